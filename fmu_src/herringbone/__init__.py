@@ -1,0 +1,4 @@
+"""Dynamics of a herringbone Novikov gear train (see MODEL.md): scenes, model, reference run."""
+from .scene import Scene, SceneError, load_scene, scene_from_dict
+
+__all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict"]

@@ -1,0 +1,149 @@
+"""The parameters of the gear train: one table, read by the scene loader, the model and the FMU.
+
+Every parameter is named as in MODEL.md (sections 2-6, 11), with its reference value, unit,
+meaning, allowed range and the component that needs it. A scene that leaves a component out
+carries none of that component's parameters.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+COMPONENTS = ("motor", "load", "bearings")
+
+
+@dataclass(frozen=True)
+class Range:
+    """An interval of allowed values; bounds of None are unbounded."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+
+    def contains(self, value: float) -> bool:
+        if not math.isfinite(value):
+            return False
+        if self.low is not None and (value < self.low or (self.low_open and value == self.low)):
+            return False
+        if self.high is not None and (value > self.high or (self.high_open and value == self.high)):
+            return False
+        return True
+
+    def describe(self) -> str:
+        if self.low is None and self.high is None:
+            return "any finite number"
+        if self.high is None:
+            return f"{'>' if self.low_open else '>='} {self.low:g}"
+        if self.low is None:
+            return f"{'<' if self.high_open else '<='} {self.high:g}"
+        left = "(" if self.low_open else "["
+        right = ")" if self.high_open else "]"
+        return f"{left}{self.low:g}, {self.high:g}{right}"
+
+
+POSITIVE = Range(0.0, None, low_open=True)
+NON_NEGATIVE = Range(0.0, None)
+FRACTION = Range(0.0, 1.0, high_open=True)
+FINITE = Range()
+AT_LEAST_ONE = Range(1, None)
+HELIX_ANGLE = Range(0.0, math.pi / 2, low_open=True, high_open=True)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    default: float | int | bool | None  # None: derived from other parameters (see gear.py)
+    unit: str
+    description: str
+    kind: type = float
+    allowed: Range = POSITIVE
+    component: str | None = None  # None: every scene has it
+
+
+def _p(name, default, unit, description, kind=float, allowed=POSITIVE, component=None):
+    return Parameter(name, default, unit, description, kind, allowed, component)
+
+
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in [
+    # geometry (MODEL.md section 2)
+    _p("z_pinion", 10, "1", "number of pinion teeth", int, AT_LEAST_ONE),
+    _p("z_wheel", 36, "1", "number of wheel teeth", int, AT_LEAST_ONE),
+    _p("m_n", 0.004, "m", "normal module"),
+    _p("beta", 0.398982, "rad", "helix angle on the pitch cylinder", allowed=HELIX_ANGLE),
+    _p("b_left", 0.035, "m", "face width of the left helix half"),
+    _p("b_right", 0.035, "m", "face width of the right helix half"),
+    _p("groove", 0.010, "m", "groove width between the helix halves", allowed=NON_NEGATIVE),
+    _p("a_left", 0.020, "m", "distance from the left bearing to the outer face of the left half",
+       allowed=NON_NEGATIVE, component="bearings"),
+    _p("a_right", 0.020, "m", "distance from the right bearing to the outer face of the right half",
+       allowed=NON_NEGATIVE, component="bearings"),
+    # mesh (section 3)
+    _p("c_point", 2.5e8, "N/m", "stiffness of one contact point"),
+    _p("eps_q", 0.8, "1", "phase overlap of the two lines of engagement, fraction of p_x",
+       allowed=FRACTION),
+    _p("stagger", 0.0, "1", "shift of the right half against the left, fraction of p_x",
+       allowed=FRACTION),
+    _p("phase0", 0.0, "1", "position of the first contact point at t = 0, fraction of p_x",
+       allowed=FRACTION),
+    _p("edge_ramp", 0.0, "m", "half-length of the contact ellipse along the axis (0: sharp edges)",
+       allowed=NON_NEGATIVE),
+    _p("contact_loss", True, "", "teeth can separate (a point carries no tensile force)", bool,
+       allowed=FINITE),
+    _p("zeta_mesh", 0.05, "1", "mesh damping ratio", allowed=NON_NEGATIVE),
+    _p("dbeta_left", 0.0, "rad", "helix (lead) error of the left half", allowed=FINITE),
+    _p("dbeta_right", 0.0, "rad", "helix (lead) error of the right half", allowed=FINITE),
+    # inertias (section 1)
+    _p("I_pinion", 2.18927e-4, "kg.m2", "polar moment of inertia of the pinion"),
+    _p("I_wheel", 0.0367713, "kg.m2", "polar moment of inertia of the wheel"),
+    _p("m_pinion", 0.929436, "kg", "mass of the pinion", component="bearings"),
+    _p("m_wheel", 12.0455, "kg", "mass of the wheel", component="bearings"),
+    _p("J_pinion", None, "kg.m2", "transverse moment of inertia of the pinion "
+       "(default: solid cylinder m(3R^2+L^2)/12)", component="bearings"),
+    _p("J_wheel", None, "kg.m2", "transverse moment of inertia of the wheel "
+       "(default: solid cylinder m(3R^2+L^2)/12)", component="bearings"),
+    _p("I_motor", 0.05, "kg.m2", "moment of inertia of the motor rotor", component="motor"),
+    _p("I_load", 0.5, "kg.m2", "moment of inertia of the load", component="load"),
+    # shafts and bearings (section 4)
+    _p("C_shaft_in", 5e4, "N.m/rad", "torsional stiffness of the input shaft", component="motor"),
+    _p("h_shaft_in", 1.0, "N.m.s/rad", "torsional damping of the input shaft",
+       allowed=NON_NEGATIVE, component="motor"),
+    _p("C_shaft_out", 2e5, "N.m/rad", "torsional stiffness of the output shaft", component="load"),
+    _p("h_shaft_out", 1.0, "N.m.s/rad", "torsional damping of the output shaft",
+       allowed=NON_NEGATIVE, component="load"),
+    *[_p(f"c_brg_{gear}_{side}", 5e8, "N/m", f"stiffness of the {side} {gear} bearing",
+         component="bearings")
+      for gear in ("pinion", "wheel") for side in ("left", "right")],
+    *[_p(f"h_brg_{gear}_{side}", 2000.0, "N.s/m", f"damping of the {side} {gear} bearing",
+         allowed=NON_NEGATIVE, component="bearings")
+      for gear in ("pinion", "wheel") for side in ("left", "right")],
+    # initial state (section 6)
+    _p("w0_pinion", 157.08, "rad/s", "pinion speed at t = 0", allowed=FINITE),
+]}
+
+# The inputs of the train (section 5): torques held constant over a communication step.
+INPUTS: dict[str, Parameter] = {p.name: p for p in [
+    _p("M_motor", 500.0, "N.m", "motor torque, drives the motor rotor (the pinion without a motor)",
+       allowed=FINITE),
+    _p("M_load", 1800.0, "N.m", "load torque, resists the load (the wheel without a load)",
+       allowed=FINITE),
+]}
+
+
+def parameters_of(components: dict[str, bool]) -> dict[str, Parameter]:
+    """The parameters that a train with these components carries."""
+    return {name: p for name, p in PARAMETERS.items()
+            if p.component is None or components[p.component]}
+
+
+def check_value(parameter: Parameter, value) -> str | None:
+    """Why `value` is not allowed for `parameter`, or None if it is."""
+    if parameter.kind is bool:
+        return None if isinstance(value, bool) else "must be true or false"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return f"must be a number, got {type(value).__name__} {value!r}"
+    if parameter.kind is int and value != int(value):
+        return f"must be a whole number, got {value!r}"
+    if not parameter.allowed.contains(float(value)):
+        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
+    return None

@@ -1,0 +1,207 @@
+"""Scene files: a gear train, its experiment and its input torques, loaded and validated once.
+
+A scene file is TOML with four tables, all optional:
+
+    [parameters]   values by their FMU names; anything not given takes the reference value
+    [components]   motor, load, bearings = true/false (default true)
+    [experiment]   stop_time, output_interval
+    [inputs]       M_motor = 500, M_load = 1800   (constants), or
+                   table = [[time, M_motor, M_load], ...]   (each row held until the next)
+
+Every problem is reported as one SceneError naming the file, the key and what is allowed.
+"""
+from __future__ import annotations
+
+import bisect
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from .gear import solid_cylinder_transverse_inertia
+from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_of
+
+
+class SceneError(ValueError):
+    """A scene that cannot be simulated; the message names the culprit and what is allowed."""
+
+
+@dataclass(frozen=True)
+class Experiment:
+    stop_time: float = 0.1
+    output_interval: float = 1e-4
+
+
+@dataclass(frozen=True)
+class InputSchedule:
+    """Input torques as a step function of time: row i holds from times[i] to times[i + 1]."""
+
+    times: tuple[float, ...] = (0.0,)
+    M_motor: tuple[float, ...] = (INPUTS["M_motor"].default,)
+    M_load: tuple[float, ...] = (INPUTS["M_load"].default,)
+
+    def at(self, time: float) -> tuple[float, float]:
+        row = max(bisect.bisect_right(self.times, time) - 1, 0)
+        return self.M_motor[row], self.M_load[row]
+
+    def change_times(self) -> tuple[float, ...]:
+        return self.times[1:]
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    components: dict[str, bool]
+    given: dict[str, float | int | bool]  # the parameters the scene sets itself
+    experiment: Experiment = field(default_factory=Experiment)
+    inputs: InputSchedule = field(default_factory=InputSchedule)
+    source: str = "<scene>"
+    # every parameter the train carries: the given ones, reference values, derived inertias
+    parameters: dict[str, float | int | bool] = field(init=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "parameters",
+                           _complete_parameters(self.given, self.components, self.source))
+
+    def has(self, component: str) -> bool:
+        return self.components[component]
+
+    def with_parameters(self, **changes) -> "Scene":
+        """A copy with some parameters changed, validated like a scene file."""
+        return replace(self, given={**self.given, **changes})
+
+    def with_inputs(self, M_motor=None, M_load=None, table=None) -> "Scene":
+        """A copy with other input torques (constants, or rows of [time, M_motor, M_load])."""
+        data = {"table": table} if table is not None else {
+            "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,
+            "M_load": self.inputs.M_load[0] if M_load is None else M_load}
+        return replace(self, inputs=_inputs(data, self.source))
+
+    def with_experiment(self, stop_time=None, output_interval=None) -> "Scene":
+        return replace(self, experiment=_experiment(
+            {"stop_time": stop_time or self.experiment.stop_time,
+             "output_interval": output_interval or self.experiment.output_interval},
+            self.source))
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file (see the module docstring for its format)."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"{path}: no such scene file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise SceneError(f"{path}: not a valid TOML file: {error}") from None
+    return scene_from_dict(data, name=path.stem, source=str(path))
+
+
+def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") -> Scene:
+    """Validate a scene given as the tables of a scene file."""
+    unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
+    if unknown:
+        raise SceneError(f"{source}: unknown table [{sorted(unknown)[0]}]; allowed: "
+                         "[parameters], [components], [experiment], [inputs]")
+    components = _components(_table(data, "components", source), source)
+    return Scene(name=name, components=components,
+                 given=dict(_table(data, "parameters", source)),
+                 experiment=_experiment(_table(data, "experiment", source), source),
+                 inputs=_inputs(_table(data, "inputs", source), source), source=source)
+
+
+def _table(data, key, source):
+    table = data.get(key, {})
+    if not isinstance(table, dict):
+        raise SceneError(f"{source}: '{key}' must be a table [{key}], got {table!r}")
+    return table
+
+
+def _components(table, source):
+    components = {}
+    for key, value in table.items():
+        if key not in COMPONENTS:
+            raise SceneError(f"{source}: [components] unknown component '{key}'; "
+                             f"allowed: {', '.join(COMPONENTS)}")
+        if not isinstance(value, bool):
+            raise SceneError(f"{source}: [components] {key} must be true or false, got {value!r}")
+        components[key] = value
+    return {c: components.get(c, True) for c in COMPONENTS}
+
+
+def _complete_parameters(given, components, source):
+    carried = parameters_of(components)
+    for key, value in given.items():
+        if key not in PARAMETERS:
+            hint = " (inputs belong in [inputs])" if key in INPUTS else ""
+            raise SceneError(f"{source}: [parameters] unknown parameter '{key}'{hint}")
+        if key not in carried:
+            raise SceneError(f"{source}: [parameters] {key} belongs to the component "
+                             f"'{PARAMETERS[key].component}', which this scene leaves out "
+                             f"([components] {PARAMETERS[key].component} = false)")
+        problem = check_value(PARAMETERS[key], value)
+        if problem:
+            raise SceneError(f"{source}: [parameters] {key} {problem}")
+    values = {name: given.get(name, p.default) for name, p in carried.items()}
+    for name, p in carried.items():
+        if p.kind is int:
+            values[name] = int(values[name])
+        elif p.kind is float and values[name] is not None:
+            values[name] = float(values[name])
+    if components["bearings"]:
+        for gear in ("pinion", "wheel"):
+            if values[f"J_{gear}"] is None:
+                values[f"J_{gear}"] = solid_cylinder_transverse_inertia(values, gear)
+    return values
+
+
+def _experiment(table, source):
+    values = {}
+    for key, value in table.items():
+        if key not in ("stop_time", "output_interval"):
+            raise SceneError(f"{source}: [experiment] unknown key '{key}'; "
+                             "allowed: stop_time, output_interval")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value) or value <= 0:
+            raise SceneError(f"{source}: [experiment] {key} is {value!r}; allowed: > 0")
+        values[key] = float(value)
+    experiment = Experiment(**values)
+    if experiment.output_interval > experiment.stop_time:
+        raise SceneError(f"{source}: [experiment] output_interval {experiment.output_interval:g} "
+                         f"exceeds stop_time {experiment.stop_time:g}")
+    return experiment
+
+
+def _inputs(table, source):
+    if "table" in table:
+        if set(table) != {"table"}:
+            raise SceneError(f"{source}: [inputs] give either constants (M_motor, M_load) "
+                             "or a table, not both")
+        rows = table["table"]
+        if not isinstance(rows, list) or not rows:
+            raise SceneError(f"{source}: [inputs] table must be a list of rows "
+                             "[time, M_motor, M_load]")
+        for i, row in enumerate(rows):
+            if not isinstance(row, list) or len(row) != 3 or not all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool)
+                    and math.isfinite(v) for v in row):
+                raise SceneError(f"{source}: [inputs] table row {i} is {row!r}; "
+                                 "allowed: three finite numbers [time, M_motor, M_load]")
+        times = [float(row[0]) for row in rows]
+        if times[0] != 0.0:
+            raise SceneError(f"{source}: [inputs] table must start at time 0, "
+                             f"its first row is at {times[0]:g}")
+        if any(b <= a for a, b in zip(times, times[1:])):
+            raise SceneError(f"{source}: [inputs] table times must increase strictly")
+        return InputSchedule(tuple(times), tuple(float(r[1]) for r in rows),
+                             tuple(float(r[2]) for r in rows))
+    values = {}
+    for key, value in table.items():
+        if key not in INPUTS:
+            raise SceneError(f"{source}: [inputs] unknown key '{key}'; "
+                             "allowed: M_motor, M_load, table")
+        problem = check_value(INPUTS[key], value)
+        if problem:
+            raise SceneError(f"{source}: [inputs] {key} {problem}")
+        values[key] = float(value)
+    return InputSchedule((0.0,), (values.get("M_motor", INPUTS["M_motor"].default),),
+                         (values.get("M_load", INPUTS["M_load"].default),))
