@@ -2,3 +2,6 @@
 from .scene import Scene, SceneError, load_scene, scene_from_dict
 
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict"]
+from .reference import reference_simulate
+
+__all__ += ["reference_simulate"]

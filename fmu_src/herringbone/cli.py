@@ -1,0 +1,83 @@
+"""The `herringbone` command: `run` a scene through the reference integration, `info` on a scene."""
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+from pathlib import Path
+
+from .scene import SceneError, load_scene
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="herringbone", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="simulate a scene with the reference integration, "
+                              "print a summary and write a CSV of the outputs")
+    run.add_argument("scene", type=Path)
+    run.add_argument("--stop-time", type=float, help="simulated seconds (default: the scene's)")
+    run.add_argument("--output-interval", type=float, help="seconds between output samples")
+    run.add_argument("--tolerance", type=float, default=1e-10,
+                     help="error per step relative to the static mesh force (default 1e-10)")
+    run.add_argument("-o", "--output", type=Path,
+                     help="CSV file to write (default: results/<scene>.csv)")
+    info = commands.add_parser("info", help="geometry, mesh phase and modes of a scene")
+    info.add_argument("scene", type=Path)
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "info":
+            from .report import info_main
+            return info_main([str(args.scene)])
+        return _run(args)
+    except SceneError as error:
+        print(f"herringbone: {error}", file=sys.stderr)
+        return 2
+
+
+def _run(args) -> int:
+    from .reference import reference_simulate
+
+    scene = load_scene(args.scene)
+    started = time.perf_counter()
+    results = reference_simulate(scene, stop_time=args.stop_time,
+                                 output_interval=args.output_interval, tolerance=args.tolerance)
+    wall = time.perf_counter() - started
+    output = args.output or Path("results") / f"{scene.name}.csv"
+    write_csv(results, output)
+    print(summary(scene, results, wall))
+    print(f"outputs written to {output}")
+    return 0
+
+
+def write_csv(results: dict, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(results)
+    with open(path, "w", newline="") as file:
+        writer = csv.writer(file)
+        writer.writerow(names)
+        for row in zip(*(results[name] for name in names)):
+            writer.writerow([f"{value:.12g}" for value in row])
+
+
+def summary(scene, results: dict, wall_time: float) -> str:
+    from .model import GearTrainModel
+
+    model = GearTrainModel(scene)
+    stop = results["time"][-1]
+    static_force = scene.inputs.M_motor[0] / model.geometry.radius_pinion
+    lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
+             f"({', '.join(model.coordinates)})",
+             f"simulated {stop:g} s in {wall_time:.2f} s of wall time "
+             f"({wall_time / stop:.1f} s per simulated second)",
+             f"static mesh force M_motor/Rp = {static_force:.1f} N",
+             f"{'output':<20}{'at t=0':>14}{'min':>14}{'max':>14}{'mean':>14}"]
+    for name, values in results.items():
+        if name != "time":
+            lines.append(f"{name:<20}{values[0]:>14.6g}{values.min():>14.6g}"
+                         f"{values.max():>14.6g}{values.mean():>14.6g}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,182 @@
+"""The contact points of the mesh (MODEL.md section 3) and the phases at which the set changes.
+
+The mesh phase θ = φp / (2π/zp) counts angular pitches of the pinion; over one pitch every point
+travels one axial pitch p_x. Each of the four streams (two halves × two lines of engagement)
+holds points at z = s + n·p_x with s = ((lead + θ) mod 1)·p_x, where `lead` = phase0 + offset/p_x.
+
+A point's stiffness weight w(z) is piecewise linear in z with kinks at z = −r, r, b − r, b + r
+(r = edge_ramp; entry and exit z = 0, b when r = 0). Between two consecutive kink phases the set
+of points with w > 0 and each point's linear piece are fixed: a `ContactSet` describes them as
+linear functions of the pinion angle inside that phase interval. Integrators hold one contact set
+over a segment and change it only when φp reaches the interval's end (see NOTES.md: a solver
+whose trial steps see the switch loses accuracy or fails).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .gear import HALVES, GearGeometry
+
+# Phases closer than this (in pitches; 3e-12 m of axial travel on the reference gear) are one
+# switch: coinciding switches of different streams must not leave a segment of zero length.
+PHASE_TOLERANCE = 1e-10
+
+
+@dataclass(frozen=True)
+class Stream:
+    half: str  # "left" or "right"
+    line: str  # "pre-pole" or "post-pole"
+    lead: float  # phase by which the stream runs ahead of phase 0, fraction of p_x in [0, 1)
+
+    @property
+    def delay(self) -> float:
+        """The stream's delay k against phase 0 (Kryukov & Savelieva), fraction of a period."""
+        return (-self.lead) % 1.0
+
+
+def streams(parameters: dict) -> list[Stream]:
+    """The four streams of contact points, in the order left pre, left post, right pre, right post."""
+    offsets = {("left", "pre-pole"): 0.0,
+               ("left", "post-pole"): parameters["eps_q"],
+               ("right", "pre-pole"): parameters["stagger"],
+               ("right", "post-pole"): parameters["stagger"] + parameters["eps_q"]}
+    return [Stream(half, line, (parameters["phase0"] + offset) % 1.0)
+            for (half, line), offset in offsets.items()]
+
+
+def weight(z: float, face_width: float, edge_ramp: float) -> float:
+    """w(z): 1 inside the face, 0 outside; with an edge ramp, the share of the contact ellipse
+    (half-length r) that lies on the face."""
+    if edge_ramp == 0.0:
+        return 1.0 if 0.0 <= z < face_width else 0.0
+    on_face = min(z + edge_ramp, face_width) - max(z - edge_ramp, 0.0)
+    return min(max(on_face / (2.0 * edge_ramp), 0.0), 1.0)
+
+
+def weight_slope(z: float, face_width: float, edge_ramp: float) -> float:
+    """dw/dz on the linear piece that contains z."""
+    if edge_ramp == 0.0 or weight(z, face_width, edge_ramp) in (0.0, 1.0):
+        return 0.0
+    return (float(z + edge_ramp < face_width) - float(z - edge_ramp > 0.0)) / (2.0 * edge_ramp)
+
+
+def kink_positions(face_width: float, edge_ramp: float) -> tuple[float, ...]:
+    """Local positions where a point's weight changes its linear piece."""
+    if edge_ramp == 0.0:
+        return (0.0, face_width)
+    r = edge_ramp
+    return (-r, r, face_width - r, face_width + r)
+
+
+@dataclass(frozen=True)
+class ContactSet:
+    """The contact points of one phase interval, as linear functions of the pinion angle.
+
+    For a pinion angle φp inside the interval, with Δ = φp − `pinion_angle` (the angle at which
+    the interval starts) and the axial travel v·Δ (v = Rp cot β):
+        z = z0 + v·Δ,  c = stiffness0 + stiffness_slope·v·Δ,
+        ζ = lever_arm0 + lever_arm_slope·v·Δ,  e = lead_error0 + lead_error_slope·v·Δ.
+    """
+
+    cycle: int  # number of the mesh period the interval belongs to
+    index: int  # number of the interval within a mesh period
+    pinion_angle: float  # φp where the interval starts (the cycle it belongs to included)
+    length: float  # angular extent of the interval, rad
+    half: np.ndarray  # 0 = left, 1 = right
+    z0: np.ndarray
+    stiffness0: np.ndarray
+    stiffness_slope: np.ndarray
+    lever_arm0: np.ndarray
+    lever_arm_slope: np.ndarray
+    lead_error0: np.ndarray
+    lead_error_slope: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.z0)
+
+
+class Mesh:
+    """The four streams of a gear pair and their switch phases."""
+
+    def __init__(self, parameters: dict):
+        self.geometry = GearGeometry.from_parameters(parameters)
+        self.streams = streams(parameters)
+        self.c_point = parameters["c_point"]
+        self.edge_ramp = parameters["edge_ramp"]
+        self.lead_error = {"left": parameters["dbeta_left"], "right": parameters["dbeta_right"]}
+        self.switch_phases = self._switch_phases()
+
+    def _switch_phases(self) -> np.ndarray:
+        p_x = self.geometry.axial_pitch
+        phases = sorted((z / p_x - stream.lead) % 1.0
+                        for stream in self.streams
+                        for z in kink_positions(self.geometry.face_width(stream.half),
+                                                self.edge_ramp))
+        distinct = [phases[0]]
+        for phase in phases[1:]:
+            if phase - distinct[-1] > PHASE_TOLERANCE:
+                distinct.append(phase)
+        if 1.0 + distinct[0] - distinct[-1] <= PHASE_TOLERANCE and len(distinct) > 1:
+            distinct.pop()
+        return np.array(distinct)
+
+    def mean_stiffness(self) -> float:
+        """k̄: mean over a mesh period of Σc of all points with w > 0. Every stream carries on
+        average ∫w dz / p_x = b / p_x points (the edge ramp keeps the area of w)."""
+        return self.c_point * sum(self.geometry.axial_overlap(s.half) for s in self.streams)
+
+    def locate(self, pinion_angle: float) -> tuple[int, int]:
+        """(cycle, interval) of the phase interval that holds φp; an angle on a switch belongs to
+        the interval that starts there (points enter at z = 0 inclusive)."""
+        phase = pinion_angle / self.geometry.angular_pitch
+        cycle = math.floor(phase + PHASE_TOLERANCE)
+        within = phase - cycle
+        interval = int(np.searchsorted(self.switch_phases, within + PHASE_TOLERANCE,
+                                       side="right")) - 1
+        if interval < 0:  # before the first switch: the last interval of the previous cycle
+            return cycle - 1, len(self.switch_phases) - 1
+        return cycle, interval
+
+    def interval_start(self, cycle: int, interval: int) -> float:
+        """φp at which an interval starts."""
+        return (cycle + self.switch_phases[interval]) * self.geometry.angular_pitch
+
+    def contact_set(self, cycle: int, interval: int) -> ContactSet:
+        """The points of an interval and their linear pieces, read at the interval's middle."""
+        n = len(self.switch_phases)
+        cycle += interval // n
+        interval %= n
+        start = self.switch_phases[interval]
+        end = self.switch_phases[interval + 1] if interval + 1 < n else self.switch_phases[0] + 1.0
+        middle = 0.5 * (start + end)
+        g = self.geometry
+        p_x, travel_to_middle = g.axial_pitch, (middle - start) * g.axial_pitch
+        columns = {k: [] for k in ("half", "z0", "stiffness0", "stiffness_slope", "lever_arm0",
+                                   "lever_arm_slope", "lead_error0", "lead_error_slope")}
+        for stream in self.streams:
+            b = g.face_width(stream.half)
+            s = ((stream.lead + middle) % 1.0) * p_x
+            # every point whose weight is positive somewhere: −r < z < b + r
+            for n_point in range(-math.ceil((self.edge_ramp + s) / p_x),
+                                 math.ceil((b + self.edge_ramp - s) / p_x) + 1):
+                z_middle = s + n_point * p_x
+                w = weight(z_middle, b, self.edge_ramp)
+                if w <= 0.0:
+                    continue
+                slope = weight_slope(z_middle, b, self.edge_ramp)
+                z0 = z_middle - travel_to_middle
+                columns["half"].append(HALVES.index(stream.half))
+                columns["z0"].append(z0)
+                columns["stiffness0"].append(self.c_point * (w - slope * travel_to_middle))
+                columns["stiffness_slope"].append(self.c_point * slope)
+                columns["lever_arm0"].append(g.lever_arm(stream.half, z0))
+                columns["lever_arm_slope"].append(g.lever_arm_direction(stream.half))
+                columns["lead_error0"].append(self.lead_error[stream.half] * z0)
+                columns["lead_error_slope"].append(self.lead_error[stream.half])
+        arrays = {k: np.array(v, dtype=int if k == "half" else float) for k, v in columns.items()}
+        return ContactSet(cycle=cycle, index=interval,
+                          pinion_angle=(cycle + start) * g.angular_pitch,
+                          length=(end - start) * g.angular_pitch, **arrays)

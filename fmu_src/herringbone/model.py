@@ -1,0 +1,295 @@
+"""The gear train assembled from its elements (MODEL.md sections 1 and 4-7).
+
+Every elastic element k (shaft, bearing, contact point) has a deformation δ_k = g_k·q + e_k with
+a row g_k over the coordinates q, and a force F_k = c_k·δ_k + h_k·δ̇_k; then
+M·q̈ = f_ext − Σ g_k·F_k. A scene without motor, load or bearings has fewer coordinates.
+
+Relative coordinates (MODEL.md section 10). The state holds, instead of q,
+    y_i = q_i − r_i·φp  (i ≠ pinion),   y_pinion = φp − φ_start
+where r is the rigid rotation (1 on the motor and pinion angles, 1/u on the wheel and load
+angles, 0 on tilts and displacements) and φ_start is where the current contact set begins, so
+every entry stays small however far the train has turned. No element deforms under the rigid
+rotation (g·r = 0), so δ = g̃·y and δ̇ = g̃·ẏ, g̃ being g with its pinion entry zeroed.
+
+Contact points carry rows g = g_base + ζ·g_tilt whose lever arm ζ moves with φp; as in the
+article the rows are taken as given at each instant (no ∂g/∂φp terms), and the damping acts on
+the rate g·q̇ of the bodies' motion. (MODEL.md does not say whether δ̇ includes the slide of the
+point along a lead error, ė = Δβ·ż; taking g·q̇ keeps a steadily running train free of a
+spurious drag force.)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .gear import GearGeometry
+from .mesh import ContactSet, Mesh
+
+ALL_COORDINATES = ("phi_motor", "phi_pinion", "psi_pinion", "x_pinion",
+                   "phi_wheel", "psi_wheel", "x_wheel", "phi_load")
+COMPONENT_COORDINATES = {"motor": ("phi_motor",), "load": ("phi_load",),
+                         "bearings": ("psi_pinion", "x_pinion", "psi_wheel", "x_wheel")}
+
+
+@dataclass(frozen=True)
+class ElasticElement:
+    """A shaft or bearing: output name, row g, stiffness and damping."""
+
+    name: str
+    row: np.ndarray
+    stiffness: float
+    damping: float
+
+
+class GearTrainModel:
+    """The assembled equations of motion of a scene's gear train."""
+
+    def __init__(self, scene):
+        p = scene.parameters
+        self.scene = scene
+        self.geometry = g = GearGeometry.from_parameters(p)
+        self.mesh = Mesh(p)
+        left_out = {c for comp, coords in COMPONENT_COORDINATES.items()
+                    if not scene.has(comp) for c in coords}
+        self.coordinates = [c for c in ALL_COORDINATES if c not in left_out]
+        self.size = len(self.coordinates)
+        self.pinion = self.coordinates.index("phi_pinion")
+        self.wheel = self.coordinates.index("phi_wheel")
+
+        inertia = {"phi_motor": "I_motor", "phi_pinion": "I_pinion", "psi_pinion": "J_pinion",
+                   "x_pinion": "m_pinion", "phi_wheel": "I_wheel", "psi_wheel": "J_wheel",
+                   "x_wheel": "m_wheel", "phi_load": "I_load"}
+        self.mass = np.array([p[inertia[c]] for c in self.coordinates])
+        self.rigid_rotation = np.array([1.0 if c in ("phi_motor", "phi_pinion") else
+                                        1.0 / g.ratio if c in ("phi_wheel", "phi_load") else 0.0
+                                        for c in self.coordinates])
+        # ÿ = q̈ − (r − e_pinion)·φ̈p turns accelerations of q into those of the state
+        self._relative_offset = self.rigid_rotation.copy()
+        self._relative_offset[self.pinion] = 0.0
+        self.motor_torque_row = self.unit("phi_motor" if scene.has("motor") else "phi_pinion")
+        self.load_torque_row = self.unit("phi_load" if scene.has("load") else "phi_wheel")
+
+        self.elements = self._shafts_and_bearings(p)
+        self.contact_row_base = (g.radius_pinion * self.unit("phi_pinion")
+                                 - g.radius_wheel * self.unit("phi_wheel")
+                                 + self.unit("x_pinion") - self.unit("x_wheel"))
+        self.contact_row_tilt = self.unit("psi_pinion") - self.unit("psi_wheel")
+        for row in [e.row for e in self.elements] + [self.contact_row_base]:
+            assert abs(row @ self.rigid_rotation) <= 1e-12 * np.abs(row).max()
+        self.element_rows = np.array([e.row for e in self.elements]).reshape(-1, self.size)
+        self.element_stiffness = np.array([e.stiffness for e in self.elements])
+        self.element_damping = np.array([e.damping for e in self.elements])
+        self._element_rows_relative = self.relative(self.element_rows)
+        self._contact_base_relative = self.relative(self.contact_row_base)
+        self._contact_tilt_relative = self.relative(self.contact_row_tilt)
+
+        equivalent_mass = 1.0 / (g.radius_pinion ** 2 / p["I_pinion"]
+                                 + g.radius_wheel ** 2 / p["I_wheel"])
+        mesh_frequency = math.sqrt(self.mesh.mean_stiffness() / equivalent_mass)
+        self.mesh_damping_factor = 2.0 * p["zeta_mesh"] / mesh_frequency  # η: h = η·c
+        self.contact_loss = p["contact_loss"]
+        self.axial_travel_per_radian = g.axial_speed_per_radian
+        self.output_names = output_names(scene)
+
+    def unit(self, coordinate: str) -> np.ndarray:
+        """The unit row of a coordinate (zero if the scene leaves the coordinate out)."""
+        row = np.zeros(self.size)
+        if coordinate in self.coordinates:
+            row[self.coordinates.index(coordinate)] = 1.0
+        return row
+
+    def relative(self, rows: np.ndarray) -> np.ndarray:
+        """g̃: rows acting on the relative coordinates (the pinion entry zeroed)."""
+        rows = np.array(rows, dtype=float)
+        rows[..., self.pinion] = 0.0
+        return rows
+
+    def _shafts_and_bearings(self, p) -> list[ElasticElement]:
+        elements = []
+        if self.scene.has("motor"):
+            elements.append(ElasticElement("T_shaft_in", self.unit("phi_motor")
+                                           - self.unit("phi_pinion"),
+                                           p["C_shaft_in"], p["h_shaft_in"]))
+        if self.scene.has("load"):
+            elements.append(ElasticElement("T_shaft_out", self.unit("phi_wheel")
+                                           - self.unit("phi_load"),
+                                           p["C_shaft_out"], p["h_shaft_out"]))
+        if self.scene.has("bearings"):
+            for gear in ("pinion", "wheel"):
+                for side in ("left", "right"):
+                    row = (self.unit(f"x_{gear}") + self.geometry.bearing_position(side)
+                           * self.unit(f"psi_{gear}"))
+                    elements.append(ElasticElement(f"F_brg_{gear}_{side}", row,
+                                                   p[f"c_brg_{gear}_{side}"],
+                                                   p[f"h_brg_{gear}_{side}"]))
+        return elements
+
+    # --- the contact points of a segment -------------------------------------------------
+
+    def contact_geometry(self, y: np.ndarray, contact_set: ContactSet):
+        """Stiffness, lever arm and lead error of each point at the state's pinion angle."""
+        travel = self.axial_travel_per_radian * y[self.pinion]
+        stiffness = contact_set.stiffness0 + contact_set.stiffness_slope * travel
+        lever_arm = contact_set.lever_arm0 + contact_set.lever_arm_slope * travel
+        lead_error = contact_set.lead_error0 + contact_set.lead_error_slope * travel
+        return stiffness, lever_arm, lead_error
+
+    def point_approach(self, y, y_rate, contact_set):
+        """δ + η·δ̇ of every point of the set (its load per unit stiffness: a point is loaded
+        while this is positive, even where its stiffness ramps from zero), and the points'
+        stiffnesses and lever arms."""
+        stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
+        deformation = (self._contact_base_relative @ y
+                       + lever_arm * (self._contact_tilt_relative @ y) + lead_error)
+        rate = self._contact_base_relative @ y_rate + lever_arm * (
+            self._contact_tilt_relative @ y_rate)
+        return deformation + self.mesh_damping_factor * rate, stiffness, lever_arm
+
+    def element_forces(self, y, y_rate):
+        """c·Δ + h·Δ̇ of the shafts and bearings."""
+        return (self.element_stiffness * (self._element_rows_relative @ y)
+                + self.element_damping * (self._element_rows_relative @ y_rate))
+
+    def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
+        """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""
+        y, y_rate = state[:self.size], state[self.size:]
+        approach, stiffness, lever_arm = self.point_approach(y, y_rate, contact_set)
+        point_forces = stiffness * approach * loaded
+        generalized_force = (motor_torque * self.motor_torque_row
+                             - load_torque * self.load_torque_row
+                             - self.element_rows.T @ self.element_forces(y, y_rate)
+                             - point_forces.sum() * self.contact_row_base
+                             - (lever_arm @ point_forces) * self.contact_row_tilt)
+        acceleration = generalized_force / self.mass
+        acceleration -= self._relative_offset * acceleration[self.pinion]
+        return np.concatenate([y_rate, acceleration])
+
+    def outputs(self, state, contact_set, loaded) -> dict[str, float]:
+        """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
+        carry load (all points of the set where contact cannot be lost)."""
+        y, y_rate = state[:self.size], state[self.size:]
+        approach, stiffness, _ = self.point_approach(y, y_rate, contact_set)
+        forces = stiffness * approach * loaded
+        in_contact = stiffness * loaded
+        left = contact_set.half == 0
+        values = {"k_mesh": in_contact.sum(), "k_mesh_left": in_contact[left].sum(),
+                  "k_mesh_right": in_contact[~left].sum(), "F_mesh": forces.sum(),
+                  "F_mesh_left": forces[left].sum(), "F_mesh_right": forces[~left].sum()}
+        values.update(zip((e.name for e in self.elements), self.element_forces(y, y_rate)))
+        speeds = y_rate + self.rigid_rotation * y_rate[self.pinion]
+        speeds[self.pinion] = y_rate[self.pinion]
+        for name, coordinate in (("w_motor", "phi_motor"), ("w_pinion", "phi_pinion"),
+                                 ("w_wheel", "phi_wheel"), ("w_load", "phi_load")):
+            if coordinate in self.coordinates:
+                values[name] = speeds[self.coordinates.index(coordinate)]
+        # Rp·φp − Rw·φw: the rigid rotation cancels (Rp = Rw/u), leaving −Rw·(φw − φp/u)
+        values["dte"] = -self.geometry.radius_wheel * y[self.wheel]
+        values["n_contacts"] = float(np.count_nonzero(loaded * (stiffness > 0.0)))
+        return {name: float(values[name]) for name in self.output_names}
+
+    # --- stiffness, statics, modes ------------------------------------------------------
+
+    def stiffness_matrix(self, y, contact_set, loaded=None, relative=False) -> np.ndarray:
+        """K = Σ c·g·gᵀ of shafts, bearings and (loaded) contact points at the state's angle."""
+        stiffness, lever_arm, _ = self.contact_geometry(y, contact_set)
+        if loaded is not None:
+            stiffness = stiffness * loaded
+        base, tilt, rows = ((self._contact_base_relative, self._contact_tilt_relative,
+                             self._element_rows_relative) if relative else
+                            (self.contact_row_base, self.contact_row_tilt, self.element_rows))
+        contact_rows = base[None, :] + lever_arm[:, None] * tilt[None, :]
+        return (rows.T * self.element_stiffness) @ rows + (contact_rows.T * stiffness) @ contact_rows
+
+    def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
+        """Relative coordinates of the static equilibrium under M_motor balanced by
+        M_load = u·M_motor, every point of the set loaded (MODEL.md section 6)."""
+        stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
+        force = motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
+        contact_rows = (self._contact_base_relative[None, :]
+                        + lever_arm[:, None] * self._contact_tilt_relative[None, :])
+        force = force - contact_rows.T @ (stiffness * lead_error)
+        elastic = [i for i in range(self.size) if i != self.pinion]
+        stiffness_matrix = self.stiffness_matrix(y, contact_set, relative=True)
+        deflection = np.zeros(self.size)
+        deflection[elastic] = np.linalg.solve(stiffness_matrix[np.ix_(elastic, elastic)],
+                                              force[elastic])
+        deflection[self.pinion] = y[self.pinion]
+        return deflection
+
+    def mean_stiffness_matrix(self) -> np.ndarray:
+        """K averaged over one mesh period (Gauss-Legendre on each contact interval: the
+        contact terms are cubic in φp)."""
+        nodes, weights = np.polynomial.legendre.leggauss(3)
+        total = np.zeros((self.size, self.size))
+        for interval in range(len(self.mesh.switch_phases)):
+            contact_set = self.mesh.contact_set(0, interval)
+            for node, weight in zip(nodes, weights):
+                y = np.zeros(self.size)
+                y[self.pinion] = 0.5 * (node + 1.0) * contact_set.length
+                total += 0.5 * weight * contact_set.length * self.stiffness_matrix(y, contact_set)
+        return total / self.geometry.angular_pitch
+
+
+    def force_scale(self) -> float:
+        """The static mesh force of the largest input torque: the scale errors are judged on.
+        A train without torque is judged on the force of a 1 µm approach of one point."""
+        torques = self.scene.inputs
+        scale = max(max(abs(m) for m in torques.M_motor) / self.geometry.radius_pinion,
+                    max(abs(m) for m in torques.M_load) / self.geometry.radius_wheel)
+        return scale if scale > 0.0 else self.mesh.c_point * 1e-6
+
+    def state_scales(self) -> np.ndarray:
+        """For each state entry, the change that moves a force by the force scale: an error
+        tolerance `tol` on forces becomes the absolute tolerance `tol·state_scales()`.
+
+        A deflection y_i changes the generalized elastic force by K_ii·y_i; a rate by its
+        mode's ω_i = sqrt(K_ii/M_ii) times that. The pinion angle only moves the contact
+        points; a phase error shifts a switch by δφ/ω_p, worth F·(ω_max/ω_p)·δφ, so it is
+        held a thousand times tighter (in radians) than the force."""
+        stiffness = np.diag(self.mean_stiffness_matrix())
+        angular_frequency = np.sqrt(stiffness / self.mass)
+        highest = angular_frequency.max()
+        force = self.force_scale()
+        deflection = np.where(stiffness > 0.0, force / np.where(stiffness > 0.0, stiffness, 1.0),
+                              1.0)
+        deflection[self.pinion] = 1e-3
+        rate = deflection * np.where(stiffness > 0.0, angular_frequency, highest)
+        rate[self.pinion] = 1e-3 * highest
+        return np.concatenate([deflection, rate])
+
+
+def output_names(scene) -> list[str]:
+    """The outputs of MODEL.md section 7 that a scene has."""
+    names = ["k_mesh", "k_mesh_left", "k_mesh_right", "F_mesh", "F_mesh_left", "F_mesh_right"]
+    if scene.has("bearings"):
+        names += [f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
+                  for side in ("left", "right")]
+    names += (["w_motor"] if scene.has("motor") else []) + ["w_pinion", "w_wheel"]
+    names += ["w_load"] if scene.has("load") else []
+    names += (["T_shaft_in"] if scene.has("motor") else [])
+    names += (["T_shaft_out"] if scene.has("load") else [])
+    return names + ["dte", "n_contacts"]
+
+
+def mass_matrix(scene) -> np.ndarray:
+    """M = diag(inertias) over the scene's coordinates (GearTrainModel.coordinates)."""
+    return np.diag(GearTrainModel(scene).mass)
+
+
+def natural_modes(scene, pinion_angle=None):
+    """Natural frequencies (Hz, ascending), mode shapes (columns, over q) and coordinate names,
+    with every contact point of the set at `pinion_angle` loaded, or with the stiffness averaged
+    over a mesh period when `pinion_angle` is None."""
+    model = GearTrainModel(scene)
+    if pinion_angle is None:
+        stiffness = model.mean_stiffness_matrix()
+    else:
+        contact_set = model.mesh.contact_set(*model.mesh.locate(pinion_angle))
+        y = np.zeros(model.size)
+        y[model.pinion] = pinion_angle - contact_set.pinion_angle
+        stiffness = model.stiffness_matrix(y, contact_set)
+    eigenvalues, shapes = scipy.linalg.eigh(stiffness, np.diag(model.mass))
+    return np.sqrt(np.clip(eigenvalues, 0.0, None)) / (2 * math.pi), shapes, list(model.coordinates)
