@@ -48,22 +48,17 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
                                     scene.parameters["w0_pinion"])
     input_changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
     time, sample, stalled = 0.0, 0, 0
-    while True:
+    while time < stop_time:
         end = min([stop_time] + [t for t in input_changes if t > time])
         torques = scene.inputs.at(time)
         solution, event = _integrate_segment(model, segment, state, time, end, torques,
                                              method, tolerance, absolute_tolerance)
         reached = solution.t[-1]
-        last_segment = event is None and reached >= stop_time
-        while sample < len(times) and (times[sample] < reached or last_segment):
-            results_state = solution.sol(times[sample])
-            for name, value in model.outputs(results_state, segment.contact_set,
-                                             segment.loaded).items():
-                results[name][sample] = value
+        while sample < len(times) and times[sample] < reached:
+            _store(results, sample, model.outputs(solution.sol(times[sample]),
+                                                  segment.contact_set, segment.loaded))
             sample += 1
         state = solution.y[:, -1]
-        if last_segment:
-            break
         stalled = stalled + 1 if reached == time else 0
         if stalled > MAX_STALLED_SEGMENTS:
             raise RuntimeError(f"reference integration stuck at t = {time:.9g} s: contact "
@@ -71,7 +66,15 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
         if event is not None:
             segment, state = segments.after(model, segment, event, state)
         time = reached
+    # the stop time itself, with the segment that holds from there on
+    for sample in range(sample, len(times)):
+        _store(results, sample, model.outputs(state, segment.contact_set, segment.loaded))
     return {"time": times, **results}
+
+
+def _store(results, sample, outputs):
+    for name, value in outputs.items():
+        results[name][sample] = value
 
 
 def _integrate_segment(model, segment, state, time, end, torques, method, tolerance,
