@@ -1,0 +1,107 @@
+"""`herringbone info SCENE`: geometry, mesh phasing, natural modes and resonance speeds of a scene.
+
+The natural modes come from herringbone.model at the stiffness averaged over one mesh period.
+Output is plain ASCII so that any console shows it.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+import numpy as np
+
+from .gear import GearGeometry
+from .mesh import Mesh
+from .model import mass_matrix, natural_modes
+from .phasing import scene_phasing
+from .scene import SceneError, load_scene
+
+HARMONICS = (1, 2, 3)
+MAX_RPM = 30_000.0  # resonance speeds above this are not listed: beyond any practical pinion speed
+COORDINATE_KINDS = {"phi": "torsional", "psi": "tilt", "x": "lateral"}
+STREAM_NAMES = ("left pre-pole", "left post-pole", "right pre-pole", "right post-pole")
+
+
+def mode_character(frequency_hz, mode_shape, masses, coordinate_names, rigid_below_hz) -> str:
+    """'rigid rotation' below `rigid_below_hz`, else the kind of coordinate (torsional phi_*,
+    tilt psi_*, lateral x_*) holding the largest share of the mode's kinetic energy m_i·v_i²."""
+    if frequency_hz < rigid_below_hz:
+        return "rigid rotation"
+    energy = np.asarray(masses) * np.asarray(mode_shape) ** 2
+    shares = {}
+    for name, e in zip(coordinate_names, energy):
+        kind = COORDINATE_KINDS[name.split("_")[0]]
+        shares[kind] = shares.get(kind, 0.0) + e / energy.sum()
+    kind = max(shares, key=shares.get)
+    return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
+
+
+def resonance_speeds(frequency_hz: float, z_pinion: int) -> dict[int, float]:
+    """Pinion speeds (rad/s) at which k·f_mesh = f_n, f_mesh = ω·zp/(2π), for k in HARMONICS."""
+    return {k: 2.0 * math.pi * frequency_hz / (k * z_pinion) for k in HARMONICS}
+
+
+def scene_report(scene) -> str:
+    """The text of `herringbone info` for a Scene."""
+    p = scene.parameters
+    g = GearGeometry.from_parameters(p)
+    phasing = scene_phasing(p)
+    mesh = Mesh(p)
+    lines = [f"Scene {scene.name} ({scene.source})", "",
+             "Geometry",
+             f"  pinion radius Rp       {1e3 * g.radius_pinion:.3f} mm",
+             f"  wheel radius Rw        {1e3 * g.radius_wheel:.3f} mm",
+             f"  ratio u = zw/zp        {g.ratio:.4g} ({g.z_wheel}/{g.z_pinion})",
+             f"  axial pitch p_x        {1e3 * g.axial_pitch:.3f} mm",
+             f"  eps_beta left, right   {phasing.eps_beta_left:.4f}, {phasing.eps_beta_right:.4f}",
+             f"  q21 = eps_q*p_x        {1e3 * phasing.q21:.3f} mm (eps_q {p['eps_q']:g})", "",
+             "Contact points (no contact lost; sharp face edges)",
+             "  stream (eps, delay in mesh periods):"]
+    lines += [f"    {name:<16} {eps:.4f}, {delay:.4f}"
+              for name, (eps, delay) in zip(STREAM_NAMES, phasing.streams)]
+    lines += [f"  alternation law        {phasing.law} (read from phase 0)",
+              f"  K_eps                  {phasing.k_eps} points (K_eps/eps_beta per half "
+              f"{phasing.k_eps_ratio:.3f})"]
+    if p["edge_ramp"] > 0:
+        lines.append(f"  (edge_ramp {1e3 * p['edge_ramp']:g} mm widens each point's span: the "
+                     "model counts more points than this law)")
+    speed = abs(p["w0_pinion"])
+    f_mesh = speed * g.z_pinion / (2.0 * math.pi)
+    lines += ["", f"Mesh frequency at w0_pinion = {speed:g} rad/s "
+                  f"({speed * 30 / math.pi:.0f} rpm): {f_mesh:.2f} Hz", ""]
+    frequencies, shapes, names = natural_modes(scene, pinion_angle=None)
+    masses = np.diag(mass_matrix(scene))
+    # a numerically zero eigenvalue gives a frequency ~1e-8 of the largest one
+    rigid_below = 1e-6 * max(frequencies.max(), 1.0)
+    lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m"]
+    lines += [f"  {i + 1:2d} {f:12.2f} Hz  "
+              f"{mode_character(f, shapes[:, i], masses, names, rigid_below)}"
+              for i, f in enumerate(frequencies)]
+    lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s); "
+                  f"speeds above {MAX_RPM:.0f} rpm are not listed",
+              "  f_n / Hz    " + "".join(f"{f'k = {k}':<22}" for k in HARMONICS)]
+    for f in frequencies[frequencies >= rigid_below]:
+        speeds = resonance_speeds(f, g.z_pinion)
+        cells = [f"{w * 30 / math.pi:.0f} ({w:.1f})" if w * 30 / math.pi <= MAX_RPM else "-"
+                 for w in speeds.values()]
+        if any(cell != "-" for cell in cells):
+            lines.append(f"  {f:10.2f}  " + "".join(f"{cell:<22}" for cell in cells))
+    return "\n".join(lines) + "\n"
+
+
+def info_main(argv: list[str]) -> int:
+    """`herringbone info SCENE`: print the scene report; 0 on success, 2 with one line on
+    stderr for a scene that cannot be loaded (argparse itself exits 2 on bad usage)."""
+    parser = argparse.ArgumentParser(prog="herringbone info",
+                                     description="Geometry, mesh phasing, natural frequencies "
+                                                 "and resonance speeds of a scene.")
+    parser.add_argument("scene", metavar="SCENE", help="scene file (TOML)")
+    arguments = parser.parse_args(argv)
+    try:
+        scene = load_scene(arguments.scene)
+    except SceneError as error:
+        print(f"herringbone info: {error}", file=sys.stderr)
+        return 2
+    print(scene_report(scene), end="")
+    return 0
