@@ -3,18 +3,14 @@
 Speed is no concern here; this is the anchor every faster integrator is measured against. Each
 segment of the run (segments.py) is integrated on its own with the contact set and loaded points
 held fixed, and ends exactly at the next contact switch, contact loss or regain, or input change,
-so the method keeps its full order everywhere.
+so the method keeps its full order everywhere (stepping.py).
 """
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-from . import segments
 from .model import GearTrainModel
-
-# consecutive zero-length segments before a run is declared stuck (chattering contact)
-MAX_STALLED_SEGMENTS = 100
+from .stepping import ScipyStepper, start_position
 
 
 def output_times(stop_time: float, output_interval: float) -> np.ndarray:
@@ -39,73 +35,20 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
     output_interval = scene.experiment.output_interval if output_interval is None \
         else output_interval
     model = GearTrainModel(scene)
+    stepper = ScipyStepper(model, tolerance, method)
     times = output_times(stop_time, output_interval)
     results = {name: np.empty(len(times)) for name in model.output_names}
-    absolute_tolerance = tolerance * model.state_scales()
+    index = {t: i for i, t in enumerate(times)}
 
-    motor_torque, _ = scene.inputs.at(0.0)
-    segment, state = segments.start(model, initial_pinion_angle, motor_torque,
-                                    scene.parameters["w0_pinion"])
-    input_changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
-    time, sample, stalled = 0.0, 0, 0
-    while time < stop_time:
-        end = min([stop_time] + [t for t in input_changes if t > time])
-        torques = scene.inputs.at(time)
-        solution, event = _integrate_segment(model, segment, state, time, end, torques,
-                                             method, tolerance, absolute_tolerance)
-        reached = solution.t[-1]
-        while sample < len(times) and times[sample] < reached:
-            _store(results, sample, model.outputs(solution.sol(times[sample]),
-                                                  segment.contact_set, segment.loaded))
-            sample += 1
-        state = solution.y[:, -1]
-        stalled = stalled + 1 if reached == time else 0
-        if stalled > MAX_STALLED_SEGMENTS:
-            raise RuntimeError(f"reference integration stuck at t = {time:.9g} s: contact "
-                               "switches without progress (grazing contact)")
-        if event is not None:
-            segment, state = segments.after(model, segment, event, state)
-        time = reached
+    def store(t, outputs):
+        for name, value in outputs.items():
+            results[name][index[t]] = value
+
+    position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
+    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
+    for start, end in zip([0.0] + changes, changes + [stop_time]):
+        position = stepper.advance(position, end, scene.inputs.at(start), times, store)
     # the stop time itself, with the segment that holds from there on
-    for sample in range(sample, len(times)):
-        _store(results, sample, model.outputs(state, segment.contact_set, segment.loaded))
+    store(times[-1], model.outputs(position.state, position.segment.contact_set,
+                                   position.segment.loaded))
     return {"time": times, **results}
-
-
-def _store(results, sample, outputs):
-    for name, value in outputs.items():
-        results[name][sample] = value
-
-
-def _integrate_segment(model, segment, state, time, end, torques, method, tolerance,
-                       absolute_tolerance):
-    """Integrate one segment from `time` towards `end`; stops at its first event."""
-    event_list = segments.events(model, segment)
-    cache = {}
-
-    def values(t, x):
-        key = (t, x.tobytes())
-        if key not in cache:
-            cache.clear()
-            cache[key] = segments.event_values(model, segment, x)
-        return cache[key]
-
-    def make_event(index, event):
-        def function(t, x):
-            return values(t, x)[index]
-        function.terminal = True
-        function.direction = event.direction
-        return function
-
-    solution = solve_ivp(lambda t, x: model.derivative(x, segment.contact_set, segment.loaded,
-                                                       *torques),
-                         (time, end), state, method=method, rtol=tolerance,
-                         atol=absolute_tolerance, dense_output=True,
-                         events=[make_event(i, e) for i, e in enumerate(event_list)])
-    if solution.status < 0:
-        raise RuntimeError(f"reference integration failed at t = {time:.9g} s: "
-                           f"{solution.message}")
-    if solution.status == 1:
-        fired = [i for i, t in enumerate(solution.t_events) if len(t)]
-        return solution, event_list[fired[0]]
-    return solution, None
