@@ -147,3 +147,33 @@ def check_value(parameter: Parameter, value) -> str | None:
     if not parameter.allowed.contains(float(value)):
         return f"is {value!r}; allowed: {parameter.allowed.describe()}"
     return None
+
+
+@dataclass(frozen=True)
+class Output:
+    name: str
+    unit: str
+    description: str
+    kind: type = float
+
+
+# The outputs of MODEL.md section 7 (model.output_names picks those a scene has).
+OUTPUTS: dict[str, Output] = {o.name: o for o in [
+    Output("k_mesh", "N/m", "mesh stiffness: sum of the stiffnesses of the points in contact"),
+    Output("k_mesh_left", "N/m", "mesh stiffness of the left half"),
+    Output("k_mesh_right", "N/m", "mesh stiffness of the right half"),
+    Output("F_mesh", "N", "mesh force: sum of the contact point forces"),
+    Output("F_mesh_left", "N", "mesh force of the left half"),
+    Output("F_mesh_right", "N", "mesh force of the right half"),
+    *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing "
+             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)")
+      for gear in ("pinion", "wheel") for side in ("left", "right")],
+    Output("w_motor", "rad/s", "motor speed"),
+    Output("w_pinion", "rad/s", "pinion speed"),
+    Output("w_wheel", "rad/s", "wheel speed (positive in its running direction)"),
+    Output("w_load", "rad/s", "load speed"),
+    Output("T_shaft_in", "N.m", "input shaft torque"),
+    Output("T_shaft_out", "N.m", "output shaft torque"),
+    Output("dte", "m", "dynamic transmission error Rp*phi_p - Rw*phi_w"),
+    Output("n_contacts", "1", "number of contact points carrying load", int),
+]}

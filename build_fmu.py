@@ -1,0 +1,228 @@
+"""Build pythonfmu co-simulation FMUs that pass `fmpy validate`; CLI for this project's FMUs.
+
+Generic part (importable): `build_slave_fmu`, `fix_model_description`, `validate`,
+`build_example_fmus`.  CLI: `python build_fmu.py [SCENE] [-o OUT.fmu]` builds the gear FMU of a
+scene; `python build_fmu.py --examples DIR` builds the drive-train examples into DIR.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+EXAMPLES = ROOT / "examples"
+GEAR_SLAVE = ROOT / "fmu_src" / "herringbone_gear_fmu.py"
+GEAR_PACKAGE = ROOT / "fmu_src" / "herringbone"
+
+# FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
+_DEFAULT_INITIAL = {
+    ("parameter", "fixed"): "exact", ("parameter", "tunable"): "exact",
+    ("calculatedParameter", "fixed"): "calculated", ("calculatedParameter", "tunable"): "calculated",
+    ("output", "constant"): "exact", ("output", "discrete"): "calculated",
+    ("output", "continuous"): "calculated",
+    ("local", "constant"): "exact", ("local", "fixed"): "calculated",
+    ("local", "tunable"): "calculated", ("local", "discrete"): "calculated",
+    ("local", "continuous"): "calculated",
+}
+# Schema order of fmiModelDescription's children: UnitDefinitions must precede these.
+_AFTER_UNIT_DEFINITIONS = ("TypeDefinitions", "LogCategories", "DefaultExperiment",
+                           "VendorAnnotations", "ModelVariables", "ModelStructure")
+
+
+def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
+                    handle_state: bool = True) -> Path:
+    """Build `slave_script` (one pythonfmu Fmi2Slave class) into the FMU file `output`.
+
+    `project_files` (files or package directories, copied recursively) land in the FMU's
+    `resources/`, which the FMU puts on `sys.path` at run time.  Directories among them are also
+    put on the build's PYTHONPATH, since the builder imports the script to write the model
+    description.  The model description is then fixed by `fix_model_description`.  `output` (its
+    parent directories are created) is replaced only once the FMU is complete and valid.
+    Needs pythonfmu and fmpy importable by `sys.executable`.  Returns `output`.  Raises
+    RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
+    """
+    slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
+    project_files = [Path(p).resolve() for p in project_files]
+    with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
+        # A separate interpreter: pythonfmu's builder imports the script and leaves it in
+        # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
+        # then run that source copy instead of the packaged one.
+        command = [sys.executable, "-m", "pythonfmu", "build", "-f", str(slave_script),
+                   "-d", tmp, *map(str, project_files)]
+        if handle_state:
+            command.append("--handle-state")
+        import_paths = [str(p.parent) for p in project_files if p.is_dir()]
+        if os.environ.get("PYTHONPATH"):
+            import_paths.append(os.environ["PYTHONPATH"])
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(import_paths)}
+        run = subprocess.run(command, env=env, capture_output=True, text=True)
+        built = sorted(Path(tmp).glob("*.fmu"))
+        if run.returncode != 0 or len(built) != 1:
+            raise RuntimeError(f"pythonfmu build of {slave_script} failed:\n{run.stderr}")
+        fix_model_description(fmu_path=built[0])
+        problems = validate(fmu_path=built[0])
+        if problems:
+            raise RuntimeError(f"{slave_script.name}: fmpy validate found\n" + "\n".join(problems))
+        output.parent.mkdir(parents=True, exist_ok=True)
+        _replace_file(target=output, write=lambda staging: shutil.copyfile(built[0], staging))
+    return output
+
+
+def fix_model_description(fmu_path: Path) -> None:
+    """Rewrite the modelDescription.xml inside the FMU zip `fmu_path` in place.
+
+    pythonfmu 0.7.0 writes no `<InitialUnknowns>` and cannot declare units.  This regenerates
+    `<ModelStructure>` (Outputs and InitialUnknowns, 1-based indices into ModelVariables, per
+    FMI 2.0 section 3.4.8) and adds a `<UnitDefinitions>` entry for every `unit`/`displayUnit`
+    used by a variable (a slave sets them on the `<Real>` element, see examples/).
+    Idempotent; all other zip entries are copied unchanged.
+    """
+    fmu_path = Path(fmu_path)
+    with zipfile.ZipFile(fmu_path) as zf:
+        entries = {info: zf.read(info) for info in zf.infolist()}
+    root = ET.fromstring(entries[next(i for i in entries if i.filename == "modelDescription.xml")])
+    _rebuild_model_structure(root)
+    _add_unit_definitions(root)
+    ET.indent(root, space="  ")
+    xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+    def write(staging: Path) -> None:
+        with zipfile.ZipFile(staging, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            for info, data in entries.items():
+                zf.writestr(info.filename, xml if info.filename == "modelDescription.xml" else data,
+                            compress_type=zipfile.ZIP_DEFLATED)
+
+    _replace_file(target=fmu_path, write=write)
+
+
+def _replace_file(target: Path, write) -> None:
+    # Stage beside the target so that os.replace is atomic: a reader never sees half a zip.
+    fd, staging = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial")
+    os.close(fd)
+    try:
+        write(Path(staging))
+        os.chmod(staging, 0o644)  # mkstemp makes it private; an FMU is an ordinary file
+        os.replace(staging, target)
+    except BaseException:
+        Path(staging).unlink(missing_ok=True)
+        raise
+
+
+def _rebuild_model_structure(root: ET.Element) -> None:
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    outputs, initial_unknowns = [], []
+    for index, var in enumerate(variables, start=1):
+        causality = var.get("causality", "local")
+        initial = var.get("initial") or _DEFAULT_INITIAL.get(
+            (causality, var.get("variability", "continuous")))
+        if causality == "output":
+            outputs.append(index)
+        if (causality == "output" and initial in ("approx", "calculated")) \
+                or causality == "calculatedParameter":
+            initial_unknowns.append(index)
+    # pythonfmu FMUs are co-simulation only: no Derivatives to carry over.
+    for old in root.findall("ModelStructure"):
+        root.remove(old)
+    structure = ET.SubElement(root, "ModelStructure")
+    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", initial_unknowns)):
+        if indices:
+            node = ET.SubElement(structure, tag)
+            for index in indices:
+                ET.SubElement(node, "Unknown", index=str(index))
+
+
+def _add_unit_definitions(root: ET.Element) -> None:
+    used: dict[str, set[str]] = {}
+    for real in root.iter("Real"):
+        if real.get("unit"):
+            used.setdefault(real.get("unit"), set())
+            if real.get("displayUnit"):
+                used[real.get("unit")].add(real.get("displayUnit"))
+    definitions = root.find("UnitDefinitions")
+    if definitions is None:
+        if not used:
+            return
+        position = next((i for i, child in enumerate(root) if child.tag in _AFTER_UNIT_DEFINITIONS),
+                        len(root))
+        definitions = ET.Element("UnitDefinitions")
+        root.insert(position, definitions)
+    declared = {unit.get("name"): unit for unit in definitions.findall("Unit")}
+    for name in sorted(used):
+        unit = declared.get(name)
+        if unit is None:  # not `or`: an Element without children is falsy
+            unit = ET.SubElement(definitions, "Unit", name=name)
+        known = {d.get("name") for d in unit.findall("DisplayUnit")}
+        for display in sorted(used[name] - known):
+            ET.SubElement(unit, "DisplayUnit", name=display)
+
+
+def validate(fmu_path: Path) -> list[str]:
+    """Problems `fmpy validate` reports for `fmu_path` (schema, structure, start values, units).
+
+    An empty list means valid.
+    """
+    from fmpy.validation import validate_fmu
+
+    return list(validate_fmu(str(fmu_path)))
+
+
+def build_example_fmus(output_dir: Path) -> list[Path]:
+    """Build examples/induction_motor.py and examples/fan_load.py into `output_dir`.
+
+    Returns the FMU paths (InductionMotor.fmu, FanLoad.fmu); existing files of those names in
+    `output_dir` are replaced.
+    """
+    output_dir = Path(output_dir)
+    return [build_slave_fmu(slave_script=EXAMPLES / script, project_files=[],
+                            output=output_dir / fmu_name, handle_state=True)
+            for script, fmu_name in (("induction_motor.py", "InductionMotor.fmu"),
+                                     ("fan_load.py", "FanLoad.fmu"))]
+
+
+def build_gear_fmu(scene: Path, output: Path) -> Path:
+    """Build the gear-train FMU of a scene file: the slave, the herringbone package and the
+    scene (as resources/scene.toml) go into it; its variables are exactly the scene's."""
+    sys.path.insert(0, str(GEAR_PACKAGE.parent))
+    from herringbone import load_scene
+
+    load_scene(scene)  # a bad scene is reported here, in the scene's own words
+    with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
+        scene_copy = Path(tmp) / "scene.toml"
+        shutil.copyfile(scene, scene_copy)
+        return build_slave_fmu(slave_script=GEAR_SLAVE, project_files=[GEAR_PACKAGE, scene_copy],
+                               output=output, handle_state=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """CLI entry point; returns the process exit code."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scene", nargs="?", type=Path, default=ROOT / "models" / "reference.toml",
+                        help="scene file (default: models/reference.toml)")
+    parser.add_argument("-o", "--output", type=Path, default=ROOT / "dist" / "HerringboneGear.fmu",
+                        help="FMU to write (default: dist/HerringboneGear.fmu)")
+    parser.add_argument("--examples", type=Path, metavar="DIR",
+                        help="build the example drive-train FMUs into DIR instead")
+    args = parser.parse_args(argv)
+    if args.examples is not None:
+        for path in build_example_fmus(output_dir=args.examples):
+            print(path)
+        return 0
+    from herringbone import SceneError
+
+    try:
+        print(build_gear_fmu(scene=args.scene, output=args.output))
+    except (SceneError, RuntimeError) as error:
+        print(f"build_fmu: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,66 @@
+"""Fan (quadratic) load as a pythonfmu co-simulation slave.
+
+Input `w_load` (shaft speed, rad/s) -> output `M_load` = k_fan w |w| (N.m, opposes the motion:
+positive for positive speed).  The output is a direct feedthrough of the input, evaluated
+whenever the host reads it.  Default k_fan gives 1800 N.m at 157.08/3.6 = 43.63 rad/s, the
+wheel speed of the reference gear train.
+"""
+import math
+
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+from pythonfmu.enums import Fmi2Status
+
+
+class RealWithUnit(Real):
+    """pythonfmu 0.7.0's Real has no `unit`; this writes it into the <Real> element.
+
+    build_fmu.py adds the matching <UnitDefinitions>.
+    """
+
+    def __init__(self, name: str, *, unit: str, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self):
+        node = super().to_xml()
+        node.find("Real").set("unit", self.unit)
+        return node
+
+
+class FanLoad(Fmi2Slave):
+    """Quadratic fan load: speed in, resisting torque out."""
+
+    description = "Fan load M = k_fan w |w| (speed in, torque out)"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.k_fan = 0.9454
+        self.w_load = 0.0
+        self.register_variable(RealWithUnit(
+            "k_fan", unit="N.m.s2/rad2", description="fan torque coefficient (>= 0)",
+            causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable))
+        self.register_variable(RealWithUnit(
+            "w_load", unit="rad/s", description="fan shaft speed",
+            causality=Fmi2Causality.input, variability=Fmi2Variability.continuous))
+        self.register_variable(RealWithUnit(
+            "M_load", unit="N.m", description="torque the fan takes from its shaft",
+            causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+            getter=self.torque))
+
+    def torque(self) -> float:
+        """Fan torque at the current input speed, N.m (NaN while k_fan is unusable)."""
+        if self.problem() is not None:
+            return math.nan
+        return self.k_fan * self.w_load * abs(self.w_load)
+
+    def problem(self) -> str | None:
+        """Why the parameters are unusable, or None."""
+        return None if self.k_fan >= 0 else f"FanLoad: need k_fan >= 0; got {self.k_fan}"
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        # Reported here rather than raised: see InductionMotor.do_step.
+        problem = self.problem()
+        if problem is not None:
+            self.log(problem.replace("%", "%%"), Fmi2Status.error)
+            return False
+        return True

@@ -1,0 +1,187 @@
+"""The gear train as an FMI 2.0 co-simulation slave: a thin adapter over herringbone's model.
+
+The FMU carries its scene (resources/scene.toml) and declares exactly that scene's variables:
+its parameters (start values from the scene), the two input torques, the outputs of MODEL.md
+section 7, and the solver's settings. doStep advances the same model that reference_simulate
+uses, stopping at every contact switch.
+
+Errors never raise: a Python exception is fmi2Fatal, which aborts a libcosim host. A bad
+parameter, a non-finite input or a solver failure is logged at error status and the next doStep
+returns False (fmi2Discard), so the host keeps running and shows the message.
+"""
+import math
+from pathlib import Path
+
+from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
+                       Integer, Real)
+from pythonfmu.enums import Fmi2Status
+
+import herringbone
+from herringbone.model import GearTrainModel
+from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
+from herringbone.stepping import ScipyStepper, start_position
+
+SCENE_FILE = "scene.toml"
+TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise
+
+# The solver's settings, declared next to their meaning like the model's parameters.
+SOLVER_SETTINGS = {
+    "solver_tolerance": Parameter(
+        "solver_tolerance", 1e-7, "1", "error allowed per internal step, relative to the static "
+        "mesh force (tighter: more accurate, slower)"),
+    "max_step": Parameter(
+        "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)"),
+}
+
+
+class RealWithUnit(Real):
+    """pythonfmu 0.7.0's Real takes no unit: this writes one into the <Real> element
+    (build_fmu.py declares the units the model description uses)."""
+
+    def __init__(self, name, *, unit, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self):
+        node = super().to_xml()
+        node.find("Real").set("unit", self.unit)
+        return node
+
+
+class HerringboneGear(Fmi2Slave):
+    description = "Herringbone Novikov gear train: motor, pinion, wheel and load (MODEL.md)"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
+        experiment = self.scene.experiment
+        type(self).default_experiment = DefaultExperiment(
+            start_time=0.0, stop_time=experiment.stop_time,
+            step_size=experiment.output_interval)
+        self.values = dict(self.scene.parameters)
+        self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})
+        motor_torque, load_torque = self.scene.inputs.at(0.0)
+        self.values.update(M_motor=motor_torque, M_load=load_torque)
+        self.outputs = {}
+        self.problem = None  # what stops the run, logged once and reported by every doStep
+        self.position = None
+        self.stepper = None
+        self.model = GearTrainModel(self.scene)
+
+        for name, parameter in {**parameters_of(self.scene.components),
+                                **SOLVER_SETTINGS}.items():
+            self._declare(name, parameter, Fmi2Causality.parameter, Fmi2Variability.fixed)
+        for name, parameter in INPUTS.items():
+            self._declare(name, parameter, Fmi2Causality.input, Fmi2Variability.continuous)
+        for name in self.model.output_names:
+            output = OUTPUTS[name]
+            self.outputs[name] = 0.0
+            getter = (lambda n=name: int(self.outputs[n])) if output.kind is int \
+                else (lambda n=name: self.outputs[n])
+            if output.kind is int:
+                self.register_variable(Integer(name, description=output.description,
+                                               causality=Fmi2Causality.output,
+                                               variability=Fmi2Variability.discrete,
+                                               getter=getter))
+            else:
+                self.register_variable(RealWithUnit(name, unit=output.unit,
+                                                    description=output.description,
+                                                    causality=Fmi2Causality.output,
+                                                    variability=Fmi2Variability.continuous,
+                                                    getter=getter))
+        self._start()  # outputs at t = 0 for the scene's own values
+
+    def _declare(self, name, parameter, causality, variability):
+        kind = {bool: Boolean, int: Integer}.get(parameter.kind)
+        arguments = dict(description=f"{parameter.description} [{parameter.unit}]"
+                         if kind else parameter.description, causality=causality,
+                         variability=variability, getter=lambda: self.values[name],
+                         setter=lambda value: self.values.__setitem__(name, value))
+        self.register_variable(kind(name, **arguments) if kind else
+                               RealWithUnit(name, unit=parameter.unit, **arguments))
+
+    # --- FMI callbacks -----------------------------------------------------------------------
+
+    def exit_initialization_mode(self):
+        self._start()
+
+    def do_step(self, current_time, step_size):
+        if self.problem is None:
+            torques = (self.values["M_motor"], self.values["M_load"])
+            for name, value in zip(INPUTS, torques):
+                if not math.isfinite(value):
+                    self._fail(f"input {name} is {value}; allowed: any finite number")
+            if self.problem is None:
+                try:
+                    self.position = self.stepper.advance(self.position,
+                                                         current_time + step_size, torques)
+                    self._update_outputs()
+                except Exception as error:  # never let an exception reach the host
+                    self._fail(f"doStep from t = {current_time:g} s by {step_size:g} s "
+                               f"failed: {error}")
+        if self.problem is not None:
+            self._log_error(self.problem)
+            return False
+        return True
+
+    def _get_fmu_state(self):
+        return {"position": self.position, "outputs": dict(self.outputs),
+                "values": dict(self.values), "problem": self.problem}
+
+    def _set_fmu_state(self, state):
+        # positions are immutable (every step makes a new one), so sharing them is safe
+        self.position = state["position"]
+        self.outputs = dict(state["outputs"])
+        self.values = dict(state["values"])
+        self.problem = state["problem"]
+
+    # --- the model behind it -----------------------------------------------------------------
+
+    def _start(self):
+        """Validate the parameters and place the train in its initial state (MODEL.md 6)."""
+        self.problem = None
+        try:
+            for name, parameter in {**SOLVER_SETTINGS, **INPUTS}.items():
+                problem = check_value(parameter, self.values[name]) if name not in SOLVER_SETTINGS \
+                    else self._check_solver_setting(name, self.values[name])
+                if problem:
+                    return self._fail(f"{name} {problem}")
+            given = {k: v for k, v in self.values.items() if k in self.scene.parameters}
+            scene = self.scene.with_parameters(**given).with_inputs(
+                M_motor=self.values["M_motor"], M_load=self.values["M_load"])
+            self.model = GearTrainModel(scene)
+            max_step = self.values["max_step"] or math.inf
+            self.stepper = ScipyStepper(self.model, self.values["solver_tolerance"],
+                                        max_step=max_step)
+            self.position = start_position(self.model, self.values["M_motor"])
+            self._update_outputs()
+        except herringbone.SceneError as error:
+            # the scene's own message names the variable; drop its file prefix
+            self._fail(str(error).split(": ", 1)[-1].replace("[parameters] ", "parameter "))
+        except Exception as error:
+            self._fail(f"initialization failed: {error}")
+
+    @staticmethod
+    def _check_solver_setting(name, value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            return f"is {value!r}; allowed: a finite number"
+        if name == "solver_tolerance" and not TIGHTEST_TOLERANCE <= value <= 1e-2:
+            return f"is {value!r}; allowed: [{TIGHTEST_TOLERANCE:g}, 0.01]"
+        if name == "max_step" and value < 0.0:
+            return f"is {value!r}; allowed: >= 0 (0: no limit)"
+        return None
+
+    def _update_outputs(self):
+        segment = self.position.segment
+        self.outputs.update(self.model.outputs(self.position.state, segment.contact_set,
+                                               segment.loaded))
+
+    def _fail(self, message):
+        if self.problem is None:
+            self.problem = message
+            self._log_error(message)
+
+    def _log_error(self, message):
+        # hosts format log messages printf-style: a bare '%' crashes them
+        self.log(f"{self.instance_name}: {message}".replace("%", "%%"), Fmi2Status.error)
