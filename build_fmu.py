@@ -207,6 +207,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="scene file (default: models/reference.toml)")
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "dist" / "HerringboneGear.fmu",
                         help="FMU to write (default: dist/HerringboneGear.fmu)")
+    parser.add_argument("--simulate", action="store_true",
+                        help="then simulate the scene through the FMU with fmpy: a summary, "
+                             "and the outputs in results/<scene>_fmu.csv")
     parser.add_argument("--examples", type=Path, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
     args = parser.parse_args(argv)
@@ -217,11 +220,31 @@ def main(argv: list[str] | None = None) -> int:
     from herringbone import SceneError
 
     try:
-        print(build_gear_fmu(scene=args.scene, output=args.output))
+        print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
+        if args.simulate:
+            simulate(fmu=args.output, scene_path=args.scene)
     except (SceneError, RuntimeError) as error:
         print(f"build_fmu: {error}", file=sys.stderr)
         return 2
     return 0
+
+
+def simulate(fmu: Path, scene_path: Path) -> None:
+    """The main job's second half: the scene through its FMU, summary and CSV."""
+    import time
+
+    from herringbone import load_scene
+    from herringbone.cli import summary, write_csv
+    from herringbone.fmu_run import simulate_scene_fmu
+
+    scene = load_scene(scene_path)
+    started = time.perf_counter()
+    results = simulate_scene_fmu(fmu_path=fmu, scene=scene)
+    wall = time.perf_counter() - started
+    csv_path = Path("results") / f"{scene.name}_fmu.csv"
+    write_csv(results, csv_path)
+    print(summary(scene, results, wall))
+    print(f"outputs written to {csv_path}")
 
 
 if __name__ == "__main__":

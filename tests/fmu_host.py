@@ -1,0 +1,68 @@
+"""A small fmpy host for tests: one FMU2Slave instance with its log captured."""
+import shutil
+from ctypes import byref
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import (FMU2Slave, calloc, fmi2CallbackAllocateMemoryTYPE,
+                       fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE, free)
+from fmpy.logging import addLoggerProxy
+
+
+class Instance:
+    """Instantiate, set start values, initialize; then step, read outputs, save and restore."""
+
+    def __init__(self, fmu_path, start_values=None, name="gear"):
+        self.description = read_model_description(str(fmu_path))
+        self.variables = {v.name: v for v in self.description.modelVariables}
+        self.unzipped = extract(str(fmu_path))
+        self.messages = []  # (status, text) of every log message
+
+        def on_log(environment, instance, status, category, message):
+            self.messages.append((status, message.decode()))
+
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(on_log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(self.callbacks))
+        self.slave = FMU2Slave(guid=self.description.guid, unzipDirectory=self.unzipped,
+                               modelIdentifier=self.description.coSimulation.modelIdentifier,
+                               instanceName=name)
+        self.slave.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.slave.setupExperiment(startTime=0.0)
+        self.slave.enterInitializationMode()
+        self.set(**(start_values or {}))
+        self.slave.exitInitializationMode()
+        self.time = 0.0
+
+    def set(self, **values):
+        for name, value in values.items():
+            variable = self.variables[name]
+            setter = {"Real": self.slave.setReal, "Integer": self.slave.setInteger,
+                      "Boolean": self.slave.setBoolean}[variable.type]
+            setter([variable.valueReference], [value])
+
+    def get(self, names):
+        out = {}
+        for name in names:
+            variable = self.variables[name]
+            getter = {"Real": self.slave.getReal, "Integer": self.slave.getInteger}[variable.type]
+            out[name] = getter([variable.valueReference])[0]
+        return out
+
+    def step(self, size):
+        self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=size)
+        self.time += size
+
+    def free(self):
+        self.slave.freeInstance()
+        shutil.rmtree(self.unzipped, ignore_errors=True)
+
+
+def structured_inputs(times, motor_torque, load_torque):
+    """The input table fmpy.simulate_fmu takes."""
+    table = np.zeros(len(times), dtype=[("time", float), ("M_motor", float), ("M_load", float)])
+    table["time"], table["M_motor"], table["M_load"] = times, motor_torque, load_torque
+    return table
