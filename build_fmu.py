@@ -20,6 +20,7 @@ ROOT = Path(__file__).resolve().parent
 EXAMPLES = ROOT / "examples"
 GEAR_SLAVE = ROOT / "fmu_src" / "herringbone_gear_fmu.py"
 GEAR_PACKAGE = ROOT / "fmu_src" / "herringbone"
+UNITS_MODULE = ROOT / "fmu_src" / "fmi_units.py"  # shipped with every FMU: see its docstring
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -49,7 +50,7 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
     """
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
-    project_files = [Path(p).resolve() for p in project_files]
+    project_files = [Path(p).resolve() for p in project_files] + [UNITS_MODULE]
     with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
         # A separate interpreter: pythonfmu's builder imports the script and leaves it in
         # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
@@ -58,7 +59,7 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
                    "-d", tmp, *map(str, project_files)]
         if handle_state:
             command.append("--handle-state")
-        import_paths = [str(p.parent) for p in project_files if p.is_dir()]
+        import_paths = [str(p.parent) for p in project_files if p.is_dir() or p.suffix == ".py"]
         if os.environ.get("PYTHONPATH"):
             import_paths.append(os.environ["PYTHONPATH"])
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(import_paths)}

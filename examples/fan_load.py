@@ -7,24 +7,9 @@ wheel speed of the reference gear train.
 """
 import math
 
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+from fmi_units import RealWithUnit
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
-
-
-class RealWithUnit(Real):
-    """pythonfmu 0.7.0's Real has no `unit`; this writes it into the <Real> element.
-
-    build_fmu.py adds the matching <UnitDefinitions>.
-    """
-
-    def __init__(self, name: str, *, unit: str, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        node = super().to_xml()
-        node.find("Real").set("unit", self.unit)
-        return node
 
 
 class FanLoad(Fmi2Slave):

@@ -13,8 +13,9 @@ import math
 from pathlib import Path
 
 import numpy as np
+from fmi_units import RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
-                       Integer, Real)
+                       Integer)
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
@@ -33,20 +34,6 @@ SOLVER_SETTINGS = {
     "max_step": Parameter(
         "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)"),
 }
-
-
-class RealWithUnit(Real):
-    """pythonfmu 0.7.0's Real takes no unit: this writes one into the <Real> element
-    (build_fmu.py declares the units the model description uses)."""
-
-    def __init__(self, name, *, unit, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        node = super().to_xml()
-        node.find("Real").set("unit", self.unit)
-        return node
 
 
 class HerringboneGear(Fmi2Slave):
