@@ -240,3 +240,16 @@ def test_scene_input_table_reaches_the_fmu_held_like_the_reference(built_fmus, t
     assert largest_force_difference(result, reference, scene) < DEFAULT_BOUND
     # after the first step the motor torque has changed the shaft torque by hundreds of N·m
     assert np.ptp(reference["T_shaft_in"]) > 100.0
+
+
+def test_step_from_a_time_the_fmu_is_not_at_is_discarded(built_fmus):
+    gear = Instance(built_fmus["reference"])
+    try:
+        gear.step(1e-3)
+        gear.time = 5e-3  # a master that skipped ahead without stepping
+        with pytest.raises(FMICallException) as error:
+            gear.step(1e-3)
+        assert error.value.status == DISCARD
+        assert any("FMU is at" in text for status, text in gear.messages if status == 3)
+    finally:
+        gear.free()

@@ -77,12 +77,6 @@ class Scene:
             "M_load": self.inputs.M_load[0] if M_load is None else M_load}
         return replace(self, inputs=_inputs(data, self.source))
 
-    def with_experiment(self, stop_time=None, output_interval=None) -> "Scene":
-        return replace(self, experiment=_experiment(
-            {"stop_time": stop_time or self.experiment.stop_time,
-             "output_interval": output_interval or self.experiment.output_interval},
-            self.source))
-
 
 def load_scene(path) -> Scene:
     """Read and validate a scene file (see the module docstring for its format)."""
