@@ -57,7 +57,8 @@ class ScipyStepper:
         sample_times = [t for t in sample_times if position.time <= t < end]
         stalled = 0
         while position.time < end:
-            solution, event = self._integrate_segment(position, end, torques)
+            solution, event = self._integrate_segment(position, end, torques,
+                                                      dense_output=bool(sample_times))
             reached = solution.t[-1]
             segment = position.segment
             while sample_times and sample_times[0] < reached:
@@ -74,8 +75,9 @@ class ScipyStepper:
             position = Position(reached, state, segment, _step_hint(solution, position))
         return position
 
-    def _integrate_segment(self, position, end, torques):
-        """One segment from position.time towards `end`; stops at its first event."""
+    def _integrate_segment(self, position, end, torques, dense_output):
+        """One segment from position.time towards `end`; stops at its first event. The dense
+        output (three more evaluations a step for DOP853) is kept only for sampling."""
         model, segment = self.model, position.segment
         event_list = segments.events(model, segment)
         cache = {}
@@ -100,7 +102,8 @@ class ScipyStepper:
                                                            segment.loaded, *torques),
                              (position.time, end), position.state, method=self.method,
                              rtol=self.tolerance, atol=self.absolute_tolerance,
-                             dense_output=True, first_step=first_step, max_step=self.max_step,
+                             dense_output=dense_output, first_step=first_step,
+                             max_step=self.max_step,
                              events=[make_event(i, e) for i, e in enumerate(event_list)])
         if solution.status < 0 or not np.all(np.isfinite(solution.y[:, -1])):
             raise IntegrationError(f"integration failed at t = {position.time:.9g} s: "
