@@ -19,7 +19,7 @@ from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variabil
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
-from herringbone.model import GearTrainModel
+from herringbone.model import GearTrainModel, output_names
 from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
 from herringbone.stepping import ScipyStepper, start_position
 
@@ -54,14 +54,14 @@ class HerringboneGear(Fmi2Slave):
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.position = None
         self.stepper = None
-        self.model = GearTrainModel(self.scene)
+        self.model = None
 
         for name, parameter in {**parameters_of(self.scene.components),
                                 **SOLVER_SETTINGS}.items():
             self._declare(name, parameter, Fmi2Causality.parameter, Fmi2Variability.fixed)
         for name, parameter in INPUTS.items():
             self._declare(name, parameter, Fmi2Causality.input, Fmi2Variability.continuous)
-        for name in self.model.output_names:
+        for name in output_names(self.scene):
             output = OUTPUTS[name]
             self.outputs[name] = 0.0
             getter = (lambda n=name: int(self.outputs[n])) if output.kind is int \
@@ -136,9 +136,10 @@ class HerringboneGear(Fmi2Slave):
         """Validate the parameters and place the train in its initial state (MODEL.md 6)."""
         self.problem = None
         try:
-            for name, parameter in {**SOLVER_SETTINGS, **INPUTS}.items():
-                problem = check_value(parameter, self.values[name]) if name not in SOLVER_SETTINGS \
-                    else self._check_solver_setting(name, self.values[name])
+            problems = [(name, check_value(p, self.values[name])) for name, p in INPUTS.items()]
+            problems += [(name, self._check_solver_setting(name, self.values[name]))
+                         for name in SOLVER_SETTINGS]
+            for name, problem in problems:
                 if problem:
                     return self._fail(f"{name} {problem}")
             given = {k: v for k, v in self.values.items() if k in self.scene.parameters}
