@@ -13,11 +13,13 @@ whose trial steps see the switch loses accuracy or fails).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import equations
 from .gear import HALVES, GearGeometry
 
 # Phases closer than this (in pitches; 3e-12 m of axial travel on the reference gear) are one
@@ -93,6 +95,7 @@ class ContactSet:
     lever_arm_slope: np.ndarray
     lead_error0: np.ndarray
     lead_error_slope: np.ndarray
+    table: np.ndarray  # the same, one column a point, as the compiled equations take it
 
     def __len__(self) -> int:
         return len(self.z0)
@@ -108,6 +111,7 @@ class Mesh:
         self.edge_ramp = parameters["edge_ramp"]
         self.lead_error = {"left": parameters["dbeta_left"], "right": parameters["dbeta_right"]}
         self.switch_phases = self._switch_phases()
+        self._sets_of_first_period: dict[int, ContactSet] = {}  # shared: never written to
 
     def _switch_phases(self) -> np.ndarray:
         p_x = self.geometry.axial_pitch
@@ -149,6 +153,17 @@ class Mesh:
         n = len(self.switch_phases)
         cycle += interval // n
         interval %= n
+        if interval not in self._sets_of_first_period:
+            self._sets_of_first_period[interval] = self._contact_set(interval)
+        first = self._sets_of_first_period[interval]
+        if cycle == 0:
+            return first
+        # every period holds the same sets; only where they start moves
+        return dataclasses.replace(first, cycle=cycle, pinion_angle=(
+            cycle + self.switch_phases[interval]) * self.geometry.angular_pitch)
+
+    def _contact_set(self, interval: int) -> ContactSet:
+        cycle, n = 0, len(self.switch_phases)
         start = self.switch_phases[interval]
         end = self.switch_phases[interval + 1] if interval + 1 < n else self.switch_phases[0] + 1.0
         middle = 0.5 * (start + end)
@@ -177,6 +192,25 @@ class Mesh:
                 columns["lead_error0"].append(self.lead_error[stream.half] * z0)
                 columns["lead_error_slope"].append(self.lead_error[stream.half])
         arrays = {k: np.array(v, dtype=int if k == "half" else float) for k, v in columns.items()}
+        table = np.zeros((equations.POINT_FIELDS, len(arrays["z0"])))
+        for row, name in ((equations.HALF, "half"), (equations.STIFFNESS0, "stiffness0"),
+                          (equations.STIFFNESS_SLOPE, "stiffness_slope"),
+                          (equations.LEVER_ARM0, "lever_arm0"),
+                          (equations.LEVER_ARM_SLOPE, "lever_arm_slope"),
+                          (equations.LEAD_ERROR0, "lead_error0"),
+                          (equations.LEAD_ERROR_SLOPE, "lead_error_slope")):
+            table[row] = arrays[name]
         return ContactSet(cycle=cycle, index=interval,
                           pinion_angle=(cycle + start) * g.angular_pitch,
-                          length=(end - start) * g.angular_pitch, **arrays)
+                          length=(end - start) * g.angular_pitch, table=table, **arrays)
+
+    def period_table(self):
+        """Every contact set of one mesh period, for the compiled integrator (the sets of other
+        periods differ only in where they start): the intervals' lengths, their numbers of
+        points, and their point tables stacked, padded with zero columns to the longest."""
+        sets = [self.contact_set(0, i) for i in range(len(self.switch_phases))]
+        counts = np.array([len(s) for s in sets], dtype=np.int64)
+        tables = np.zeros((len(sets), equations.POINT_FIELDS, max(1, counts.max())))
+        for i, contact_set in enumerate(sets):
+            tables[i, :, :counts[i]] = contact_set.table
+        return np.array([s.length for s in sets]), counts, tables

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from .compiled import equations
 from .gear import GearGeometry
 from .mesh import ContactSet, Mesh
 
@@ -92,7 +93,46 @@ class GearTrainModel:
         self.mesh_damping_factor = 2.0 * p["zeta_mesh"] / mesh_frequency  # η: h = η·c
         self.contact_loss = p["contact_loss"]
         self.axial_travel_per_radian = g.axial_speed_per_radian
+        # ÿ = P·(generalized force): q̈ = M⁻¹·f, then ÿ = q̈ − r̃·φ̈p
+        to_relative = ((np.eye(self.size) - np.outer(self._relative_offset,
+                                                    self.unit("phi_pinion"))) / self.mass)
+        self.system = equations.System(
+            pinion=self.pinion, wheel=self.wheel, mass=self.mass,
+            rigid_rotation=self.rigid_rotation,
+            element_rows_relative=self._element_rows_relative,
+            element_stiffness=self.element_stiffness, element_damping=self.element_damping,
+            motor_acceleration=to_relative @ self.motor_torque_row,
+            load_acceleration=to_relative @ self.load_torque_row,
+            elastic_acceleration=-to_relative @ (self.element_rows.T * self.element_stiffness)
+            @ self._element_rows_relative,
+            damping_acceleration=-to_relative @ (self.element_rows.T * self.element_damping)
+            @ self._element_rows_relative,
+            contact_base_acceleration=to_relative @ self.contact_row_base,
+            contact_tilt_acceleration=to_relative @ self.contact_row_tilt,
+            contact_row_base_relative=self._contact_base_relative,
+            contact_row_tilt_relative=self._contact_tilt_relative,
+            mesh_damping_factor=float(self.mesh_damping_factor),
+            axial_travel_per_radian=float(g.axial_speed_per_radian),
+            radius_wheel=float(g.radius_wheel), contact_loss=bool(self.contact_loss))
         self.output_names = output_names(scene)
+        self.output_layout = self._output_layout()
+        self.output_layout_size = (equations.FIRST_ELEMENT_FORCE + len(self.elements)
+                                   + self.size)
+
+    def _output_layout(self) -> list[tuple[str, int]]:
+        """Where each output of the scene sits in the vector equations.outputs fills."""
+        first_speed = equations.FIRST_ELEMENT_FORCE + len(self.elements)
+        index = {"k_mesh": equations.K_MESH, "k_mesh_left": equations.K_MESH_LEFT,
+                 "k_mesh_right": equations.K_MESH_RIGHT, "F_mesh": equations.F_MESH,
+                 "F_mesh_left": equations.F_MESH_LEFT, "F_mesh_right": equations.F_MESH_RIGHT,
+                 "n_contacts": equations.N_CONTACTS, "dte": equations.DTE}
+        index.update({e.name: equations.FIRST_ELEMENT_FORCE + k
+                      for k, e in enumerate(self.elements)})
+        for name, coordinate in (("w_motor", "phi_motor"), ("w_pinion", "phi_pinion"),
+                                 ("w_wheel", "phi_wheel"), ("w_load", "phi_load")):
+            if coordinate in self.coordinates:
+                index[name] = first_speed + self.coordinates.index(coordinate)
+        return [(name, index[name]) for name in self.output_names]
 
     def unit(self, coordinate: str) -> np.ndarray:
         """The unit row of a coordinate (zero if the scene leaves the coordinate out)."""
@@ -127,68 +167,32 @@ class GearTrainModel:
                                                    p[f"h_brg_{gear}_{side}"]))
         return elements
 
-    # --- the contact points of a segment -------------------------------------------------
+    # --- the equations (compiled: compiled/equations.py) ------------------------------------
 
     def contact_geometry(self, y: np.ndarray, contact_set: ContactSet):
         """Stiffness, lever arm and lead error of each point at the state's pinion angle."""
-        travel = self.axial_travel_per_radian * y[self.pinion]
-        stiffness = contact_set.stiffness0 + contact_set.stiffness_slope * travel
-        lever_arm = contact_set.lever_arm0 + contact_set.lever_arm_slope * travel
-        lead_error = contact_set.lead_error0 + contact_set.lead_error_slope * travel
-        return stiffness, lever_arm, lead_error
+        return equations.point_geometry(self.system, contact_set.table, len(contact_set),
+                                        float(y[self.pinion]))
 
-    def point_approach(self, y, y_rate, contact_set):
-        """δ + η·δ̇ of every point of the set (its load per unit stiffness: a point is loaded
-        while this is positive, even where its stiffness ramps from zero), and the points'
-        stiffnesses and lever arms."""
-        stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
-        deformation = (self._contact_base_relative @ y
-                       + lever_arm * (self._contact_tilt_relative @ y) + lead_error)
-        rate = self._contact_base_relative @ y_rate + lever_arm * (
-            self._contact_tilt_relative @ y_rate)
-        return deformation + self.mesh_damping_factor * rate, stiffness, lever_arm
-
-    def element_forces(self, y, y_rate):
-        """c·Δ + h·Δ̇ of the shafts and bearings."""
-        return (self.element_stiffness * (self._element_rows_relative @ y)
-                + self.element_damping * (self._element_rows_relative @ y_rate))
+    def point_approach(self, state, contact_set) -> np.ndarray:
+        """δ + η·δ̇ of every point of the set: its load per unit stiffness."""
+        approach = np.empty(len(contact_set))
+        equations.approaches(self.system, contact_set.table, len(contact_set), state, approach)
+        return approach
 
     def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
         """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""
-        y, y_rate = state[:self.size], state[self.size:]
-        approach, stiffness, lever_arm = self.point_approach(y, y_rate, contact_set)
-        point_forces = stiffness * approach * loaded
-        generalized_force = (motor_torque * self.motor_torque_row
-                             - load_torque * self.load_torque_row
-                             - self.element_rows.T @ self.element_forces(y, y_rate)
-                             - point_forces.sum() * self.contact_row_base
-                             - (lever_arm @ point_forces) * self.contact_row_tilt)
-        acceleration = generalized_force / self.mass
-        acceleration -= self._relative_offset * acceleration[self.pinion]
-        return np.concatenate([y_rate, acceleration])
+        rate = np.empty_like(state)
+        equations.derivative(self.system, contact_set.table, len(contact_set), loaded,
+                             float(motor_torque), float(load_torque), state, rate)
+        return rate
 
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
         """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
         carry load (all points of the set where contact cannot be lost)."""
-        y, y_rate = state[:self.size], state[self.size:]
-        approach, stiffness, _ = self.point_approach(y, y_rate, contact_set)
-        forces = stiffness * approach * loaded
-        in_contact = stiffness * loaded
-        left = contact_set.half == 0
-        values = {"k_mesh": in_contact.sum(), "k_mesh_left": in_contact[left].sum(),
-                  "k_mesh_right": in_contact[~left].sum(), "F_mesh": forces.sum(),
-                  "F_mesh_left": forces[left].sum(), "F_mesh_right": forces[~left].sum()}
-        values.update(zip((e.name for e in self.elements), self.element_forces(y, y_rate)))
-        speeds = y_rate + self.rigid_rotation * y_rate[self.pinion]
-        speeds[self.pinion] = y_rate[self.pinion]
-        for name, coordinate in (("w_motor", "phi_motor"), ("w_pinion", "phi_pinion"),
-                                 ("w_wheel", "phi_wheel"), ("w_load", "phi_load")):
-            if coordinate in self.coordinates:
-                values[name] = speeds[self.coordinates.index(coordinate)]
-        # Rp·φp − Rw·φw: the rigid rotation cancels (Rp = Rw/u), leaving −Rw·(φw − φp/u)
-        values["dte"] = -self.geometry.radius_wheel * y[self.wheel]
-        values["n_contacts"] = float(np.count_nonzero(loaded * (stiffness > 0.0)))
-        return {name: float(values[name]) for name in self.output_names}
+        values = np.empty(self.output_layout_size)
+        equations.outputs(self.system, contact_set.table, len(contact_set), loaded, state, values)
+        return {name: float(values[i]) for name, i in self.output_layout}
 
     # --- stiffness, statics, modes ------------------------------------------------------
 

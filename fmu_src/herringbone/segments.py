@@ -60,9 +60,7 @@ def event_values(model: GearTrainModel, segment: Segment, state: np.ndarray) -> 
     pinion_travel = state[model.pinion]
     values = [pinion_travel - segment.contact_set.length, pinion_travel]
     if model.contact_loss:
-        approach, _, _ = model.point_approach(state[:model.size], state[model.size:],
-                                              segment.contact_set)
-        values.extend(approach)
+        values.extend(model.point_approach(state, segment.contact_set))
     return np.array(values)
 
 
@@ -85,5 +83,4 @@ def after(model: GearTrainModel, segment: Segment, event: Event,
 def _loaded_by_sign(model, state, contact_set) -> np.ndarray:
     if not model.contact_loss:
         return np.ones(len(contact_set))
-    approach, _, _ = model.point_approach(state[:model.size], state[model.size:], contact_set)
-    return (approach >= 0.0).astype(float)
+    return (model.point_approach(state, contact_set) >= 0.0).astype(float)
