@@ -15,13 +15,14 @@ from pathlib import Path
 import numpy as np
 from fmi_units import RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
-                       Integer)
+                       Integer, String)
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
 from herringbone.model import GearTrainModel, output_names
 from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
-from herringbone.stepping import ScipyStepper, start_position
+from herringbone.integrator import METHODS, STIFFNESS_RATIO, CompiledStepper, warm_up
+from herringbone.stepping import start_position
 
 SCENE_FILE = "scene.toml"
 TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise
@@ -33,6 +34,11 @@ SOLVER_SETTINGS = {
         "mesh force (tighter: more accurate, slower)"),
     "max_step": Parameter(
         "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)"),
+    "solver_method": Parameter(
+        "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
+        "'radau' (implicit, L-stable, order 5, for stiff scenes) or 'auto' (radau when the "
+        f"fastest eigenvalue is over {STIFFNESS_RATIO:g} times the fastest oscillation: "
+        "overdamped stiffness)", kind=str),
 }
 
 
@@ -50,7 +56,8 @@ class HerringboneGear(Fmi2Slave):
         self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})
         motor_torque, load_torque = self.scene.inputs.at(0.0)
         self.values.update(M_motor=motor_torque, M_load=load_torque)
-        self.outputs = {}
+        self.output_values = None  # model.output_vector at the current position
+        self.output_index = {}
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.position = None
         self.stepper = None
@@ -63,9 +70,8 @@ class HerringboneGear(Fmi2Slave):
             self._declare(name, parameter, Fmi2Causality.input, Fmi2Variability.continuous)
         for name in output_names(self.scene):
             output = OUTPUTS[name]
-            self.outputs[name] = 0.0
-            getter = (lambda n=name: int(self.outputs[n])) if output.kind is int \
-                else (lambda n=name: self.outputs[n])
+            getter = (lambda n=name: int(self._output(n))) if output.kind is int \
+                else (lambda n=name: self._output(n))
             if output.kind is int:
                 self.register_variable(Integer(name, description=output.description,
                                                causality=Fmi2Causality.output,
@@ -77,10 +83,15 @@ class HerringboneGear(Fmi2Slave):
                                                     causality=Fmi2Causality.output,
                                                     variability=Fmi2Variability.continuous,
                                                     getter=getter))
+        self.register_variable(Integer(
+            "internal_steps", description="internal steps the integrator has taken since "
+            "initialization (a diagnostic of its cost)", causality=Fmi2Causality.local,
+            variability=Fmi2Variability.discrete,
+            getter=lambda: self.stepper.accepted_steps if self.stepper else 0))
         self._start()  # outputs at t = 0 for the scene's own values
 
     def _declare(self, name, parameter, causality, variability):
-        kind = {bool: Boolean, int: Integer}.get(parameter.kind)
+        kind = {bool: Boolean, int: Integer, str: String}.get(parameter.kind)
         arguments = dict(description=f"{parameter.description} [{parameter.unit}]"
                          if kind else parameter.description, causality=causality,
                          variability=variability, getter=lambda: self.values[name],
@@ -120,13 +131,13 @@ class HerringboneGear(Fmi2Slave):
         return True
 
     def _get_fmu_state(self):
-        return {"position": self.position, "outputs": dict(self.outputs),
+        return {"position": self.position, "outputs": self.output_values,
                 "values": dict(self.values), "problem": self.problem}
 
     def _set_fmu_state(self, state):
         # positions are immutable (every step makes a new one), so sharing them is safe
         self.position = state["position"]
-        self.outputs = dict(state["outputs"])
+        self.output_values = state["outputs"]
         self.values = dict(state["values"])
         self.problem = state["problem"]
 
@@ -146,10 +157,17 @@ class HerringboneGear(Fmi2Slave):
             scene = self.scene.with_parameters(**given).with_inputs(
                 M_motor=self.values["M_motor"], M_load=self.values["M_load"])
             self.model = GearTrainModel(scene)
+            self.output_index = dict(self.model.output_layout)
             max_step = self.values["max_step"] or math.inf
-            self.stepper = ScipyStepper(self.model, self.values["solver_tolerance"],
-                                        max_step=max_step)
+            self.stepper = CompiledStepper(self.model, self.values["solver_tolerance"],
+                                           method=self.values["solver_method"],
+                                           max_step=max_step)
             self.position = start_position(self.model, self.values["M_motor"])
+            compiled_seconds = warm_up(self.stepper, self.position)
+            if compiled_seconds is not None:
+                self.log(f"{self.instance_name}: first start: compiled the integrator in "
+                         f"{compiled_seconds:.1f} s; cached for later starts",
+                         Fmi2Status.ok, debug=False)
             self._update_outputs()
         except herringbone.SceneError as error:
             # the scene's own message names the variable; drop its file prefix
@@ -159,6 +177,9 @@ class HerringboneGear(Fmi2Slave):
 
     @staticmethod
     def _check_solver_setting(name, value):
+        if name == "solver_method":
+            return None if value in METHODS else (
+                f"is {value!r}; allowed: {', '.join(repr(m) for m in METHODS)}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value):
             return f"is {value!r}; allowed: a finite number"
@@ -169,9 +190,18 @@ class HerringboneGear(Fmi2Slave):
         return None
 
     def _update_outputs(self):
-        segment = self.position.segment
-        self.outputs.update(self.model.outputs(self.position.state, segment.contact_set,
-                                               segment.loaded))
+        if self.position.outputs is not None:
+            self.output_values = self.position.outputs
+        else:
+            segment = self.position.segment
+            self.output_values = self.model.output_vector(self.position.state,
+                                                          segment.contact_set, segment.loaded)
+
+    def _output(self, name):
+        # before a valid start (bad parameters) there is nothing to show
+        if self.output_values is None:
+            return 0.0
+        return float(self.output_values[self.output_index[name]])
 
     def _fail(self, message):
         if self.problem is None:

@@ -190,9 +190,14 @@ class GearTrainModel:
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
         """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
         carry load (all points of the set where contact cannot be lost)."""
+        values = self.output_vector(state, contact_set, loaded)
+        return {name: float(values[i]) for name, i in self.output_layout}
+
+    def output_vector(self, state, contact_set, loaded) -> np.ndarray:
+        """The outputs as equations.outputs lays them out (`output_layout` names them)."""
         values = np.empty(self.output_layout_size)
         equations.outputs(self.system, contact_set.table, len(contact_set), loaded, state, values)
-        return {name: float(values[i]) for name, i in self.output_layout}
+        return values
 
     # --- stiffness, statics, modes ------------------------------------------------------
 
@@ -236,6 +241,13 @@ class GearTrainModel:
                 total += 0.5 * weight * contact_set.length * self.stiffness_matrix(y, contact_set)
         return total / self.geometry.angular_pitch
 
+    def mean_damping_matrix(self) -> np.ndarray:
+        """C = Σ h·g·gᵀ of shafts and bearings plus η·(the contact points' mean stiffness)."""
+        rows = self.element_rows
+        element_stiffness = (rows.T * self.element_stiffness) @ rows
+        element_damping = (rows.T * self.element_damping) @ rows
+        return element_damping + self.mesh_damping_factor * (self.mean_stiffness_matrix()
+                                                             - element_stiffness)
 
     def force_scale(self) -> float:
         """The static mesh force of the largest input torque: the scale errors are judged on.

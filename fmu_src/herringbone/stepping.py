@@ -32,6 +32,7 @@ class Position:
     state: np.ndarray
     segment: segments.Segment
     step_hint: float | None = None  # the step size to try first (None: let the method choose)
+    outputs: np.ndarray | None = None  # model.output_vector here, if the stepper computed it
 
 
 def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: float = 0.0):

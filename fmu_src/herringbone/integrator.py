@@ -1,0 +1,120 @@
+"""The fast integrator: the compiled loop (compiled/walk.py) behind the stepping contract.
+
+`CompiledStepper.advance(position, end, torques)` keeps the contract of stepping.ScipyStepper:
+start from `position`, integrate with the torques held to exactly `end`, stopping on every contact
+switch, contact loss and regain; the result depends only on the position passed in, so a saved
+position re-runs identically. One call is one pass through compiled code, however many switches
+the span holds.
+
+Methods (`method`):
+- "dop853": explicit, order 8. Its step is bounded by stability to about 3.3/ω_max (ω_max the
+  highest natural frequency), which costs nothing while accuracy asks for shorter steps anyway.
+- "radau": Radau IIA, implicit and L-stable, order 5. Its step is set by accuracy alone, so it
+  wins where ω_max is far above what the outputs need resolved (very stiff bearings on light
+  bodies); it costs a Jacobian and two LU factorizations per segment.
+- "auto": see `choose_method`.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .compiled import walk
+from .model import GearTrainModel
+from .segments import Segment
+from .stepping import IntegrationError, Position
+
+METHODS = ("auto", "dop853", "radau")
+# "auto" takes the implicit method when the fastest eigenvalue of the linearized train is this
+# many times faster than the fastest oscillating one: the excess is overdamped motion that an
+# explicit method must follow for stability alone (measured: benchmarks/extreme_scenes.py).
+STIFFNESS_RATIO = 10.0
+
+
+def eigenvalues(model: GearTrainModel) -> np.ndarray:
+    """Eigenvalues (1/s) of the train linearized at its period-averaged stiffness and damping."""
+    size = model.size
+    mass_inverse = 1.0 / model.mass[:, None]
+    state_matrix = np.block([[np.zeros((size, size)), np.eye(size)],
+                             [-mass_inverse * model.mean_stiffness_matrix(),
+                              -mass_inverse * model.mean_damping_matrix()]])
+    return np.linalg.eigvals(state_matrix)
+
+
+def choose_method(model: GearTrainModel, method: str = "auto") -> str:
+    """The method "auto" stands for on this model; the others are returned as they are.
+
+    An explicit step is bounded by stability to about 3.3/max|λ|. Oscillating modes (|Im λ| >
+    |Re λ|, damping ratio below 0.7) have to be followed by any method, to be accurate; modes
+    faster than those and overdamped (very stiff bearings with strong damping) only cost the
+    explicit method steps, so then Radau IIA is the cheaper one."""
+    if method not in METHODS:
+        raise ValueError(f"method {method!r}: allowed are {', '.join(METHODS)}")
+    if method != "auto":
+        return method
+    modes = eigenvalues(model)
+    oscillating = modes[np.abs(modes.imag) > np.abs(modes.real)]
+    fastest_oscillation = np.abs(oscillating).max() if len(oscillating) else 0.0
+    return "radau" if np.abs(modes).max() > STIFFNESS_RATIO * fastest_oscillation else "dop853"
+
+
+class CompiledStepper:
+    def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
+                 max_step: float = math.inf):
+        self.model = model
+        self.tolerance = tolerance
+        self.method = choose_method(model, method)
+        # a tenth of the fastest time scale: the controller adjusts it within a few steps
+        self.first_step = 0.1 / np.abs(eigenvalues(model)).max()
+        self.absolute_tolerance = tolerance * model.state_scales()
+        self.max_step = max_step
+        self.lengths, self.counts, self.tables = model.mesh.period_table()
+        self.accepted_steps = 0  # over the stepper's life, for benchmarks
+
+    def advance(self, position: Position, end: float, torques: tuple[float, float],
+                sample_times=(), on_sample=None) -> Position:
+        """Integrate to `end`; for every t in `sample_times` with position.time <= t < end,
+        call on_sample(t, outputs) with the outputs at t (the run stops there exactly)."""
+        for t in [t for t in sample_times if position.time <= t < end]:
+            position = self._advance(position, t, torques)
+            segment = position.segment
+            on_sample(t, self.model.outputs(position.state, segment.contact_set, segment.loaded))
+        return self._advance(position, end, torques)
+
+    def _advance(self, position: Position, end: float, torques) -> Position:
+        if end <= position.time:
+            return position
+        contact_set = position.segment.contact_set
+        state = position.state.copy()
+        loaded = np.zeros(self.tables.shape[2])
+        loaded[:len(contact_set)] = position.segment.loaded
+        h = position.step_hint if position.step_hint is not None else self.first_step
+        outputs = np.empty(self.model.output_layout_size)
+        time, interval, cycle, h, status, steps = walk.advance(
+            self.model.system, self.lengths, self.counts, self.tables,
+            walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT,
+            float(position.time), contact_set.index, contact_set.cycle, float(h), state, loaded,
+            float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
+            float(self.tolerance), float(self.max_step), outputs)
+        self.accepted_steps += steps
+        if status != walk.OK or not np.all(np.isfinite(state)):
+            reason = {walk.STALLED: "contact switches without progress (grazing contact)",
+                      walk.STEP_TOO_SMALL: "the step size fell below the time's resolution"
+                      }.get(status, "the state is no longer finite")
+            raise IntegrationError(f"integration failed at t = {time:.9g} s: {reason}")
+        if (cycle, interval) != (contact_set.cycle, contact_set.index):
+            contact_set = self.model.mesh.contact_set(cycle, interval)
+        return Position(time, state, Segment(contact_set, loaded[:len(contact_set)]), h, outputs)
+
+
+def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
+    """Load the compiled loop before the first step (from the cache, or by compiling it the
+    first time); returns the seconds spent compiling, or None if it came from the cache."""
+    started = time.perf_counter()
+    steps = stepper.accepted_steps
+    stepper.advance(position, position.time + 1e-9, (0.0, 0.0))
+    stepper.accepted_steps = steps
+    compiled = any(walk.advance.stats.cache_misses.values())
+    return time.perf_counter() - started if compiled else None
