@@ -64,13 +64,15 @@ class CompiledStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
                  max_step: float = math.inf):
         self.model = model
-        self.tolerance = tolerance
+        self.tolerance = float(tolerance)
         self.method = choose_method(model, method)
+        self.method_code = walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
         self.first_step = 0.1 / np.abs(eigenvalues(model)).max()
         self.absolute_tolerance = tolerance * model.state_scales()
-        self.max_step = max_step
+        self.max_step = float(max_step)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
+        self.system_fields = tuple(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
@@ -92,17 +94,17 @@ class CompiledStepper:
         loaded[:len(contact_set)] = position.segment.loaded
         h = position.step_hint if position.step_hint is not None else self.first_step
         outputs = np.empty(self.model.output_layout_size)
+        # float(): an int would make numba compile another version
         time, interval, cycle, h, status, steps = walk.advance(
-            self.model.system, self.lengths, self.counts, self.tables,
-            walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT,
+            self.system_fields, self.lengths, self.counts, self.tables, self.method_code,
             float(position.time), contact_set.index, contact_set.cycle, float(h), state, loaded,
             float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
-            float(self.tolerance), float(self.max_step), outputs)
+            self.tolerance, self.max_step, outputs)
         self.accepted_steps += steps
-        if status != walk.OK or not np.all(np.isfinite(state)):
+        if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",
-                      walk.STEP_TOO_SMALL: "the step size fell below the time's resolution"
-                      }.get(status, "the state is no longer finite")
+                      walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",
+                      walk.NOT_FINITE: "the state is no longer finite"}[status]
             raise IntegrationError(f"integration failed at t = {time:.9g} s: {reason}")
         if (cycle, interval) != (contact_set.cycle, contact_set.index):
             contact_set = self.model.mesh.contact_set(cycle, interval)

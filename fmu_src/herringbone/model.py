@@ -96,6 +96,11 @@ class GearTrainModel:
         # ÿ = P·(generalized force): q̈ = M⁻¹·f, then ÿ = q̈ − r̃·φ̈p
         to_relative = ((np.eye(self.size) - np.outer(self._relative_offset,
                                                     self.unit("phi_pinion"))) / self.mass)
+        elastic = -to_relative @ (self.element_rows.T * self.element_stiffness) \
+            @ self._element_rows_relative
+        damping = -to_relative @ (self.element_rows.T * self.element_damping) \
+            @ self._element_rows_relative
+        coupled = np.nonzero((elastic != 0.0) | (damping != 0.0))
         self.system = equations.System(
             pinion=self.pinion, wheel=self.wheel, mass=self.mass,
             rigid_rotation=self.rigid_rotation,
@@ -103,10 +108,8 @@ class GearTrainModel:
             element_stiffness=self.element_stiffness, element_damping=self.element_damping,
             motor_acceleration=to_relative @ self.motor_torque_row,
             load_acceleration=to_relative @ self.load_torque_row,
-            elastic_acceleration=-to_relative @ (self.element_rows.T * self.element_stiffness)
-            @ self._element_rows_relative,
-            damping_acceleration=-to_relative @ (self.element_rows.T * self.element_damping)
-            @ self._element_rows_relative,
+            coupling_row=coupled[0], coupling_column=coupled[1],
+            elastic_acceleration=elastic[coupled], damping_acceleration=damping[coupled],
             contact_base_acceleration=to_relative @ self.contact_row_base,
             contact_tilt_acceleration=to_relative @ self.contact_row_tilt,
             contact_row_base_relative=self._contact_base_relative,

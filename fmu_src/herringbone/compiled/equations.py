@@ -44,8 +44,12 @@ class System(NamedTuple):
     # zeroed; the terms that do not depend on the contact set are assembled once:
     motor_acceleration: np.ndarray  # P·(where M_motor acts)
     load_acceleration: np.ndarray  # P·(where M_load resists)
-    elastic_acceleration: np.ndarray  # −P·Σ g·c·g̃ of the shafts and bearings (acting on y)
-    damping_acceleration: np.ndarray  # −P·Σ g·h·g̃ (acting on ẏ)
+    # −P·Σ g·c·g̃ (acting on y) and −P·Σ g·h·g̃ (acting on ẏ) of the shafts and bearings, as
+    # their nonzero entries (a fifth of the matrix for the full train): row, column, values
+    coupling_row: np.ndarray
+    coupling_column: np.ndarray
+    elastic_acceleration: np.ndarray
+    damping_acceleration: np.ndarray
     contact_base_acceleration: np.ndarray  # P·base, P·tilt: a point's row is base + ζ·tilt
     contact_tilt_acceleration: np.ndarray
     contact_row_base_relative: np.ndarray
@@ -56,7 +60,7 @@ class System(NamedTuple):
     contact_loss: bool
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def point_at(points, i, travel):
     """Stiffness c, lever arm ζ and lead error e of point i after the axial travel."""
     return (points[STIFFNESS0, i] + points[STIFFNESS_SLOPE, i] * travel,
@@ -64,7 +68,7 @@ def point_at(points, i, travel):
             points[LEAD_ERROR0, i] + points[LEAD_ERROR_SLOPE, i] * travel)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _contact_motion(system, state):
     """g̃·y and g̃·ẏ of the base and tilt parts of a contact row, and the axial travel."""
     n = system.mass.shape[0]
@@ -77,7 +81,7 @@ def _contact_motion(system, state):
     return base, tilt, base_rate, tilt_rate, system.axial_travel_per_radian * state[system.pinion]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point_geometry(system, points, count, pinion_travel_angle):
     """Stiffness, lever arm and lead error of every point of a set, as arrays."""
     travel = system.axial_travel_per_radian * pinion_travel_angle
@@ -87,7 +91,7 @@ def point_geometry(system, points, count, pinion_travel_angle):
     return stiffness, lever_arm, lead_error
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def approaches(system, points, count, state, out):
     """out[i] = δ + η·δ̇ of point i: its load per unit stiffness. A point is loaded while this
     is positive, even where its stiffness ramps from zero."""
@@ -98,7 +102,25 @@ def approaches(system, points, count, state, out):
                   + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def approach_rates(system, points, count, state, rate, out):
+    """out[i] = d/dt (δ + η·δ̇) of point i, from the state and its derivative `rate`: with the
+    values of `approaches` at both ends of a step, it shows a point that lifts off and lands
+    again within the step (walk.py)."""
+    _, tilt, _, tilt_rate, travel = _contact_motion(system, state)
+    # the same sums over the derivative: g̃·ẏ and g̃·ÿ of the base and tilt parts
+    base_rate, _, base_acceleration, tilt_acceleration, _ = _contact_motion(system, rate)
+    travel_rate = system.axial_travel_per_radian * rate[system.pinion]
+    eta = system.mesh_damping_factor
+    for i in range(count):
+        _, lever_arm, _ = point_at(points, i, travel)
+        out[i] = (base_rate + lever_arm * tilt_rate
+                  + eta * (base_acceleration + lever_arm * tilt_acceleration)
+                  + travel_rate * (points[LEVER_ARM_SLOPE, i] * (tilt + eta * tilt_rate)
+                                   + points[LEAD_ERROR_SLOPE, i]))
+
+
+@njit(cache=True, error_model="numpy")
 def element_force(system, element, state):
     """c·Δ + h·Δ̇ of a shaft or bearing."""
     n = system.mass.shape[0]
@@ -110,7 +132,7 @@ def element_force(system, element, state):
             + system.element_damping[element] * rate)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def derivative(system, points, count, loaded, motor_torque, load_torque, state, out):
     """out = d(state)/dt with the contact set and its loaded points (loaded[i] = 1) fixed.
     `out` must not be `state`."""
@@ -125,18 +147,19 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
             total += force
             moment += lever_arm * force
     for j in range(n):
-        acceleration = (motor_torque * system.motor_acceleration[j]
-                        - load_torque * system.load_acceleration[j]
-                        - total * system.contact_base_acceleration[j]
-                        - moment * system.contact_tilt_acceleration[j])
-        for k in range(n):
-            acceleration += (system.elastic_acceleration[j, k] * state[k]
-                             + system.damping_acceleration[j, k] * state[n + k])
-        out[n + j] = acceleration
+        out[n + j] = (motor_torque * system.motor_acceleration[j]
+                      - load_torque * system.load_acceleration[j]
+                      - total * system.contact_base_acceleration[j]
+                      - moment * system.contact_tilt_acceleration[j])
         out[j] = state[n + j]
+    for entry in range(system.coupling_row.shape[0]):
+        k = system.coupling_column[entry]
+        out[n + system.coupling_row[entry]] += (system.elastic_acceleration[entry] * state[k]
+                                                + system.damping_acceleration[entry]
+                                                * state[n + k])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def outputs(system, points, count, loaded, state, out):
     """MODEL.md section 7 into `out`, laid out as the constants above say: mesh stiffness and
     force (both halves), n_contacts, dte, then the shaft and bearing forces, then the speeds."""

@@ -30,7 +30,7 @@ _TI_REAL, _TI_COMPLEX, _T, _E, _C = (np.ascontiguousarray(a) for a in (TI_REAL, 
                                                                        T, E, C))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def lu_factor(matrix, pivots):
     """In place: LU with partial pivoting (real or complex). The systems here are at most
     16 × 16, so a plain loop beats calling LAPACK through numba's allocating wrappers."""
@@ -51,7 +51,7 @@ def lu_factor(matrix, pivots):
                     matrix[row, k] -= matrix[row, column] * matrix[column, k]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def lu_solve(matrix, pivots, vector):
     """In place: solve with factors from lu_factor."""
     size = matrix.shape[0]
@@ -65,7 +65,7 @@ def lu_solve(matrix, pivots, vector):
         vector[i] /= matrix[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def jacobian_of(system, points, count, loaded, motor_torque, load_torque, state, rate,
                 scale, jacobian, trial, column):
     """Forward differences; exact but for rounding in every entry the equations are linear in."""
@@ -79,7 +79,7 @@ def jacobian_of(system, points, count, loaded, motor_torque, load_torque, state,
             jacobian[i, k] = (column[i] - rate[i]) / delta
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def factorize(jacobian, h, real, real_pivots, complex_, complex_pivots):
     size = jacobian.shape[0]
     for i in range(size):
@@ -92,7 +92,7 @@ def factorize(jacobian, h, real, real_pivots, complex_, complex_pivots):
     lu_factor(complex_, complex_pivots)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
          absolute_tolerance, relative_tolerance, real, real_pivots, complex_, complex_pivots,
          stages, new_state):
@@ -161,7 +161,7 @@ def step(system, points, count, loaded, motor_torque, load_torque, state, rate, 
     return math.sqrt(norm / size), iterations
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step_factor(error_norm, iterations, rejected):
     """By how much to scale h (scipy's Radau controller without its two-step prediction)."""
     safety = SAFETY * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)

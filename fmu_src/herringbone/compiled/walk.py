@@ -12,8 +12,10 @@ a segment ends where an event function crosses zero (as segments.py defines them
     2 + i: point i's approach δ + η·δ̇ crosses zero (falling while it is loaded, rising while it
        is not), only where contact can be lost.
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
-by false position (Illinois) on steps of the method itself taken from the step's start, and the
-segment ends on the far side of the crossing, at most 2e-13 of the step past it. Every segment therefore
+by secant iterations on steps of the method itself taken from the step's start, and the segment
+ends on the far side of the crossing, past it by at most 2e-3 × the relative tolerance (at most
+2e-11) of the step: a switch misplaced by δt leaves a force error of about ω·δt times the force
+that switched, far below the tolerance. Every segment therefore
 ends with a true step of the method, which keeps its order (a step across a switch would drop
 it to first order). An event that crosses and re-crosses inside one step is not seen; the
 steps of both methods are short against the time a separated tooth takes to return.
@@ -26,24 +28,24 @@ import numpy as np
 from numba import njit
 
 from . import dop853, radau
-from .equations import approaches, derivative, outputs
+from .equations import System, approach_rates, approaches, derivative, outputs
 
 EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
-OK, STALLED, STEP_TOO_SMALL = 0, 1, 2
-LOCATION_TOLERANCE = 1e-13  # width of the last bracket of an event, relative to the step
+OK, STALLED, STEP_TOO_SMALL, NOT_FINITE = 0, 1, 2, 3
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def event_values(system, points, count, length, state, approach, out):
     out[0] = state[system.pinion] - length
     out[1] = state[system.pinion]
     if system.contact_loss:
         approaches(system, points, count, state, approach)
-        out[2:2 + count] = approach[:count]
+        for i in range(count):
+            out[2 + i] = approach[i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def first_crossing(before, after, number, loaded):
     """The event whose function crosses zero first (by linear interpolation) between two
     states, in its direction, ending strictly past zero; −1 if none does."""
@@ -58,12 +60,56 @@ def first_crossing(before, after, number, loaded):
     return first
 
 
-@njit(cache=True)
-def advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
-            end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
-            outputs_at_end):
+@njit(cache=True, error_model="numpy")
+def grazing_fraction(before, after, slopes_before, slopes_after, h, count, loaded):
+    """Where inside a step (a fraction of it) a point's approach, modelled by the cubic through
+    its values and slopes at the step's ends, turns back across zero though both ends lie on
+    the same side: a lift-off and landing (or a touch) too brief for the ends to show. The
+    earliest such turning point, or −1."""
+    earliest = -1.0
+    for i in range(count):
+        g0, g1 = before[2 + i], after[2 + i]
+        d0, d1 = h * slopes_before[i], h * slopes_after[i]
+        sign = 1.0 if loaded[i] != 0.0 else -1.0  # loaded: watch for a dip below zero
+        if sign * g0 < 0.0 or sign * g1 < 0.0:
+            continue
+        # Hermite cubic p(s) = g0 + d0·s + c2·s² + c3·s³ on [0, 1]
+        c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
+        c3 = 2.0 * (g0 - g1) + d0 + d1
+        # p'(s) = d0 + 2·c2·s + 3·c3·s² = 0
+        a, b, c = 3.0 * c3, 2.0 * c2, d0
+        first = second = -1.0
+        if a == 0.0:
+            if b != 0.0:
+                first = -c / b
+        else:
+            discriminant = b * b - 4.0 * a * c
+            if discriminant >= 0.0:
+                root = math.sqrt(discriminant)
+                first, second = (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
+        for s in (first, second):
+            if 0.0 < s < 1.0 and sign * (g0 + s * (d0 + s * (c2 + s * c3))) < 0.0:
+                if earliest < 0.0 or s < earliest:
+                    earliest = s
+    return earliest
+
+
+@njit(cache=True, error_model="numpy")
+def advance(system_fields, lengths, counts, tables, method, time, interval, cycle, h, state,
+            loaded, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance,
+            max_step, outputs_at_end):
     """Returns (time, interval, cycle, next step size, status, accepted steps), and fills
-    `outputs_at_end` (equations.outputs) at the position reached."""
+    `outputs_at_end` (equations.outputs) at the position reached. `system_fields` is
+    tuple(System): numba types a plain tuple in C, a named one in Python (2 µs a call)."""
+    return _advance(System(*system_fields), lengths, counts, tables, method, time, interval,
+                    cycle, h, state, loaded, end, motor_torque, load_torque, absolute_tolerance,
+                    relative_tolerance, max_step, outputs_at_end)
+
+
+@njit(cache=True, error_model="numpy")
+def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
+             end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
+             outputs_at_end):
     size = state.shape[0]
     max_points = tables.shape[2]
     rate, new_state, trial_state, work = (np.empty(size), np.empty(size), np.empty(size),
@@ -72,6 +118,8 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
     values_before, values_after = np.empty(2 + max_points), np.empty(2 + max_points)
     values_trial, values_low = np.empty(2 + max_points), np.empty(2 + max_points)
     approach = np.empty(max_points)
+    rate_after = np.empty(size)
+    slopes_before, slopes_after = np.zeros(max_points), np.zeros(max_points)
     jacobian = np.empty((size, size))
     real, complex_ = np.empty((size, size)), np.empty((size, size), dtype=np.complex128)
     real_pivots, complex_pivots = np.empty(size, np.int64), np.empty(size, np.int64)
@@ -80,11 +128,14 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
     events = 2 + (count if system.contact_loss else 0)
     derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
     event_values(system, points, count, length, state, approach, values_before)
+    if system.contact_loss:
+        approach_rates(system, points, count, state, rate, slopes_before)
     jacobian_fresh = False
     jacobian_state = -1  # the segment number the Jacobian belongs to (implicit method)
     segment_number = 0
     factored_h = 0.0
     steps = 0
+    previous_error = 1e-4  # of the last accepted step (explicit method's controller)
     rejected = False
     stalled_events = 0
 
@@ -118,15 +169,18 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
                 jacobian_state = -1  # Newton failed on an old Jacobian: refresh it first
                 continue
         if not error <= 1.0:  # too large, or NaN
-            factor = (dop853.step_factor(error, rejected) if method == EXPLICIT
+            factor = (dop853.step_factor(error, previous_error, rejected) if method == EXPLICIT
                       else radau.step_factor(error, iterations, rejected))
             h = h_step * (factor if math.isfinite(error) else 0.5)
             rejected = True
             continue
-        factor = (dop853.step_factor(error, rejected) if method == EXPLICIT
-                  else radau.step_factor(error, iterations, rejected))
-        if method == IMPLICIT and factor < 1.2:
-            factor = 1.0  # keep the factorization (scipy's rule)
+        if method == EXPLICIT:
+            factor = dop853.step_factor(error, previous_error, rejected)
+            previous_error = max(error, 1e-4)
+        else:
+            factor = radau.step_factor(error, iterations, rejected)
+            if factor < 1.2:
+                factor = 1.0  # keep the factorization (scipy's rule)
         rejected = False
         jacobian_fresh = False
         steps += 1
@@ -137,32 +191,65 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
         # --- did it cross an event? --------------------------------------------------------
         event_values(system, points, count, length, new_state, approach, values_after)
         event = first_crossing(values_before, values_after, events, loaded)
+        high = h_step
+        if method == EXPLICIT:
+            rate_after[:] = stages[dop853.N_STAGES]
+        else:
+            derivative(system, points, count, loaded, motor_torque, load_torque, new_state,
+                       rate_after)
+        if event < 0 and system.contact_loss:
+            # a point may lift off and land again (or touch and leave) inside the step
+            approach_rates(system, points, count, new_state, rate_after, slopes_after)
+            fraction = grazing_fraction(values_before, values_after, slopes_before,
+                                        slopes_after, h_step, count, loaded)
+            if fraction > 0.0:
+                trial_h = fraction * h_step
+                if method == EXPLICIT:
+                    dop853.step(system, points, count, loaded, motor_torque, load_torque,
+                                state, rate, trial_h, absolute_tolerance, relative_tolerance,
+                                stages, work, trial_state)
+                else:
+                    radau.factorize(jacobian, trial_h, real, real_pivots, complex_,
+                                    complex_pivots)
+                    factored_h = trial_h
+                    radau.step(system, points, count, loaded, motor_torque, load_torque,
+                               state, rate, trial_h, absolute_tolerance, relative_tolerance,
+                               real, real_pivots, complex_, complex_pivots, stages,
+                               trial_state)
+                event_values(system, points, count, length, trial_state, approach,
+                             values_trial)
+                event = first_crossing(values_before, values_trial, events, loaded)
+                if event >= 0:
+                    high = trial_h
+                    new_state[:] = trial_state
+                    values_after[:] = values_trial
         if event < 0:
             state[:] = new_state
-            if method == EXPLICIT:
-                rate[:] = stages[dop853.N_STAGES]
-            else:
-                derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
+            rate[:] = rate_after
             values_before[:] = values_after
+            if system.contact_loss:
+                slopes_before[:] = slopes_after
             time = end if landing else time + h_step
             h = h_next
             stalled_events = 0
             continue
 
-        # --- locate it: bracket [low, high] of step sizes, Illinois false position ----------
-        low, high = 0.0, h_step
+        # --- locate it: secant steps inside the bracket [low, high] of step sizes ------------
+        low = 0.0
         values_low[:] = values_before
-        low_value, high_value = values_low[event], values_after[event]
-        last_side = 0
-        tolerance = LOCATION_TOLERANCE * h_step
+        older_h, older_value = low, values_low[event]  # the two latest points, for the secant
+        newer_h, newer_value = high, values_after[event]
+        tolerance = max(min(1e-3 * relative_tolerance, 1e-11), 1e-14) * h_step
         for _ in range(60):
-            estimate = low + (high - low) * low_value / (low_value - high_value)
+            estimate = -1.0
+            if newer_value != older_value:
+                estimate = newer_h - newer_value * (newer_h - older_h) / (newer_value - older_value)
+            if not low <= estimate < high:
+                estimate = 0.5 * (low + high)
             if high - estimate <= 2.0 * tolerance:
                 break  # the crossing lies within the tolerance before `high`
             # aim just past the estimate, so that a good estimate ends the search at once
             trial_h = estimate + tolerance
-            if not low < trial_h < high:
-                trial_h = 0.5 * (low + high)
             if method == EXPLICIT:
                 dop853.step(system, points, count, loaded, motor_torque, load_torque, state,
                             rate, trial_h, absolute_tolerance, relative_tolerance, stages, work,
@@ -176,25 +263,23 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
             event_values(system, points, count, length, trial_state, approach, values_trial)
             crossed = first_crossing(values_before, values_trial, events, loaded)
             if crossed >= 0:
-                if crossed != event:
-                    event, last_side = crossed, 0
-                    low_value = values_low[event]
-                high, high_value = trial_h, values_trial[event]
+                if crossed != event:  # another event crosses first: locate that one
+                    event = crossed
+                    older_h, older_value = low, values_low[event]
+                else:
+                    older_h, older_value = newer_h, newer_value
+                high = trial_h
                 new_state[:] = trial_state
-                if last_side == 1:
-                    low_value *= 0.5
-                last_side = 1
             else:
-                low, low_value = trial_h, values_trial[event]
+                older_h, older_value = newer_h, newer_value
+                low = trial_h
                 values_low[:] = values_trial
-                if last_side == -1:
-                    high_value *= 0.5
-                last_side = -1
+            newer_h, newer_value = trial_h, values_trial[event]
 
         # --- the next segment ----------------------------------------------------------------
         state[:] = new_state
         time = end if landing and high == h_step else time + high
-        stalled_events = stalled_events + 1 if high <= LOCATION_TOLERANCE * h_step else 0
+        stalled_events = stalled_events + 1 if high <= 1e-12 * h_step else 0
         if stalled_events > MAX_EVENTS_WITHOUT_PROGRESS:
             return time, interval, cycle, h_next, STALLED, steps
         if event >= 2:
@@ -216,12 +301,17 @@ def advance(system, lengths, counts, tables, method, time, interval, cycle, h, s
         segment_number += 1
         derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
         event_values(system, points, count, length, state, approach, values_before)
+        if system.contact_loss:
+            approach_rates(system, points, count, state, rate, slopes_before)
         h = h_next
     outputs(system, points, count, loaded, state, outputs_at_end)
+    for j in range(size):
+        if not math.isfinite(state[j]):
+            return time, interval, cycle, h, NOT_FINITE, steps
     return time, interval, cycle, h, OK, steps
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def set_loaded_by_sign(system, points, count, state, approach, loaded):
     """Which points of a new set carry load: all, or where contact can be lost, those whose
     approach δ + η·δ̇ is not negative (segments.py)."""
