@@ -215,6 +215,14 @@ class GearTrainModel:
         contact_rows = base[None, :] + lever_arm[:, None] * tilt[None, :]
         return (rows.T * self.element_stiffness) @ rows + (contact_rows.T * stiffness) @ contact_rows
 
+    def damping_matrix(self, y, contact_set) -> np.ndarray:
+        """C = Σ h·g·gᵀ of the shafts and bearings + η·Σ c·g·gᵀ of the contact points (all
+        loaded) over q, at the state's pinion angle, like stiffness_matrix."""
+        rows = self.element_rows
+        contacts = (self.stiffness_matrix(y, contact_set)
+                    - self.stiffness_matrix(y, contact_set, loaded=np.zeros(len(contact_set))))
+        return (rows.T * self.element_damping) @ rows + self.mesh_damping_factor * contacts
+
     def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
         """Relative coordinates of the static equilibrium under M_motor balanced by
         M_load = u·M_motor, every point of the set loaded (MODEL.md section 6)."""

@@ -1,0 +1,279 @@
+"""Parametric stability of the linear mesh at constant speed: Floquet multipliers (issue 5).
+
+At a constant pinion speed ω the contact points move with φp = ω·t, so the stiffness K(φp) and
+damping C(φp) of the linear model (every point of each contact set loaded: no contact loss) repeat
+every mesh period T = (2π/zp)/ω, and free vibration obeys M·q̈ + C(t)·q̇ + K(t)·q = 0. Its
+monodromy matrix Φ(T) maps the state [q, q̇] at the start of a period to the state one period
+later; its eigenvalues, the multipliers λ, say how a disturbance changes per period: the linear
+model is stable when every |λ| < 1 and a disturbance grows like |λ|max^(t/T) when |λ|max > 1. The
+contact geometry is prescribed by φp = ω·t; the load-dependent term F·(∂g/∂φp)·δφp of the
+linearization about the loaded running state is left out, as are the static force and lead errors,
+which drive the forced response and do not change its stability.
+
+The rigid rotation. r (model.rigid_rotation) deforms no element (g·r = 0 for every row), so
+K·r = C·r = 0 at all times and the rigid angle only drifts (a double multiplier 1). With
+q = Q·η + r·θ, Q an M-orthonormal basis (Qᵀ·M·Q = I) of the M-orthogonal complement of r, the
+symmetry of K and C splits the equations exactly into θ̈ = 0 and η̈ + Qᵀ·C·Q·η̇ + Qᵀ·K·Q·η = 0,
+the 2(n−1)-state system we analyse. Its mass is the identity, and trace(Qᵀ·C·Q) =
+trace(M⁻¹·C), so Liouville's det Φ = exp(−∫ trace(M⁻¹·C) dt) holds unchanged. (The model's
+relative coordinates keep the rigid angle as the pinion's, coupled to the rest through inertia.)
+
+Integration. Inside a phase interval of the mesh (mesh.switch_phases) the contact set is fixed but
+the lever arms, and with an edge ramp the point stiffnesses, move linearly with φp, so K and C are
+cubic in φp there (and jump at the switches): four samples of model.stiffness_matrix give them
+exactly. Each interval is advanced by fourth-order Magnus steps exp(Ω), Ω = h/2·(A₁ + A₂) +
+√3/12·h²·[A₂, A₁] with A₁, A₂ the state matrices at the two Gauss points: at least `substeps` per
+interval, and more where a step would exceed `step_phase` radians of the interval's fastest mode
+(the commutator term holds only for steps short against it: at ~100 rad per step it blows up).
+A piecewise-constant stiffness (rigid bearings: no tilt; Meissner's equation) is exact with any
+step, and the trace of Ω integrates trace(A) exactly, so det Φ obeys Liouville to rounding. With
+the defaults Φ of the reference scene is within 6e-7 of its largest entry (fourth order). A is
+taken at fractions of an interval, independent of ω: a sweep of speeds shares it and batches the
+exponentials.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .model import GearTrainModel
+
+SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
+STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
+_GAUSS_POINTS = np.array([0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0])
+_MATRICES_AT_ONCE = 8192  # exponentials evaluated in one batch (memory)
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """A part of a period over which stiffness and damping vary smoothly (they may jump only
+    between stretches): polynomials in the fraction s ∈ [0, 1] of the stretch done, given as
+    coefficient stacks (degree + 1, n, n), lowest power first."""
+
+    stiffness: np.ndarray
+    damping: np.ndarray
+
+    @classmethod
+    def constant(cls, stiffness, damping) -> "Stretch":
+        return cls(np.atleast_2d(stiffness)[None], np.atleast_2d(damping)[None])
+
+    @classmethod
+    def interpolating(cls, stiffness_at, damping_at, degree=3) -> "Stretch":
+        """The polynomials of `degree` through functions of s sampled at degree + 1 points
+        (exact when the functions are such polynomials)."""
+        nodes = np.linspace(0.0, 1.0, degree + 1)
+        vandermonde_inverse = np.linalg.inv(np.vander(nodes, increasing=True))
+        return cls(*(np.einsum("ij,jkl->ikl", vandermonde_inverse,
+                               np.array([function(s) for s in nodes]))
+                     for function in (stiffness_at, damping_at)))
+
+    def state_matrices(self, fractions, inverse_mass) -> np.ndarray:
+        """A(s) = [[0, I], [−M⁻¹·K(s), −M⁻¹·C(s)]] for an array of fractions."""
+        fractions = np.asarray(fractions, dtype=float)
+        powers = fractions[..., None] ** np.arange(len(self.stiffness))
+        n = len(inverse_mass)
+        a = np.zeros(fractions.shape + (2 * n, 2 * n))
+        a[..., :n, n:] = np.eye(n)
+        a[..., n:, :n] = -inverse_mass @ np.tensordot(powers, self.stiffness, axes=1)
+        a[..., n:, n:] = -inverse_mass @ np.tensordot(powers, self.damping, axes=1)
+        return a
+
+
+def periodic_monodromy(mass, stretches, durations, substeps=SUBSTEPS,
+                       step_phase=STEP_PHASE) -> np.ndarray:
+    """Φ(T) of M·x'' + C(t)·x' + K(t)·x = 0 over one period made of consecutive stretches.
+
+    mass: (n, n) constant matrix (or a scalar); stretches: sequence of Stretch; durations: how
+    long each lasts, seconds, shape (..., len(stretches)), the leading axes a batch (e.g. one row
+    per speed). Each stretch takes at least `substeps` Magnus steps, and more (a power of two
+    times that) to keep each step within `step_phase` radians of its fastest frozen mode.
+    Returns Φ, shape (..., 2n, 2n), acting on the state [x, ẋ]."""
+    mass = np.atleast_2d(np.asarray(mass, dtype=float))
+    inverse_mass, size = np.linalg.inv(mass), 2 * len(mass)
+    durations = np.asarray(durations, dtype=float)
+    batch_shape, durations = durations.shape[:-1], durations.reshape(-1, len(stretches))
+    fastest = np.array([np.abs(np.linalg.eigvals(s.state_matrices([0.0, 0.5, 1.0], inverse_mass)))
+                        .max() for s in stretches])
+    # powers of two: a sweep of speeds falls into few groups that share their step counts
+    refine = np.maximum(durations * fastest / (step_phase * substeps), 1.0)
+    steps = substeps * 2 ** np.ceil(np.log2(refine)).astype(int)
+    result = np.empty((len(durations), size, size))
+    for pattern in np.unique(steps, axis=0):
+        rows = np.flatnonzero(np.all(steps == pattern, axis=1))
+        for chunk in np.array_split(rows, -(-len(rows) * pattern.max() // _MATRICES_AT_ONCE)):
+            phi = np.eye(size)
+            for stretch, count, duration in zip(stretches, pattern, durations[chunk].T):
+                phi = _magnus_product(stretch, inverse_mass, duration, count) @ phi
+            result[chunk] = phi
+    return result.reshape(batch_shape + (size, size))
+
+
+def _magnus_product(stretch, inverse_mass, durations, count):
+    """The transition over a stretch of each duration (B,): `count` fourth-order Magnus steps
+    exp(h/2·(A₁ + A₂) + √3/12·h²·[A₂, A₁]), multiplied later-on-the-left."""
+    fractions = (np.arange(count)[:, None] + _GAUSS_POINTS) / count
+    a = stretch.state_matrices(fractions, inverse_mass)  # (count, 2, size, size)
+    mean = 0.5 * (a[:, 0] + a[:, 1])
+    commutator = a[:, 1] @ a[:, 0] - a[:, 0] @ a[:, 1]
+    step = (durations / count)[:, None, None, None]
+    factors = scipy.linalg.expm(step * mean + step ** 2 * (math.sqrt(3.0) / 12.0) * commutator)
+    product = factors[:, 0]
+    for k in range(1, count):
+        product = factors[:, k] @ product
+    return product
+
+
+# --- the gear train -------------------------------------------------------------------------
+
+def rigid_free_basis(model: GearTrainModel) -> np.ndarray:
+    """Q (n × n−1): Qᵀ·M·Q = I and Qᵀ·M·r = 0 for the rigid rotation r."""
+    root_mass = np.sqrt(model.mass)
+    orthonormal = scipy.linalg.null_space((root_mass * model.rigid_rotation)[None, :])
+    return orthonormal / root_mass[:, None]
+
+
+def mesh_stretches(model: GearTrainModel):
+    """The phase intervals of one mesh period as stretches of the rigid-free system (mass I),
+    and their angular lengths (rad). K and C are cubic in the travel into an interval (point
+    stiffness and lever arm both linear in it), so cubic interpolation reproduces them."""
+    basis = rigid_free_basis(model)
+
+    def sampled(matrix_at, contact_set):  # Qᵀ·matrix·Q at a fraction of the interval
+        def at(fraction):
+            y = np.zeros(model.size)
+            y[model.pinion] = fraction * contact_set.length
+            return basis.T @ matrix_at(y, contact_set) @ basis
+        return at
+
+    sets = [model.mesh.contact_set(0, i) for i in range(len(model.mesh.switch_phases))]
+    stretches = [Stretch.interpolating(
+        sampled(model.stiffness_matrix, contact_set),
+        sampled(model.damping_matrix, contact_set))
+        for contact_set in sets]
+    return stretches, np.array([contact_set.length for contact_set in sets])
+
+
+def monodromy(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> np.ndarray:
+    """Φ over one mesh period at a constant pinion speed (rad/s, > 0; an array gives a stack),
+    in the rigid-free coordinates [η, η̇], q = rigid_free_basis(model)·η: 2(n−1) square. The
+    period starts at the first switch phase (the multipliers do not depend on where)."""
+    speeds = np.asarray(pinion_speed, dtype=float)
+    if not np.all(speeds > 0.0):
+        raise ValueError(f"pinion_speed must be > 0 rad/s, got {pinion_speed!r}")
+    model = GearTrainModel(scene)
+    stretches, lengths = mesh_stretches(model)
+    return periodic_monodromy(np.eye(model.size - 1), stretches, lengths / speeds[..., None],
+                              substeps, step_phase)
+
+
+def multipliers(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> np.ndarray:
+    """The Floquet multipliers (eigenvalues of the monodromy), largest modulus first."""
+    values = np.linalg.eigvals(monodromy(scene, pinion_speed, substeps, step_phase))
+    order = np.argsort(-np.abs(values), axis=-1, kind="stable")
+    return np.take_along_axis(values, order, axis=-1)
+
+
+def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_PHASE):
+    """|λ|max: the factor by which the fastest-growing (or slowest-decaying) disturbance
+    changes per mesh period; > 1 inside a parametric-resonance band."""
+    return np.abs(multipliers(scene, pinion_speed, substeps, step_phase)[..., 0])
+
+
+@dataclass(frozen=True)
+class StabilityChart:
+    speeds: np.ndarray  # pinion speeds, rad/s, ascending
+    largest_modulus: np.ndarray  # |λ|max at each speed
+    unstable_bands: tuple[tuple[float, float], ...]  # (from, to) rad/s where |λ|max > 1
+    mesh_teeth: int  # z_pinion: mesh frequency = speed·z_pinion/(2π)
+
+
+def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...]:
+    """The intervals of a sampled parameter where |λ|max > 1, their edges interpolated linearly
+    in |λ|max − 1 between samples (a band open at an end of the samples ends there)."""
+    x, excess = np.asarray(parameter, dtype=float), np.asarray(largest_modulus) - 1.0
+    change = np.diff(np.concatenate([[0], (excess > 0.0).astype(int), [0]]))
+    firsts, lasts = np.flatnonzero(change == 1), np.flatnonzero(change == -1) - 1
+
+    def crossing(i):  # where |λ|max − 1 passes zero between samples i and i + 1
+        return float(x[i] + (x[i + 1] - x[i]) * excess[i] / (excess[i] - excess[i + 1]))
+
+    return tuple((float(x[0]) if first == 0 else crossing(first - 1),
+                  float(x[-1]) if last == len(x) - 1 else crossing(last))
+                 for first, last in zip(firsts, lasts))
+
+
+def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> StabilityChart:
+    """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them."""
+    speeds = np.sort(np.asarray(speeds, dtype=float))
+    largest = largest_multiplier(scene, speeds, substeps, step_phase)
+    return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
+                          scene.parameters["z_pinion"])
+
+
+def plot_stability_chart(chart: StabilityChart, path, title=None):
+    """Write a PNG of |λ|max against pinion speed (rpm; mesh frequency in Hz on the top axis),
+    with the line |λ| = 1 and the unstable bands shaded."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rpm = 60.0 / (2.0 * math.pi)
+    hertz_per_rpm = chart.mesh_teeth / 60.0
+    figure, axes = plt.subplots(figsize=(9, 4.5))
+    axes.plot(chart.speeds * rpm, chart.largest_modulus, color="C0", lw=1.2,
+              label="largest multiplier |λ|max")
+    if chart.largest_modulus.max() > 10 * chart.largest_modulus.min():
+        axes.set_yscale("log")
+    axes.axhline(1.0, color="k", lw=0.8, ls="--", label="|λ| = 1")
+    for number, (low, high) in enumerate(chart.unstable_bands):
+        axes.axvspan(low * rpm, high * rpm, color="C3", alpha=0.25,
+                     label="unstable band" if number == 0 else None)
+    axes.set_xlabel("pinion speed, rpm")
+    axes.set_ylabel("|λ|max per mesh period")
+    top = axes.secondary_xaxis("top", functions=(lambda n: n * hertz_per_rpm,
+                                                 lambda f: f / hertz_per_rpm))
+    top.set_xlabel("mesh frequency, Hz")
+    axes.set_title(title or "Parametric stability of the linear mesh (Floquet multipliers)")
+    axes.legend(loc="best")
+    axes.grid(True, alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+
+
+# --- closed form: one degree of freedom with a stiffness alternating between two values ------
+
+def constant_stiffness_transition(stiffness, mass, damping, duration) -> np.ndarray:
+    """The 2×2 state transition over `duration` of m·x'' + c·x' + k·x = 0, closed form:
+    e^(−γt)·[[cos ω_d t + γ·S, S], [−ω²·S, cos ω_d t − γ·S]], S = sin(ω_d t)/ω_d, γ = c/2m,
+    ω_d² = k/m − γ² (complex ω_d covers the overdamped case)."""
+    gamma = damping / (2.0 * mass)
+    squared = stiffness / mass
+    damped = np.sqrt(complex(squared - gamma ** 2))
+    cosine = np.cos(damped * duration)
+    sine_over = duration * np.sinc(damped * duration / math.pi)  # sin(ω_d t)/ω_d, also at ω_d = 0
+    matrix = np.array([[cosine + gamma * sine_over, sine_over],
+                       [-squared * sine_over, cosine - gamma * sine_over]])
+    return (math.exp(-gamma * duration) * matrix).real
+
+
+def meissner_half_trace(k1, k2, mass, damping, duration1, duration2) -> float:
+    """tr(Φ)/2 of Meissner's equation: stiffness k1 for duration1, then k2 for duration2
+    (N/m, kg, N·s/m, s). The multipliers solve λ² − tr·λ + det = 0 with det = e^(−c·T/m);
+    with damping (det < 1) both lie inside the unit circle iff |tr|/2 < (1 + det)/2 (Jury),
+    undamped the classical |tr|/2 < 1 keeps them on it."""
+    product = (constant_stiffness_transition(k2, mass, damping, duration2)
+               @ constant_stiffness_transition(k1, mass, damping, duration1))
+    return 0.5 * float(np.trace(product))
+
+
+def meissner_multipliers(k1, k2, mass, damping, duration1, duration2) -> np.ndarray:
+    """The two multipliers a ± √(a² − det) (a the half-trace), largest modulus first."""
+    half_trace = meissner_half_trace(k1, k2, mass, damping, duration1, duration2)
+    determinant = math.exp(-damping * (duration1 + duration2) / mass)
+    root = np.sqrt(complex(half_trace ** 2 - determinant))
+    pair = np.array([half_trace + root, half_trace - root])
+    return pair[np.argsort(-np.abs(pair), kind="stable")]
