@@ -1,4 +1,5 @@
-"""The `herringbone` command: `run` a scene through the reference integration, `info` on a scene."""
+"""The `herringbone` command: `run` a scene through the reference integration, `info` on a scene,
+`benchmark` the FMU against scipy (from a source checkout)."""
 from __future__ import annotations
 
 import argparse
@@ -9,8 +10,15 @@ from pathlib import Path
 
 from .scene import SceneError, load_scene
 
+# The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
+BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
+BENCHMARK_SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "extreme_scenes"}
+
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["benchmark"]:  # its options belong to the script: argparse must not see them
+        return _benchmark(argv[1:])
     parser = argparse.ArgumentParser(prog="herringbone", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="simulate a scene with the reference integration, "
@@ -24,6 +32,10 @@ def main(argv=None) -> int:
                      help="CSV file to write (default: results/<scene>.csv)")
     info = commands.add_parser("info", help="geometry, mesh phase and modes of a scene")
     info.add_argument("scene", type=Path)
+    commands.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
+                        "benchmarks/error_vs_runtime.py (the default) or "
+                        "benchmarks/extreme_scenes.py of the source checkout; "
+                        "`herringbone benchmark --help` lists the options")
     args = parser.parse_args(argv)
     try:
         if args.command == "info":
@@ -48,6 +60,23 @@ def _run(args) -> int:
     print(summary(scene, results, wall))
     print(f"outputs written to {output}")
     return 0
+
+
+def _benchmark(arguments: list[str]) -> int:
+    import importlib.util
+
+    name = arguments.pop(0) if arguments[:1] and arguments[0] in BENCHMARK_SCRIPTS \
+        else "error-vs-runtime"
+    script = BENCHMARKS / f"{BENCHMARK_SCRIPTS[name]}.py"
+    if not script.is_file():
+        print(f"herringbone: benchmark needs the source checkout: {script} is not there (this "
+              "herringbone was installed without its repository); clone the repository, "
+              "`pip install -e .` it and run `herringbone benchmark` from there", file=sys.stderr)
+        return 2
+    spec = importlib.util.spec_from_file_location(f"benchmarks_{script.stem}", script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.main(arguments)
 
 
 def write_csv(results: dict, path: Path) -> None:
