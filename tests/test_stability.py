@@ -300,3 +300,21 @@ def test_simulation_grows_at_the_rate_of_the_largest_multiplier(resonance_scene)
     assert measured == pytest.approx(predicted, rel=0.01)  # measured 936.6 1/s, predicted 937.1
     # the pinion's share of the growing vibration stays small against its speed
     assert np.abs(results["w_pinion"] - speed).max() < 0.02 * speed
+
+
+def test_command_line_lists_the_bands_of_the_example(tmp_path, capsys):
+    """`herringbone stability` on the shipped example: the k = 5 band around 2080 rad/s is
+    found, and the chart is written."""
+    from pathlib import Path
+
+    from herringbone.cli import main
+
+    example = Path(__file__).resolve().parent.parent / "examples" / "parametric_resonance.toml"
+    chart = tmp_path / "chart.png"
+    assert main(["stability", str(example), "--speeds", "1900", "2300", "81",
+                 "-o", str(chart)]) == 0
+    printed = capsys.readouterr().out
+    bands = [line for line in printed.splitlines() if line.startswith("unstable:")]
+    assert len(bands) == 1
+    low, high = (float(x) for x in bands[0].split()[1].split("-"))
+    assert low < 2080.0 < high and chart.stat().st_size > 10_000

@@ -1,5 +1,5 @@
 """The `herringbone` command: `run` a scene through the reference integration, `info` on a scene,
-`benchmark` the FMU against scipy (from a source checkout)."""
+`stability` chart of a scene, `benchmark` the FMU against scipy (from a source checkout)."""
 from __future__ import annotations
 
 import argparse
@@ -32,6 +32,15 @@ def main(argv=None) -> int:
                      help="CSV file to write (default: results/<scene>.csv)")
     info = commands.add_parser("info", help="geometry, mesh phase and modes of a scene")
     info.add_argument("scene", type=Path)
+    stability = commands.add_parser("stability", help="Floquet chart: the largest multiplier "
+                                    "of the linear mesh against pinion speed, with its "
+                                    "unstable bands (PNG and a list of the bands)")
+    stability.add_argument("scene", type=Path)
+    stability.add_argument("--speeds", type=float, nargs=3, default=(50.0, 3000.0, 300),
+                           metavar=("FROM", "TO", "COUNT"),
+                           help="pinion speeds, rad/s (default 50 3000 300)")
+    stability.add_argument("-o", "--output", type=Path,
+                           help="PNG to write (default: results/<scene>_stability.png)")
     commands.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
                         "benchmarks/error_vs_runtime.py (the default) or "
                         "benchmarks/extreme_scenes.py of the source checkout; "
@@ -41,6 +50,8 @@ def main(argv=None) -> int:
         if args.command == "info":
             from .report import info_main
             return info_main([str(args.scene)])
+        if args.command == "stability":
+            return _stability(args)
         return _run(args)
     except SceneError as error:
         print(f"herringbone: {error}", file=sys.stderr)
@@ -59,6 +70,33 @@ def _run(args) -> int:
     write_csv(results, output)
     print(summary(scene, results, wall))
     print(f"outputs written to {output}")
+    return 0
+
+
+def _stability(args) -> int:
+    import numpy as np
+
+    from .stability import plot_stability_chart, stability_chart
+
+    scene = load_scene(args.scene)
+    low, high, count = args.speeds
+    if not 0.0 < low < high or count < 2:
+        print("herringbone: --speeds FROM TO COUNT needs 0 < FROM < TO and COUNT >= 2",
+              file=sys.stderr)
+        return 2
+    chart = stability_chart(scene, np.linspace(low, high, int(count)))
+    output = args.output or Path("results") / f"{scene.name}_stability.png"
+    output.parent.mkdir(parents=True, exist_ok=True)
+    plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
+    rpm = 60.0 / (2.0 * np.pi)
+    print(f"largest multiplier |λ|max from {chart.largest_modulus.min():.6g} to "
+          f"{chart.largest_modulus.max():.6g} over {low:g}-{high:g} rad/s")
+    for band_low, band_high in chart.unstable_bands:
+        print(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
+              f"({band_low * rpm:.0f}-{band_high * rpm:.0f} rpm)")
+    if not chart.unstable_bands:
+        print("no unstable band: every multiplier inside the unit circle")
+    print(f"chart written to {output}")
     return 0
 
 
