@@ -61,6 +61,19 @@ def first_crossing(before, after, number, loaded):
 
 
 @njit(cache=True, error_model="numpy")
+def near_contact(before, after, count):
+    """Whether some point's approach comes within ten times its change over the step of zero
+    at either end: only such a point can cross zero and back inside the step, since a step
+    spans at most about a third of the fastest period. The cubic test below is run only then
+    (it costs the approaches' rates at both ends)."""
+    for i in range(count):
+        g0, g1 = before[2 + i], after[2 + i]
+        if min(abs(g0), abs(g1)) <= 10.0 * abs(g1 - g0):
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
 def grazing_fraction(before, after, slopes_before, slopes_after, h, count, loaded):
     """Where inside a step (a fraction of it) a point's approach, modelled by the cubic through
     its values and slopes at the step's ends, turns back across zero though both ends lie on
@@ -128,8 +141,6 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
     events = 2 + (count if system.contact_loss else 0)
     derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
     event_values(system, points, count, length, state, approach, values_before)
-    if system.contact_loss:
-        approach_rates(system, points, count, state, rate, slopes_before)
     jacobian_fresh = False
     jacobian_state = -1  # the segment number the Jacobian belongs to (implicit method)
     segment_number = 0
@@ -197,8 +208,10 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         else:
             derivative(system, points, count, loaded, motor_torque, load_torque, new_state,
                        rate_after)
-        if event < 0 and system.contact_loss:
+        if event < 0 and system.contact_loss and near_contact(values_before, values_after,
+                                                              count):
             # a point may lift off and land again (or touch and leave) inside the step
+            approach_rates(system, points, count, state, rate, slopes_before)
             approach_rates(system, points, count, new_state, rate_after, slopes_after)
             fraction = grazing_fraction(values_before, values_after, slopes_before,
                                         slopes_after, h_step, count, loaded)
@@ -227,8 +240,6 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             state[:] = new_state
             rate[:] = rate_after
             values_before[:] = values_after
-            if system.contact_loss:
-                slopes_before[:] = slopes_after
             time = end if landing else time + h_step
             h = h_next
             stalled_events = 0
@@ -301,8 +312,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         segment_number += 1
         derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
         event_values(system, points, count, length, state, approach, values_before)
-        if system.contact_loss:
-            approach_rates(system, points, count, state, rate, slopes_before)
+
         h = h_next
     outputs(system, points, count, loaded, state, outputs_at_end)
     for j in range(size):
