@@ -61,6 +61,24 @@ def first_crossing(before, after, number, loaded):
 
 
 @njit(cache=True, error_model="numpy")
+def trial_step(method, system, points, count, loaded, motor_torque, load_torque, state, rate,
+               h, absolute_tolerance, relative_tolerance, jacobian, real, real_pivots, complex_,
+               complex_pivots, stages, work, out):
+    """A step of the method to `out`, taken only to look where an event lies (its error is
+    not checked: it is shorter than a step already accepted). Returns the step size the
+    implicit method's factors now belong to."""
+    if method == EXPLICIT:
+        dop853.step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
+                    absolute_tolerance, relative_tolerance, stages, work, out)
+    else:
+        radau.factorize(jacobian, h, real, real_pivots, complex_, complex_pivots)
+        radau.step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
+                   absolute_tolerance, relative_tolerance, real, real_pivots, complex_,
+                   complex_pivots, stages, out)
+    return h
+
+
+@njit(cache=True, error_model="numpy")
 def near_contact(before, after, count):
     """Whether some point's approach comes within ten times its change over the step of zero
     at either end: only such a point can cross zero and back inside the step, since a step
@@ -217,18 +235,10 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
                                         slopes_after, h_step, count, loaded)
             if fraction > 0.0:
                 trial_h = fraction * h_step
-                if method == EXPLICIT:
-                    dop853.step(system, points, count, loaded, motor_torque, load_torque,
-                                state, rate, trial_h, absolute_tolerance, relative_tolerance,
-                                stages, work, trial_state)
-                else:
-                    radau.factorize(jacobian, trial_h, real, real_pivots, complex_,
-                                    complex_pivots)
-                    factored_h = trial_h
-                    radau.step(system, points, count, loaded, motor_torque, load_torque,
-                               state, rate, trial_h, absolute_tolerance, relative_tolerance,
-                               real, real_pivots, complex_, complex_pivots, stages,
-                               trial_state)
+                factored_h = trial_step(method, system, points, count, loaded, motor_torque,
+                                        load_torque, state, rate, trial_h, absolute_tolerance,
+                                        relative_tolerance, jacobian, real, real_pivots,
+                                        complex_, complex_pivots, stages, work, trial_state)
                 event_values(system, points, count, length, trial_state, approach,
                              values_trial)
                 event = first_crossing(values_before, values_trial, events, loaded)
@@ -261,16 +271,10 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
                 break  # the crossing lies within the tolerance before `high`
             # aim just past the estimate, so that a good estimate ends the search at once
             trial_h = estimate + tolerance
-            if method == EXPLICIT:
-                dop853.step(system, points, count, loaded, motor_torque, load_torque, state,
-                            rate, trial_h, absolute_tolerance, relative_tolerance, stages, work,
-                            trial_state)
-            else:
-                radau.factorize(jacobian, trial_h, real, real_pivots, complex_, complex_pivots)
-                factored_h = trial_h
-                radau.step(system, points, count, loaded, motor_torque, load_torque, state,
-                           rate, trial_h, absolute_tolerance, relative_tolerance, real,
-                           real_pivots, complex_, complex_pivots, stages, trial_state)
+            factored_h = trial_step(method, system, points, count, loaded, motor_torque,
+                                    load_torque, state, rate, trial_h, absolute_tolerance,
+                                    relative_tolerance, jacobian, real, real_pivots, complex_,
+                                    complex_pivots, stages, work, trial_state)
             event_values(system, points, count, length, trial_state, approach, values_trial)
             crossed = first_crossing(values_before, values_trial, events, loaded)
             if crossed >= 0:
