@@ -139,3 +139,23 @@ def test_implicit_method_steps_over_overdamped_stiff_modes(reference_scene):
     truth = run(explicit, 1e-3, 1e-4)
     assert force_error(run(stepper, 1e-3, 1e-4), truth, model) <= 1e-6
     assert stepper.accepted_steps < explicit.accepted_steps / 5
+
+
+def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
+    """numba checks only a function's own file; walk.advance compiles dop853.step and the
+    equations into itself, so a change to any kernel file must move the whole cache."""
+    import shutil
+
+    from herringbone.compiled import cache
+
+    copy = tmp_path / "compiled"
+    shutil.copytree(cache.PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(cache, "PACKAGE_DIR", copy)
+    cache.package_digest.cache_clear()
+    before = cache.package_digest()
+    equations = copy / "equations.py"
+    equations.write_text(equations.read_text() + "\n# changed\n")
+    cache.package_digest.cache_clear()
+    assert cache.package_digest() != before
+    cache.package_digest.cache_clear()  # the real package's digest again for later tests
+    monkeypatch.undo()
