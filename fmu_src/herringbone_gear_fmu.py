@@ -177,13 +177,13 @@ class HerringboneGear(Fmi2Slave):
         if name == "solver_method":
             return None if value in METHODS else (
                 f"is {value!r}; allowed: {', '.join(repr(m) for m in METHODS)}")
+        allowed = {"solver_tolerance": f"[{TIGHTEST_TOLERANCE:g}, 0.01]",
+                   "max_step": ">= 0 (0: no limit)"}[name]
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value):
-            return f"is {value!r}; allowed: a finite number"
-        if name == "solver_tolerance" and not TIGHTEST_TOLERANCE <= value <= 1e-2:
-            return f"is {value!r}; allowed: [{TIGHTEST_TOLERANCE:g}, 0.01]"
-        if name == "max_step" and value < 0.0:
-            return f"is {value!r}; allowed: >= 0 (0: no limit)"
+                or not math.isfinite(value) \
+                or (name == "solver_tolerance" and not TIGHTEST_TOLERANCE <= value <= 1e-2) \
+                or (name == "max_step" and value < 0.0):
+            return f"is {value!r}; allowed: {allowed}"
         return None
 
     def _update_outputs(self):

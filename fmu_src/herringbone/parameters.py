@@ -142,6 +142,8 @@ def check_value(parameter: Parameter, value) -> str | None:
         return None if isinstance(value, bool) else "must be true or false"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"must be a number, got {type(value).__name__} {value!r}"
+    if not math.isfinite(value):
+        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
     if parameter.kind is int and value != int(value):
         return f"must be a whole number, got {value!r}"
     if not parameter.allowed.contains(float(value)):

@@ -152,7 +152,8 @@ def _experiment(table, source):
     values = {}
     for key, value in table.items():
         if key not in ("stop_time", "output_interval"):
-            raise SceneError(f"{source}: [experiment] unknown key '{key}'; "
+            hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
+            raise SceneError(f"{source}: [experiment] unknown key '{key}'{hint}; "
                              "allowed: stop_time, output_interval")
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value) or value <= 0:
@@ -191,7 +192,8 @@ def _inputs(table, source):
     values = {}
     for key, value in table.items():
         if key not in INPUTS:
-            raise SceneError(f"{source}: [inputs] unknown key '{key}'; "
+            hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
+            raise SceneError(f"{source}: [inputs] unknown key '{key}'{hint}; "
                              "allowed: M_motor, M_load, table")
         problem = check_value(INPUTS[key], value)
         if problem:
