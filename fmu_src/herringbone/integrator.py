@@ -60,6 +60,13 @@ def choose_method(model: GearTrainModel, method: str = "auto") -> str:
     return "radau" if np.abs(modes).max() > STIFFNESS_RATIO * fastest_oscillation else "dop853"
 
 
+CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
+                   "load at once (sharp face edges, edge_ramp = 0) and throw it back, at low "
+                   "speed faster than it comes on; give edge_ramp > 0 (the contact ellipse's "
+                   "half-length along the face, e.g. 1e-3 m), which lets the load come on "
+                   "gradually")
+
+
 class CompiledStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
                  max_step: float = math.inf):
@@ -104,7 +111,8 @@ class CompiledStepper:
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",
                       walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",
-                      walk.NOT_FINITE: "the state is no longer finite"}[status]
+                      walk.NOT_FINITE: "the state is no longer finite",
+                      walk.CHATTER: CHATTER_MESSAGE}[status]
             raise IntegrationError(f"integration failed at t = {time:.9g} s: {reason}")
         if (cycle, interval) != (contact_set.cycle, contact_set.index):
             contact_set = self.model.mesh.contact_set(cycle, interval)

@@ -69,7 +69,9 @@ class ScipyStepper:
             stalled = stalled + 1 if reached == position.time else 0
             if stalled > MAX_STALLED_SEGMENTS:
                 raise IntegrationError(f"stuck at t = {reached:.9g} s: contact switches "
-                                       "without progress (grazing contact)")
+                                       "without progress. If the pinion sits on a switch, "
+                                       "its points take load at once (edge_ramp = 0) and "
+                                       "throw it back: give edge_ramp > 0 (e.g. 1e-3 m)")
             state = solution.y[:, -1]
             if event is not None:
                 segment, state = segments.after(self.model, segment, event, state)

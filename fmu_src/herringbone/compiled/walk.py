@@ -31,8 +31,12 @@ from . import dop853, radau
 from .equations import System, approach_rates, approaches, derivative, outputs
 
 EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
-OK, STALLED, STEP_TOO_SMALL, NOT_FINITE = 0, 1, 2, 3
+OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER = 0, 1, 2, 3, 4
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
+# A contact set that throws the pinion back into the previous one, and that one forward again:
+# beyond this many reversals in a row the train is stuck on the switch (a point entering at
+# full load with sharp face edges, at low speed), which an edge ramp resolves
+MAX_PHASE_REVERSALS = 1000
 
 
 @njit(cache=True, error_model="numpy")
@@ -167,6 +171,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
     previous_error = 1e-4  # of the last accepted step (explicit method's controller)
     rejected = False
     stalled_events = 0
+    reversals, last_phase_event = 0, -1  # of the phase events: 0 forward, 1 backward
 
     while time < end:
         h_wanted = min(h, max_step)
@@ -300,6 +305,10 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         if event >= 2:
             loaded[event - 2] = 1.0 - loaded[event - 2]
         else:
+            reversals = reversals + 1 if event != last_phase_event else 0
+            last_phase_event = event
+            if reversals > MAX_PHASE_REVERSALS:
+                return time, interval, cycle, h_next, CHATTER, steps
             if event == 0:
                 state[system.pinion] -= length
                 interval += 1
