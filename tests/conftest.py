@@ -1,8 +1,13 @@
+import os
 from pathlib import Path
 
-import pytest
+# Small matrices only: BLAS threads fighting over two cores slow them tenfold (measured on
+# tests/test_stability.py); set before numpy loads BLAS.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import herringbone
+import pytest  # noqa: E402
+
+import herringbone  # noqa: E402
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 
@@ -29,3 +34,22 @@ def built_fmus(tmp_path_factory):
             for name in ("reference", "torsional", "staggered", "lead_error")}
     motor, fan = build_fmu.build_example_fmus(folder)
     return {**fmus, "motor": motor, "fan": fan}
+
+
+@pytest.fixture(scope="session")
+def scene_fmu(tmp_path_factory):
+    """Build the gear FMU of a scene in models/ on first use, once per session:
+    scene_fmu("undamped") is the path of models/undamped.toml's FMU."""
+    import sys
+    sys.path.insert(0, str(MODELS.parent))
+    import build_fmu
+
+    folder = tmp_path_factory.mktemp("scene_fmus")
+    built = {}
+
+    def build(name):
+        if name not in built:
+            built[name] = build_fmu.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
+        return built[name]
+
+    return build

@@ -1,0 +1,397 @@
+"""Issue 5, bad input: every way to hand the train something it cannot run gets ONE clear message
+that names the culprit (and, for a value, what is allowed), through the Python API, through the
+FMU and through the command line; nothing crashes and nothing prints a traceback.
+
+CASES is the table: one row per bad input, with the words its message must contain. The rows of
+every parameter come from herringbone.parameters.PARAMETERS itself (below its minimum, at an
+open bound, above its maximum, NaN, +inf, -inf, a string, a boolean, a non-integer for the
+integers, a number for the flags), so a parameter added there is tested here.
+
+Routes (a row takes every route that can carry its value):
+- api:  scene_from_dict, Scene.with_parameters / Scene.with_inputs and load_scene of a file
+        holding the row must raise herringbone.SceneError with a one-line message;
+- fmu:  the value set on the reference FMU (tests/fmu_host.py, FMU2Slave in this process) as a
+        start value, or for an input also before a later doStep: an error-status log message
+        naming the culprit, the same message every time, and doStep ends in fmi2Discard (the
+        host lives on). FMI can carry only Real values into a Real variable and whole numbers
+        into an Integer one, so strings, booleans, fractions and NaN of integers go by the api;
+- cli:  `herringbone run FILE` (and for some rows `herringbone info FILE` and
+        `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback.
+"""
+import math
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+import herringbone
+from conftest import MODELS
+from fmu_host import Instance
+from herringbone import SceneError
+from herringbone.parameters import INPUTS, PARAMETERS
+
+NAN, INF = float("nan"), float("inf")
+DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
+ROOT = MODELS.parent
+REFERENCE_TEXT = (MODELS / "reference.toml").read_text()
+# The FMU's own settings (herringbone_gear_fmu.SOLVER_SETTINGS; the slave script imports pythonfmu's
+# runtime, so written out): name -> what its message must say is allowed.
+SOLVER_SETTINGS = {"solver_tolerance": ("[1e-12, 0.01]",), "max_step": (">= 0",),
+                   "solver_method": ("'dop853'", "'radau'", "'auto'")}
+
+
+@dataclass(frozen=True)
+class Case:
+    id: str
+    kind: str  # "parameter", "input", "solver", "experiment", "table", "file"
+    name: str  # the culprit: the variable or key, or for a file the problem
+    value: object = None  # the bad value; for "file" the file's text (None: no file at all)
+    words: tuple = ()  # what the message must contain (besides the file, for files)
+    routes: tuple = ("api",)
+    # for "file": which command lines to try
+    commands: tuple = field(default=())
+
+
+def _fmu_can_carry(parameter, value):
+    """Whether FMI 2.0 can set `value` on the variable of `parameter`."""
+    if parameter.kind is bool or isinstance(value, (bool, str)):
+        return False
+    if parameter.kind is int:
+        return isinstance(value, int)
+    return isinstance(value, (int, float))
+
+
+def _parameter_cases():
+    cases = []
+    for name, p in PARAMETERS.items():
+        if p.kind is bool:
+            for label, value in (("number", 1), ("string", "yes"), ("nan", NAN)):
+                cases.append(Case(f"{name}-{label}", "parameter", name, value,
+                                  (name, "true or false")))
+            continue
+        allowed = p.allowed.describe()
+        values = []
+        r = p.allowed
+        if r.low is not None:
+            if r.low_open:
+                values.append(("at-open-minimum", p.kind(r.low)))
+            values.append(("below-minimum", p.kind(r.low - 1) if p.kind is int
+                           else r.low - 0.25 - abs(r.low)))
+        if r.high is not None:
+            if r.high_open:
+                values.append(("at-open-maximum", r.high))
+            values.append(("above-maximum", r.high + 0.5))
+        values += [("nan", NAN), ("plus-inf", INF), ("minus-inf", -INF)]
+        for label, value in values:
+            cases.append(Case(f"{name}-{label}", "parameter", name, value, (name, allowed),
+                              ("api", "fmu") if _fmu_can_carry(p, value) else ("api",)))
+        cases.append(Case(f"{name}-string", "parameter", name, "4 mm", (name, "must be a number")))
+        cases.append(Case(f"{name}-boolean", "parameter", name, True, (name, "must be a number")))
+        if p.kind is int:
+            cases.append(Case(f"{name}-fraction", "parameter", name, 2.5, (name, "whole number")))
+    return cases
+
+
+def _solver_cases():
+    non_finite = [("nan", NAN), ("plus-inf", INF), ("minus-inf", -INF)]
+    values = {"solver_tolerance": [("below-minimum", 1e-13), ("zero", 0.0), ("negative", -1e-7),
+                                   ("above-maximum", 0.5)] + non_finite,
+              "max_step": [("below-minimum", -1e-3)] + non_finite,
+              "solver_method": [("unknown", "rk4"), ("empty", ""), ("capitals", "DOP853")]}
+    return [Case(f"{name}-{label}", "solver", name, value, (name, *allowed), ("fmu",))
+            for name, allowed in SOLVER_SETTINGS.items() for label, value in values[name]]
+
+
+def _input_cases():
+    cases = []
+    for name in INPUTS:
+        for label, value in (("nan", NAN), ("plus-inf", INF), ("minus-inf", -INF)):
+            cases.append(Case(f"{name}-{label}", "input", name, value, (name, "finite"),
+                              ("api", "fmu")))
+        cases.append(Case(f"{name}-string", "input", name, "500 N.m", (name, "must be a number")))
+    for label, row in (("nan-torque", [0.0, NAN, 1800.0]), ("inf-torque", [0.0, 500.0, INF]),
+                       ("nan-time", [NAN, 500.0, 1800.0])):
+        cases.append(Case(f"table-{label}", "table", "table", [row],
+                          ("table row 0", "three finite numbers")))
+    return cases
+
+
+def _experiment_cases():
+    cases = []
+    for name in ("stop_time", "output_interval"):
+        for label, value in (("zero", 0.0), ("negative", -0.1), ("nan", NAN), ("plus-inf", INF),
+                             ("string", "1 s")):
+            cases.append(Case(f"{name}-{label}", "experiment", name, value, (name, "> 0")))
+    return cases
+
+
+def _cut_in_a_key(text, fraction):
+    """`text` cut in the middle of the key of the key line nearest `fraction` of the file."""
+    offsets, position = [], 0
+    for line in text.splitlines(keepends=True):
+        if "=" in line and not line.lstrip().startswith("#"):
+            offsets.append((position, len(line.split("=")[0].strip())))
+        position += len(line)
+    start, length = offsets[min(int(fraction * len(offsets)), len(offsets) - 1)]
+    return text[:start + max(1, length // 2)]
+
+
+def _cut_after(text, marker, keep):
+    return text[:text.index(marker) + keep]
+
+
+ALL_COMMANDS = ("run", "info", "build_fmu")
+FILE_CASES = [
+    Case("missing-file", "file", "no such scene file", None, ("no such scene file",),
+         ("api", "cli"), ALL_COMMANDS),
+    Case("malformed-toml", "file", "not a valid TOML file", "[parameters\nbeta = 0.3\n",
+         ("not a valid TOML file", "line 1"), ("api", "cli"), ALL_COMMANDS),
+    Case("malformed-value", "file", "not a valid TOML file", "[parameters]\nbeta = 0.3.1\n",
+         ("not a valid TOML file", "line 2"), ("api", "cli"), ("run",)),
+    Case("not-utf8", "file", "not a valid TOML file", b"[parameters]\nbeta = 0.3 # \xff\xfe\n",
+         ("not a valid TOML file",), ("api", "cli"), ("run",)),
+    Case("truncated-mid-key", "file", "not a valid TOML file",
+         _cut_in_a_key(REFERENCE_TEXT, 0.5), ("not a valid TOML file",), ("api", "cli"),
+         ALL_COMMANDS),
+    Case("truncated-mid-table-name", "file", "not a valid TOML file",
+         _cut_after(REFERENCE_TEXT, "[experiment]", 6), ("not a valid TOML file",),
+         ("api", "cli"), ("run",)),
+    Case("truncated-mid-input-table", "file", "not a valid TOML file",
+         "[inputs]\ntable = [[0.0, 500.0, 1800.0], [0.05, 10",
+         ("not a valid TOML file",), ("api", "cli"), ("run",)),
+    Case("unknown-parameter", "file", "module", "[parameters]\nmodule = 0.004\n",
+         ("module", "unknown parameter"), ("api", "cli"), ("run",)),
+    Case("unknown-experiment-key", "file", "duration", "[experiment]\nduration = 1.0\n",
+         ("duration", "stop_time, output_interval"), ("api", "cli"), ("run",)),
+    Case("unknown-input-key", "file", "torque", "[inputs]\ntorque = 500.0\n",
+         ("torque", "M_motor, M_load, table"), ("api", "cli"), ("run",)),
+    Case("unknown-table", "file", "solver", "[solver]\nrtol = 1e-6\n",
+         ("[solver]", "[parameters]", "[experiment]"), ("api", "cli"), ("run",)),
+    Case("misspelt-table", "file", "parameter", "[parameter]\nbeta = 0.3\n",
+         ("[parameter]", "[parameters]"), ("api", "cli"), ("run",)),
+    Case("key-outside-any-table", "file", "beta", "beta = 0.3\n",
+         ("beta", "[parameters]"), ("api", "cli"), ("run",)),
+    # a key in the wrong table: say where it belongs, as an input in [parameters] already does
+    Case("input-in-parameters", "file", "M_motor", "[parameters]\nM_motor = 500.0\n",
+         ("M_motor", "[inputs]"), ("api", "cli"), ("run",)),
+    Case("parameter-in-experiment", "file", "beta", "[experiment]\nbeta = 0.3\n",
+         ("beta", "[parameters]"), ("api", "cli"), ("run",)),
+    Case("parameter-in-inputs", "file", "stagger", "[inputs]\nstagger = 0.5\n",
+         ("stagger", "[parameters]"), ("api", "cli"), ("run",)),
+    Case("table-not-a-table", "file", "parameters", "parameters = 5\n",
+         ("parameters", "table"), ("api", "cli"), ("run",)),
+    Case("parameter-of-a-left-out-component", "file", "c_brg_wheel_left",
+         "[components]\nbearings = false\n[parameters]\nc_brg_wheel_left = 1e9\n",
+         ("c_brg_wheel_left", "bearings = false"), ("api", "cli"), ("run",)),
+    # bad values written in a file reach the command line as one line too
+    Case("file-value-out-of-range", "file", "m_pinion", "[parameters]\nm_pinion = -1.0\n",
+         ("m_pinion", "> 0"), ("api", "cli"), ("run", "build_fmu")),
+    Case("file-integer-nan", "file", "z_pinion", "[parameters]\nz_pinion = nan\n",
+         ("z_pinion", ">= 1"), ("api", "cli"), ("run", "build_fmu")),
+]
+
+CASES = (_parameter_cases() + _solver_cases() + _input_cases() + _experiment_cases()
+         + FILE_CASES)
+
+
+def _cases(route):
+    return [pytest.param(case, id=case.id) for case in CASES if route in case.routes]
+
+
+def test_the_table_covers_every_parameter_and_input():
+    culprits = {case.name for case in CASES}
+    assert set(PARAMETERS) | set(INPUTS) | set(SOLVER_SETTINGS) <= culprits
+    assert len({case.id for case in CASES}) == len(CASES)
+
+
+# --- the Python API -----------------------------------------------------------------------------
+
+def _toml_value(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else "inf" if value == INF else "-inf" \
+            if value == -INF else repr(value)
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(value)
+
+
+def _file_text(case):
+    if case.kind == "file":
+        return case.value
+    table = {"parameter": "parameters", "experiment": "experiment", "input": "inputs",
+             "table": "inputs"}[case.kind]
+    return f"[{table}]\n{case.name} = {_toml_value(case.value)}\n"
+
+
+def _routes(case, tmp_path):
+    """(route name, function raising the error) for every API route of a case."""
+    path = tmp_path / "bad.toml"
+    text = _file_text(case)
+    if text is not None:
+        (path.write_bytes if isinstance(text, bytes) else path.write_text)(text)
+    routes = [("load_scene", lambda: herringbone.load_scene(path))]
+    base = herringbone.scene_from_dict({})
+    if case.kind == "parameter":
+        routes += [("scene_from_dict", lambda: herringbone.scene_from_dict(
+                        {"parameters": {case.name: case.value}})),
+                   ("Scene.with_parameters", lambda: base.with_parameters(
+                       **{case.name: case.value}))]
+    elif case.kind == "input":
+        routes += [("scene_from_dict", lambda: herringbone.scene_from_dict(
+                        {"inputs": {case.name: case.value}})),
+                   ("Scene.with_inputs", lambda: base.with_inputs(**{case.name: case.value}))]
+    elif case.kind == "table":
+        routes += [("Scene.with_inputs", lambda: base.with_inputs(table=case.value))]
+    elif case.kind == "experiment":
+        routes += [("scene_from_dict", lambda: herringbone.scene_from_dict(
+            {"experiment": {case.name: case.value}}))]
+    return path, routes
+
+
+def assert_one_clear_message(message, words, where):
+    assert message.strip() and "\n" not in message.strip(), f"{where}: not one line: {message!r}"
+    assert "Traceback" not in message, f"{where}: a traceback: {message!r}"
+    missing = [w for w in words if w not in message]
+    assert not missing, f"{where}: {message!r} does not say {missing}"
+
+
+@pytest.mark.parametrize("case", _cases("api"))
+def test_api_raises_one_scene_error_naming_the_culprit(case, tmp_path):
+    path, routes = _routes(case, tmp_path)
+    if case.kind == "file" and case.value is None:
+        path = tmp_path / "absent" / "missing.toml"
+        routes = [("load_scene", lambda: herringbone.load_scene(path))]
+    problems = []
+    for route, provoke in routes:
+        try:
+            provoke()
+        except SceneError as error:
+            message = str(error)
+            words = case.words + ((str(path),) if route == "load_scene" else ())
+            try:
+                assert_one_clear_message(message, words, route)
+            except AssertionError as failure:
+                problems.append(str(failure))
+        except Exception as error:  # anything but a SceneError is a defect
+            problems.append(f"{route}: raised {type(error).__name__}: {error}")
+        else:
+            problems.append(f"{route}: accepted {case.value!r}")
+    assert not problems, "\n".join(problems)
+
+
+# --- the FMU ------------------------------------------------------------------------------------
+
+class Gear(Instance):
+    """fmu_host.Instance that can also set String variables (solver_method)."""
+
+    def set(self, **values):
+        for name, value in values.items():
+            if self.variables[name].type == "String":
+                self.slave.setString([self.variables[name].valueReference], [value])
+            else:
+                super().set(**{name: value})
+
+
+def test_the_table_covers_every_parameter_and_input_of_the_fmu(scene_fmu):
+    """Every variable a master can set on the FMU has a row that goes through the FMU (but the
+    Boolean contact_loss: FMI can only hand it true or false)."""
+    import fmpy
+
+    variables = fmpy.read_model_description(str(scene_fmu("reference"))).modelVariables
+    settable = {v.name for v in variables
+                if v.causality in ("parameter", "input") and v.type != "Boolean"}
+    assert settable <= {case.name for case in CASES if "fmu" in case.routes}
+
+
+def _fmu_messages(gear):
+    errors = [text for status, text in gear.messages if status == ERROR]
+    fatal = [text for status, text in gear.messages if status == FATAL]
+    return errors, fatal
+
+
+def _discarded_with_one_message(gear, case):
+    with pytest.raises(FMICallException) as error:
+        gear.step(1e-4)
+    assert error.value.status == DISCARD, f"doStep returned status {error.value.status}"
+    errors, fatal = _fmu_messages(gear)
+    assert not fatal, fatal
+    assert errors, f"no error-status message; the log: {gear.messages}"
+    assert len(set(errors)) == 1, f"more than one message: {sorted(set(errors))}"
+    assert_one_clear_message(errors[0], case.words, "FMU log")
+    with pytest.raises(FMICallException):  # it stays stopped
+        gear.step(1e-4)
+
+
+@pytest.mark.parametrize("case", _cases("fmu"))
+def test_fmu_start_value_is_discarded_with_one_message(scene_fmu, case):
+    gear = Gear(scene_fmu("reference"), {case.name: case.value})
+    try:
+        _discarded_with_one_message(gear, case)
+    finally:
+        gear.free()
+
+
+@pytest.mark.parametrize("case", [pytest.param(case, id=case.id) for case in CASES
+                                  if "fmu" in case.routes and case.kind == "input"])
+def test_fmu_input_set_mid_run_is_discarded_with_one_message(scene_fmu, case):
+    gear = Gear(scene_fmu("reference"))
+    try:
+        for _ in range(3):
+            gear.step(1e-4)
+        assert not _fmu_messages(gear)[0]
+        gear.set(**{case.name: case.value})
+        _discarded_with_one_message(gear, case)
+    finally:
+        gear.free()
+
+
+def test_fmpy_simulate_stops_at_a_nan_input_with_the_message(scene_fmu):
+    """The same through fmpy's own master loop: the run ends at the step that sees the NaN."""
+    import fmpy
+
+    received = []
+    times = np.array([0.0, 5e-4, 1e-3])
+    table = np.array([(t, 500.0, 1800.0 if t < 5e-4 else NAN) for t in times],
+                     dtype=[("time", float), ("M_motor", float), ("M_load", float)])
+    result = fmpy.simulate_fmu(str(scene_fmu("reference")), stop_time=1e-3, output_interval=1e-4,
+                               input=table, debug_logging=True,
+                               logger=lambda *args: received.append(args[-1].decode()))
+    assert result["time"][-1] < 1e-3
+    assert np.all(np.isfinite(result["F_mesh"]))
+    assert any("M_load" in m and "finite" in m for m in received), received
+
+
+# --- the command line ---------------------------------------------------------------------------
+
+def _command(which, path, tmp_path):
+    if which == "run":
+        return [str(Path(sys.executable).parent / "herringbone"), "run", str(path),
+                "--stop-time", "1e-3", "-o", str(tmp_path / "out.csv")]
+    if which == "info":
+        return [str(Path(sys.executable).parent / "herringbone"), "info", str(path)]
+    return [sys.executable, str(ROOT / "build_fmu.py"), str(path), "-o", str(tmp_path / "x.fmu")]
+
+
+@pytest.mark.parametrize("which, case", [
+    pytest.param(which, case, id=f"{which}-{case.id}")
+    for case in CASES if "cli" in case.routes for which in case.commands])
+def test_command_line_exits_2_with_one_line(which, case, tmp_path):
+    if case.value is None:
+        path = tmp_path / "missing.toml"
+    else:
+        path = tmp_path / "bad.toml"
+        (path.write_bytes if isinstance(case.value, bytes) else path.write_text)(case.value)
+    run = subprocess.run(_command(which, path, tmp_path), capture_output=True, text=True,
+                         cwd=tmp_path, timeout=120)
+    assert run.returncode == 2, f"exit code {run.returncode}; stderr: {run.stderr}"
+    assert run.stdout == ""
+    assert_one_clear_message(run.stderr, case.words + (str(path),), f"{which} stderr")
+    assert not (tmp_path / "x.fmu").exists()
