@@ -29,7 +29,7 @@ TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noi
 # The solver's settings, declared next to their meaning like the model's parameters.
 SOLVER_SETTINGS = {
     "solver_tolerance": Parameter(
-        "solver_tolerance", 3e-8, "1", "error allowed per internal step, relative to the static "
+        "solver_tolerance", 2e-8, "1", "error allowed per internal step, relative to the static "
         "mesh force (tighter: more accurate, slower)"),
     "max_step": Parameter(
         "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)"),
