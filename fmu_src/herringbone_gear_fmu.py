@@ -20,7 +20,8 @@ from pythonfmu.enums import Fmi2Status
 import herringbone
 from herringbone.model import GearTrainModel, output_names
 from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
-from herringbone.integrator import METHODS, STIFFNESS_RATIO, CompiledStepper, warm_up
+from herringbone.integrator import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
+                                    CompiledStepper, warm_up)
 from herringbone.stepping import start_position
 
 SCENE_FILE = "scene.toml"
@@ -29,8 +30,8 @@ TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noi
 # The solver's settings, declared next to their meaning like the model's parameters.
 SOLVER_SETTINGS = {
     "solver_tolerance": Parameter(
-        "solver_tolerance", 2e-8, "1", "error allowed per internal step, relative to the static "
-        "mesh force (tighter: more accurate, slower)"),
+        "solver_tolerance", DEFAULT_TOLERANCE, "1", "error allowed per internal step, "
+        "relative to the static mesh force (tighter: more accurate, slower)"),
     "max_step": Parameter(
         "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)"),
     "solver_method": Parameter(
