@@ -85,6 +85,16 @@ def test_convergence_order_survives_the_switches(reference_model, method, order,
     assert order - 0.5 <= measured <= order + 1.5, (errors, measured)
 
 
+def test_simulate_samples_like_the_reference(reference_scene):
+    """herringbone.simulate: the compiled run on reference_simulate's grid and torque table."""
+    scene = reference_scene.with_inputs(table=[[0.0, 500.0, 1800.0], [0.004, 800.0, 1800.0]])
+    fast = herringbone.simulate(scene, stop_time=0.01, output_interval=1e-4)
+    reference = herringbone.reference_simulate(scene, stop_time=0.01, output_interval=1e-4,
+                                               tolerance=1e-12)
+    assert np.array_equal(fast["time"], reference["time"])
+    assert force_error(fast, reference, GearTrainModel(scene)) <= 1e-6
+
+
 def test_a_saved_position_reruns_identically(reference_model):
     stepper = CompiledStepper(reference_model, 1e-7)
     position = stepper.advance(start_position(reference_model, 500.0), 3.7e-3, (500.0, 1800.0))

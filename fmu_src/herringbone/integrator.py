@@ -132,3 +132,13 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
     stepper.accepted_steps = steps
     compiled = any(walk.advance.stats.cache_misses.values())
     return time.perf_counter() - started if compiled else None
+
+
+def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
+             method="auto", max_step=math.inf):
+    """reference_simulate's twin on the compiled integrator (what the FMU runs): a scene's
+    outputs every output_interval, {"time": …, output name: …}."""
+    from .reference import simulate_with
+
+    stepper = CompiledStepper(GearTrainModel(scene), tolerance, method, max_step)
+    return simulate_with(stepper, scene, stop_time, output_interval)

@@ -31,11 +31,19 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
     initial_pinion_angle: φp at t = 0 (MODEL.md starts at 0; any other angle must give the same
     run shifted in mesh phase).
     """
+    return simulate_with(ScipyStepper(GearTrainModel(scene), tolerance, method), scene,
+                         stop_time, output_interval, initial_pinion_angle)
+
+
+def simulate_with(stepper, scene, stop_time=None, output_interval=None,
+                  initial_pinion_angle=0.0):
+    """Run a scene with a stepper (stepping.ScipyStepper, integrator.CompiledStepper: anything
+    with `model` and `advance(position, end, torques, sample_times, on_sample)`), sampling the
+    outputs every output_interval; returns {"time": …, output name: …}."""
     stop_time = scene.experiment.stop_time if stop_time is None else stop_time
     output_interval = scene.experiment.output_interval if output_interval is None \
         else output_interval
-    model = GearTrainModel(scene)
-    stepper = ScipyStepper(model, tolerance, method)
+    model = stepper.model
     times = output_times(stop_time, output_interval)
     results = {name: np.empty(len(times)) for name in model.output_names}
     index = {t: i for i, t in enumerate(times)}
