@@ -112,6 +112,7 @@ class Mesh:
         self.lead_error = {"left": parameters["dbeta_left"], "right": parameters["dbeta_right"]}
         self.switch_phases = self._switch_phases()
         self._sets_of_first_period: dict[int, ContactSet] = {}  # shared: never written to
+        self._period_table = None
 
     def _switch_phases(self) -> np.ndarray:
         p_x = self.geometry.axial_pitch
@@ -209,12 +210,15 @@ class Mesh:
                           length=(end - start) * g.angular_pitch, table=table, **arrays)
 
     def period_table(self):
-        """Every contact set of one mesh period, for the compiled integrator (the sets of other
+        """Every contact set of one mesh period, for the compiled kernels (the sets of other
         periods differ only in where they start): the intervals' lengths, their numbers of
-        points, and their point tables stacked, padded with zero columns to the longest."""
-        sets = [self.contact_set(0, i) for i in range(len(self.switch_phases))]
-        counts = np.array([len(s) for s in sets], dtype=np.int64)
-        tables = np.zeros((len(sets), equations.POINT_FIELDS, max(1, counts.max())))
-        for i, contact_set in enumerate(sets):
-            tables[i, :, :counts[i]] = contact_set.table
-        return np.array([s.length for s in sets]), counts, tables
+        points, and their point tables stacked, padded with zero columns to the longest.
+        Computed once; the arrays are shared and never written to."""
+        if self._period_table is None:
+            sets = [self.contact_set(0, i) for i in range(len(self.switch_phases))]
+            counts = np.array([len(s) for s in sets], dtype=np.int64)
+            tables = np.zeros((len(sets), equations.POINT_FIELDS, max(1, counts.max())))
+            for i, contact_set in enumerate(sets):
+                tables[i, :, :counts[i]] = contact_set.table
+            self._period_table = np.array([s.length for s in sets]), counts, tables
+        return self._period_table

@@ -3,7 +3,8 @@
 Within a segment the contact set (which points exist, each point's linear piece) and the set of
 loaded points are fixed, so the right-hand side is smooth and any integrator keeps its order. A
 segment ends where one of its events crosses zero; every integrator (the scipy reference, the
-FMU's own) steps to that crossing, then asks this module for the next segment:
+FMU's own) steps to that crossing, then takes the next segment from the compiled
+walk.next_segment (here wrapped for scipy's event objects):
 
 - `phase_end`: φp reaches the end of the contact set's phase interval (moving forward);
 - `phase_start`: φp falls back below its start (the train turning backwards);
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import walk
 from .mesh import ContactSet
 from .model import GearTrainModel
 
@@ -57,30 +59,34 @@ def events(model: GearTrainModel, segment: Segment) -> list[Event]:
 
 def event_values(model: GearTrainModel, segment: Segment, state: np.ndarray) -> np.ndarray:
     """The event functions of `events(model, segment)`, in that order, at a state."""
-    pinion_travel = state[model.pinion]
-    values = [pinion_travel - segment.contact_set.length, pinion_travel]
-    if model.contact_loss:
-        values.extend(model.point_approach(state, segment.contact_set))
-    return np.array(values)
+    contact_set = segment.contact_set
+    count = len(contact_set)
+    values = np.empty(2 + count)
+    walk.event_values(model.system, contact_set.table, count, contact_set.length, state,
+                      np.empty(count), values)
+    return values if model.contact_loss else values[:2]
 
 
 def after(model: GearTrainModel, segment: Segment, event: Event,
           state: np.ndarray) -> tuple[Segment, np.ndarray]:
-    """The segment that follows an event, and the state re-expressed for it."""
-    if event.kind == "contact":
-        loaded = segment.loaded.copy()
-        loaded[event.point] = 1.0 if event.direction > 0 else 0.0
-        return Segment(segment.contact_set, loaded), state
+    """The segment that follows an event, and the state re-expressed for it (the compiled
+    walk.next_segment, which the FMU's integrator runs too)."""
+    lengths, counts, tables = model.mesh.period_table()
     old = segment.contact_set
-    step = 1 if event.kind == "phase_end" else -1
-    new = model.mesh.contact_set(old.cycle, old.index + step)
     state = state.copy()
-    # lengths, not absolute angles, keep the pinion entry exact however far the train turned
-    state[model.pinion] += -old.length if step > 0 else new.length
-    return Segment(new, _loaded_by_sign(model, state, new)), state
+    loaded = np.zeros(tables.shape[2])
+    loaded[:len(old)] = segment.loaded
+    number = {"phase_end": 0, "phase_start": 1}.get(event.kind, 2 + event.point)
+    interval, cycle = walk.next_segment(model.system, lengths, counts, tables, number,
+                                        old.index, old.cycle, state, loaded,
+                                        np.empty(tables.shape[2]))
+    new = old if (cycle, interval) == (old.cycle, old.index) else model.mesh.contact_set(
+        cycle, interval)
+    return Segment(new, loaded[:len(new)]), state
 
 
 def _loaded_by_sign(model, state, contact_set) -> np.ndarray:
-    if not model.contact_loss:
-        return np.ones(len(contact_set))
-    return (model.point_approach(state, contact_set) >= 0.0).astype(float)
+    loaded = np.empty(len(contact_set))
+    walk.set_loaded_by_sign(model.system, contact_set.table, len(contact_set), state,
+                            np.empty(len(contact_set)), loaded)
+    return loaded

@@ -302,26 +302,15 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         stalled_events = stalled_events + 1 if high <= 1e-12 * h_step else 0
         if stalled_events > MAX_EVENTS_WITHOUT_PROGRESS:
             return time, interval, cycle, h_next, STALLED, steps
-        if event >= 2:
-            loaded[event - 2] = 1.0 - loaded[event - 2]
-        else:
+        if event < 2:
             reversals = reversals + 1 if event != last_phase_event else 0
             last_phase_event = event
             if reversals > MAX_PHASE_REVERSALS:
                 return time, interval, cycle, h_next, CHATTER, steps
-            if event == 0:
-                state[system.pinion] -= length
-                interval += 1
-                if interval == lengths.shape[0]:
-                    interval, cycle = 0, cycle + 1
-            else:
-                interval -= 1
-                if interval < 0:
-                    interval, cycle = lengths.shape[0] - 1, cycle - 1
-                state[system.pinion] += lengths[interval]
-            points, count, length = tables[interval], counts[interval], lengths[interval]
-            events = 2 + (count if system.contact_loss else 0)
-            set_loaded_by_sign(system, points, count, state, approach, loaded)
+        interval, cycle = next_segment(system, lengths, counts, tables, event, interval, cycle,
+                                       state, loaded, approach)
+        points, count, length = tables[interval], counts[interval], lengths[interval]
+        events = 2 + (count if system.contact_loss else 0)
         segment_number += 1
         derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
         event_values(system, points, count, length, state, approach, values_before)
@@ -332,6 +321,31 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         if not math.isfinite(state[j]):
             return time, interval, cycle, h, NOT_FINITE, steps
     return time, interval, cycle, h, OK, steps
+
+
+@njit(cache=True, error_model="numpy")
+def next_segment(system, lengths, counts, tables, event, interval, cycle, state, loaded,
+                 approach):
+    """What follows an event (segments.py): a contact changes its loaded flag; a phase event
+    moves to the next (or previous) contact set, re-expresses the pinion entry of `state` from
+    the new set's start (by lengths, not absolute angles, so it stays exact however far the train
+    has turned) and loads its points by sign. Updates state and loaded; returns the new
+    (interval, cycle)."""
+    if event >= 2:
+        loaded[event - 2] = 1.0 - loaded[event - 2]
+        return interval, cycle
+    if event == 0:
+        state[system.pinion] -= lengths[interval]
+        interval += 1
+        if interval == lengths.shape[0]:
+            interval, cycle = 0, cycle + 1
+    else:
+        interval -= 1
+        if interval < 0:
+            interval, cycle = lengths.shape[0] - 1, cycle - 1
+        state[system.pinion] += lengths[interval]
+    set_loaded_by_sign(system, tables[interval], counts[interval], state, approach, loaded)
+    return interval, cycle
 
 
 @njit(cache=True, error_model="numpy")
