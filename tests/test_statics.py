@@ -1,5 +1,4 @@
 """Static equilibrium at t = 0 (MODEL.md sections 6-7): every output of the first sample."""
-import numpy as np
 import pytest
 
 import herringbone

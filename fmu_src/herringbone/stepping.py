@@ -8,7 +8,7 @@ included), never on earlier calls: a position saved and restored re-runs identic
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp.dop853_coefficients import A, B, C, E3, E5, N_STAGES  # noqa: F401
+from scipy.integrate._ivp.dop853_coefficients import A, B, E3, E5, N_STAGES
 
 from .equations import derivative
 

@@ -20,14 +20,13 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp.radau import (C, E, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, T,
-                                        TI_COMPLEX, TI_REAL)
+from scipy.integrate._ivp.radau import (E, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, T, TI_COMPLEX,
+                                        TI_REAL)
 
 from .equations import derivative
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
-_TI_REAL, _TI_COMPLEX, _T, _E, _C = (np.ascontiguousarray(a) for a in (TI_REAL, TI_COMPLEX,
-                                                                       T, E, C))
+_TI_REAL, _TI_COMPLEX, _T, _E = (np.ascontiguousarray(a) for a in (TI_REAL, TI_COMPLEX, T, E))
 
 
 @njit(cache=True, error_model="numpy")
