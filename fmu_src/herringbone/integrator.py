@@ -47,18 +47,19 @@ def eigenvalues(model: GearTrainModel) -> np.ndarray:
     return np.linalg.eigvals(state_matrix)
 
 
-def choose_method(model: GearTrainModel, method: str = "auto") -> str:
+def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> str:
     """The method "auto" stands for on this model; the others are returned as they are.
 
     An explicit step is bounded by stability to about 3.3/max|λ|. Oscillating modes (|Im λ| >
     |Re λ|, damping ratio below 0.7) have to be followed by any method, to be accurate; modes
     faster than those and overdamped (very stiff bearings with strong damping) only cost the
-    explicit method steps, so then Radau IIA is the cheaper one."""
+    explicit method steps, so then Radau IIA is the cheaper one. `modes`: the model's
+    eigenvalues, if already at hand."""
     if method not in METHODS:
         raise ValueError(f"method {method!r}: allowed are {', '.join(METHODS)}")
     if method != "auto":
         return method
-    modes = eigenvalues(model)
+    modes = eigenvalues(model) if modes is None else modes
     oscillating = modes[np.abs(modes.imag) > np.abs(modes.real)]
     fastest_oscillation = np.abs(oscillating).max() if len(oscillating) else 0.0
     return "radau" if np.abs(modes).max() > STIFFNESS_RATIO * fastest_oscillation else "dop853"
@@ -76,10 +77,11 @@ class CompiledStepper:
                  max_step: float = math.inf):
         self.model = model
         self.tolerance = float(tolerance)
-        self.method = choose_method(model, method)
+        modes = eigenvalues(model)
+        self.method = choose_method(model, method, modes)
         self.method_code = walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
-        self.first_step = 0.1 / np.abs(eigenvalues(model)).max()
+        self.first_step = 0.1 / np.abs(modes).max()
         self.absolute_tolerance = tolerance * model.state_scales()
         self.max_step = float(max_step)
         self.lengths, self.counts, self.tables = model.mesh.period_table()

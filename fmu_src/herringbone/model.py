@@ -118,6 +118,7 @@ class GearTrainModel:
             axial_travel_per_radian=float(g.axial_speed_per_radian),
             radius_wheel=float(g.radius_wheel), contact_loss=bool(self.contact_loss))
         self.output_names = output_names(scene)
+        self._mean_stiffness = None
         self.output_layout = self._output_layout()
         self.output_layout_size = (equations.FIRST_ELEMENT_FORCE + len(self.elements)
                                    + self.size)
@@ -213,15 +214,16 @@ class GearTrainModel:
                              self._element_rows_relative) if relative else
                             (self.contact_row_base, self.contact_row_tilt, self.element_rows))
         contact_rows = base[None, :] + lever_arm[:, None] * tilt[None, :]
-        return (rows.T * self.element_stiffness) @ rows + (contact_rows.T * stiffness) @ contact_rows
+        return (self._element_matrix(self.element_stiffness, rows)
+                + (contact_rows.T * stiffness) @ contact_rows)
 
     def damping_matrix(self, y, contact_set) -> np.ndarray:
         """C = Σ h·g·gᵀ of the shafts and bearings + η·Σ c·g·gᵀ of the contact points (all
         loaded) over q, at the state's pinion angle, like stiffness_matrix."""
-        rows = self.element_rows
         contacts = (self.stiffness_matrix(y, contact_set)
-                    - self.stiffness_matrix(y, contact_set, loaded=np.zeros(len(contact_set))))
-        return (rows.T * self.element_damping) @ rows + self.mesh_damping_factor * contacts
+                    - self._element_matrix(self.element_stiffness))
+        return (self._element_matrix(self.element_damping)
+                + self.mesh_damping_factor * contacts)
 
     def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
         """Relative coordinates of the static equilibrium under M_motor balanced by
@@ -241,24 +243,30 @@ class GearTrainModel:
 
     def mean_stiffness_matrix(self) -> np.ndarray:
         """K averaged over one mesh period (Gauss-Legendre on each contact interval: the
-        contact terms are cubic in φp)."""
-        nodes, weights = np.polynomial.legendre.leggauss(3)
-        total = np.zeros((self.size, self.size))
-        for interval in range(len(self.mesh.switch_phases)):
-            contact_set = self.mesh.contact_set(0, interval)
-            for node, weight in zip(nodes, weights):
-                y = np.zeros(self.size)
-                y[self.pinion] = 0.5 * (node + 1.0) * contact_set.length
-                total += 0.5 * weight * contact_set.length * self.stiffness_matrix(y, contact_set)
-        return total / self.geometry.angular_pitch
+        contact terms are cubic in φp). Computed once per model: scales, modes and the choice
+        of integrator all read it."""
+        if self._mean_stiffness is None:
+            nodes, weights = np.polynomial.legendre.leggauss(3)
+            total = np.zeros((self.size, self.size))
+            for interval in range(len(self.mesh.switch_phases)):
+                contact_set = self.mesh.contact_set(0, interval)
+                for node, weight in zip(nodes, weights):
+                    y = np.zeros(self.size)
+                    y[self.pinion] = 0.5 * (node + 1.0) * contact_set.length
+                    total += (0.5 * weight * contact_set.length
+                              * self.stiffness_matrix(y, contact_set))
+            self._mean_stiffness = total / self.geometry.angular_pitch
+        return self._mean_stiffness.copy()
 
     def mean_damping_matrix(self) -> np.ndarray:
         """C = Σ h·g·gᵀ of shafts and bearings plus η·(the contact points' mean stiffness)."""
-        rows = self.element_rows
-        element_stiffness = (rows.T * self.element_stiffness) @ rows
-        element_damping = (rows.T * self.element_damping) @ rows
-        return element_damping + self.mesh_damping_factor * (self.mean_stiffness_matrix()
-                                                             - element_stiffness)
+        return self._element_matrix(self.element_damping) + self.mesh_damping_factor * (
+            self.mean_stiffness_matrix() - self._element_matrix(self.element_stiffness))
+
+    def _element_matrix(self, values, rows=None) -> np.ndarray:
+        """Σ value·g·gᵀ over the shafts and bearings (rows g, or the given ones)."""
+        rows = self.element_rows if rows is None else rows
+        return (rows.T * values) @ rows
 
     def force_scale(self) -> float:
         """The static mesh force of the largest input torque: the scale errors are judged on.
