@@ -13,7 +13,6 @@ whose trial steps see the switch loses accuracy or fails).
 """
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
@@ -159,12 +158,12 @@ class Mesh:
         first = self._sets_of_first_period[interval]
         if cycle == 0:
             return first
-        # every period holds the same sets; only where they start moves (a shallow copy with
-        # two fields set: dataclasses.replace costs ten times as much, once per doStep)
-        contact_set = copy.copy(first)
-        object.__setattr__(contact_set, "cycle", cycle)
-        object.__setattr__(contact_set, "pinion_angle",
-                           (cycle + self.switch_phases[interval]) * self.geometry.angular_pitch)
+        # every period holds the same sets; only where they start moves: a shallow copy with
+        # two fields set (dataclasses.replace takes 3.3 µs, copy.copy 1.9, this 0.5; once per
+        # doStep)
+        contact_set = object.__new__(ContactSet)
+        contact_set.__dict__.update(first.__dict__, cycle=cycle, pinion_angle=(
+            cycle + self.switch_phases[interval]) * self.geometry.angular_pitch)
         return contact_set
 
     def _contact_set(self, interval: int) -> ContactSet:
