@@ -7,8 +7,10 @@ position re-runs identically. One call is one pass through compiled code, howeve
 the span holds.
 
 Methods (`method`):
-- "dop853": explicit, order 8. Its step is bounded by stability to about 3.3/ω_max (ω_max the
-  highest natural frequency), which costs nothing while accuracy asks for shorter steps anyway.
+- "dop853": explicit, order 8. Its steps are held to h·|λ|max <= 3.5 (|λ|max the fastest
+  eigenvalue), inside its stability bound of about 6/|λ|max: near that bound its error estimate
+  no longer sees the fastest mode's error. This costs nothing while accuracy asks for shorter
+  steps anyway, as it does after every switch.
 - "radau": Radau IIA, implicit and L-stable, order 5. Its step is set by accuracy alone, so it
   wins where ω_max is far above what the outputs need resolved (very stiff bearings on light
   bodies); it costs a Jacobian and two LU factorizations per segment.
@@ -28,13 +30,25 @@ from .stepping import IntegrationError, Position
 
 METHODS = ("auto", "dop853", "radau")
 # The FMU's default: the error per step relative to the static mesh force that keeps every
-# shipped scene within 1e-6 of it at communication steps from 1e-5 to 1e-2 s (the lead-error
-# scene is the tightest: 7.4e-7 at 1e-4 s steps; at 3e-8 it was 1.6e-6).
-DEFAULT_TOLERANCE = 2e-8
+# shipped scene within 1e-6 of it at communication steps from 1e-5 to 1e-2 s. Measured (0.1 s,
+# against a run at 1e-12): at most 4.6e-7 (torsional scene, 1e-4 s steps); 1.9e-7 to 3.4e-7 for
+# the others. At 2e-7 the torsional scene came to 9.7e-7.
+DEFAULT_TOLERANCE = 1e-7
 # "auto" takes the implicit method when the fastest eigenvalue of the linearized train is this
 # many times faster than the fastest oscillating one: the excess is overdamped motion that an
 # explicit method must follow for stability alone (measured: benchmarks/extreme_scenes.py).
 STIFFNESS_RATIO = 10.0
+# DOP853's steps are held to h·|λ|max <= this. Its stability region reaches h·|λ| ≈ 5.9 on the
+# imaginary axis (6.4 on the real one), but its embedded error estimate follows the true error
+# of a mode only well inside it: with steps grown to h·|λ| ≈ 6 in the quiet stretches between
+# switches, the lead-error scene was 1e-6 off at tolerance 1e-7 (F_brg_pinion_left), against
+# 3.4e-7 with this bound. 3.5 leaves room for the stiffest contact set, about 20 % stiffer
+# than the mean the eigenvalues are taken at.
+EXPLICIT_STEP_BOUND = 3.5
+# A switch located δt late or early leaves a force error of about |λ|max·δt times the force that
+# switched (at most the static mesh force): events are located to this fraction of the tolerance
+# over |λ|max, so that what they add is a hundredth of a step's error.
+EVENT_ERROR_FRACTION = 1e-2
 
 
 def eigenvalues(model: GearTrainModel) -> np.ndarray:
@@ -50,7 +64,7 @@ def eigenvalues(model: GearTrainModel) -> np.ndarray:
 def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> str:
     """The method "auto" stands for on this model; the others are returned as they are.
 
-    An explicit step is bounded by stability to about 3.3/max|λ|. Oscillating modes (|Im λ| >
+    An explicit step is bounded by stability to about 6/max|λ| (and held to 3.5/max|λ|). Oscillating modes (|Im λ| >
     |Re λ|, damping ratio below 0.7) have to be followed by any method, to be accurate; modes
     faster than those and overdamped (very stiff bearings with strong damping) only cost the
     explicit method steps, so then Radau IIA is the cheaper one. `modes`: the model's
@@ -74,7 +88,9 @@ CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that ent
 
 class CompiledStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
-                 max_step: float = math.inf):
+                 max_step: float = math.inf, event_time_tolerance: float | None = None):
+        """event_time_tolerance: how far past an event a segment may end, in seconds (default:
+        EVENT_ERROR_FRACTION of the tolerance over |λ|max)."""
         self.model = model
         self.tolerance = float(tolerance)
         modes = eigenvalues(model)
@@ -84,6 +100,11 @@ class CompiledStepper:
         self.first_step = 0.1 / np.abs(modes).max()
         self.absolute_tolerance = tolerance * model.state_scales()
         self.max_step = float(max_step)
+        self.event_time_tolerance = (EVENT_ERROR_FRACTION * self.tolerance / np.abs(modes).max()
+                                     if event_time_tolerance is None
+                                     else float(event_time_tolerance))
+        if self.method_code == walk.EXPLICIT:
+            self.max_step = min(self.max_step, EXPLICIT_STEP_BOUND / np.abs(modes).max())
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.system_fields = tuple(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
@@ -112,7 +133,7 @@ class CompiledStepper:
             self.system_fields, self.lengths, self.counts, self.tables, self.method_code,
             float(position.time), contact_set.index, contact_set.cycle, float(h), state, loaded,
             float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
-            self.tolerance, self.max_step, outputs)
+            self.tolerance, self.max_step, self.event_time_tolerance, outputs)
         self.accepted_steps += steps
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",

@@ -13,9 +13,9 @@ a segment ends where an event function crosses zero (as segments.py defines them
        is not), only where contact can be lost.
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
 by secant iterations on steps of the method itself taken from the step's start, and the segment
-ends on the far side of the crossing, past it by at most 2e-3 × the relative tolerance (at most
-2e-11) of the step: a switch misplaced by δt leaves a force error of about ω·δt times the force
-that switched, far below the tolerance. Every segment therefore
+ends on the far side of the crossing, past it by at most `event_time_tolerance` seconds: a
+switch misplaced by δt leaves a force error of about ω_max·δt times the force that switched,
+and the caller keeps that to a hundredth of the relative tolerance. Every segment therefore
 ends with a true step of the method, which keeps its order (a step across a switch would drop
 it to first order). An event that crosses and re-crosses inside one step is not seen; the
 steps of both methods are short against the time a separated tooth takes to return.
@@ -130,21 +130,36 @@ def grazing_fraction(before, after, slopes_before, slopes_after, h, count, loade
 
 
 @njit(cache=True, error_model="numpy")
+def hermite_root(g0, g1, d0, d1):
+    """The zero in [0, 1] of the cubic with values g0, g1 and slopes d0, d1 at 0 and 1 (g0, g1
+    of opposite signs), by Newton's method from the chord's zero; −1 if it does not settle."""
+    c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
+    c3 = 2.0 * (g0 - g1) + d0 + d1
+    s = g0 / (g0 - g1)
+    for _ in range(4):
+        slope = d0 + s * (2.0 * c2 + 3.0 * s * c3)
+        if slope == 0.0:
+            return -1.0
+        s -= (g0 + s * (d0 + s * (c2 + s * c3))) / slope
+    return s if 0.0 < s < 1.0 else -1.0
+
+
+@njit(cache=True, error_model="numpy")
 def advance(system_fields, lengths, counts, tables, method, time, interval, cycle, h, state,
             loaded, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance,
-            max_step, outputs_at_end):
+            max_step, event_time_tolerance, outputs_at_end):
     """Returns (time, interval, cycle, next step size, status, accepted steps), and fills
     `outputs_at_end` (equations.outputs) at the position reached. `system_fields` is
     tuple(System): numba types a plain tuple in C, a named one in Python (2 µs a call)."""
     return _advance(System(*system_fields), lengths, counts, tables, method, time, interval,
                     cycle, h, state, loaded, end, motor_torque, load_torque, absolute_tolerance,
-                    relative_tolerance, max_step, outputs_at_end)
+                    relative_tolerance, max_step, event_time_tolerance, outputs_at_end)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
              end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
-             outputs_at_end):
+             event_time_tolerance, outputs_at_end):
     size = state.shape[0]
     max_points = tables.shape[2]
     rate, new_state, trial_state, work = (np.empty(size), np.empty(size), np.empty(size),
@@ -260,16 +275,32 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             stalled_events = 0
             continue
 
-        # --- locate it: secant steps inside the bracket [low, high] of step sizes ------------
+        # --- locate it: steps of the method inside the bracket [low, high] of step sizes -----
+        # A phase event's function is φp less a constant, and its slope, φp's rate, is part of
+        # the state: the first estimate is the zero of the cubic through values and slopes at
+        # the step's ends (fifty times closer than the chord's), the next ones Newton's from the
+        # latest trial. A contact event is found by secant steps.
         low = 0.0
         values_low[:] = values_before
         older_h, older_value = low, values_low[event]  # the two latest points, for the secant
         newer_h, newer_value = high, values_after[event]
-        tolerance = max(min(1e-3 * relative_tolerance, 1e-11), 1e-14) * h_step
+        pinion_rate = size // 2 + system.pinion
+        newer_slope = new_state[pinion_rate]
+        tolerance = max(event_time_tolerance, 1e-14 * h_step)  # not below rounding
+        first_estimate = -1.0
+        if event < 2 and high == h_step:
+            first_estimate = high * hermite_root(values_low[event], values_after[event],
+                                                 high * state[pinion_rate],
+                                                 high * newer_slope)
         for _ in range(60):
-            estimate = -1.0
-            if newer_value != older_value:
-                estimate = newer_h - newer_value * (newer_h - older_h) / (newer_value - older_value)
+            estimate = first_estimate
+            first_estimate = -1.0
+            if estimate < 0.0:
+                if event < 2 and newer_slope != 0.0:
+                    estimate = newer_h - newer_value / newer_slope
+                elif newer_value != older_value:
+                    estimate = newer_h - newer_value * (newer_h - older_h) / (
+                        newer_value - older_value)
             if not low <= estimate < high:
                 estimate = 0.5 * (low + high)
             if high - estimate <= 2.0 * tolerance:
@@ -295,6 +326,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
                 low = trial_h
                 values_low[:] = values_trial
             newer_h, newer_value = trial_h, values_trial[event]
+            newer_slope = trial_state[pinion_rate]
 
         # --- the next segment ----------------------------------------------------------------
         state[:] = new_state
