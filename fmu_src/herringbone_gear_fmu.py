@@ -14,7 +14,7 @@ from pathlib import Path
 
 from fmi_units import RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
-                       Integer, Real, String)
+                       Integer, String)
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
@@ -58,7 +58,6 @@ class HerringboneGear(Fmi2Slave):
         self.values.update(M_motor=motor_torque, M_load=load_torque)
         self.output_values = None  # model.output_vector at the current position
         self.output_index = {}
-        self.output_slot = {}  # value reference of a Real output -> its index in output_values
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.position = None
         self.stepper = None
@@ -89,11 +88,6 @@ class HerringboneGear(Fmi2Slave):
             "initialization (a diagnostic of its cost)", causality=Fmi2Causality.local,
             variability=Fmi2Variability.discrete,
             getter=lambda: self.stepper.accepted_steps if self.stepper else 0))
-        # value reference -> name, for the fast paths of get_real and set_real
-        self.real_outputs = {vr: var.name for vr, var in self.vars.items()
-                             if var.causality == Fmi2Causality.output and isinstance(var, Real)}
-        self.stored_reals = {vr: var.name for vr, var in self.vars.items()
-                             if var.name in self.values and isinstance(var, Real)}
         self._start()  # outputs at t = 0 for the scene's own values
 
     def _declare(self, name, parameter, causality, variability):
@@ -134,22 +128,6 @@ class HerringboneGear(Fmi2Slave):
             return False
         return True
 
-    # pythonfmu's get_real and set_real call a Python getter or setter per variable (0.5 µs
-    # each); the outputs read and the torques set at every communication point go at once
-    def get_real(self, vrs):
-        try:
-            values, slot = self.output_values, self.output_slot
-            return [values.item(slot[vr]) for vr in vrs]
-        except (AttributeError, KeyError):  # no outputs yet (bad parameters), or not an output
-            return super().get_real(vrs)
-
-    def set_real(self, vrs, values):
-        try:
-            names = [self.stored_reals[vr] for vr in vrs]
-        except KeyError:  # not a parameter or input: pythonfmu's own message
-            return super().set_real(vrs, values)
-        self.values.update(zip(names, values))
-
     def _get_fmu_state(self):
         return {"position": self.position, "outputs": self.output_values,
                 "values": dict(self.values), "problem": self.problem}
@@ -178,8 +156,6 @@ class HerringboneGear(Fmi2Slave):
                 M_motor=self.values["M_motor"], M_load=self.values["M_load"])
             self.model = GearTrainModel(scene)
             self.output_index = dict(self.model.output_layout)
-            self.output_slot = {vr: self.output_index[name]
-                                for vr, name in self.real_outputs.items()}
             max_step = self.values["max_step"] or math.inf
             self.stepper = CompiledStepper(self.model, self.values["solver_tolerance"],
                                            method=self.values["solver_method"],
