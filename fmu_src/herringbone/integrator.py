@@ -64,11 +64,11 @@ def eigenvalues(model: GearTrainModel) -> np.ndarray:
 def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> str:
     """The method "auto" stands for on this model; the others are returned as they are.
 
-    An explicit step is bounded by stability to about 6/max|λ| (and held to 3.5/max|λ|). Oscillating modes (|Im λ| >
-    |Re λ|, damping ratio below 0.7) have to be followed by any method, to be accurate; modes
-    faster than those and overdamped (very stiff bearings with strong damping) only cost the
-    explicit method steps, so then Radau IIA is the cheaper one. `modes`: the model's
-    eigenvalues, if already at hand."""
+    An explicit step is bounded by stability to about 6/max|λ| (and held to 3.5/max|λ|).
+    Oscillating modes (|Im λ| > |Re λ|, damping ratio below 0.7) have to be followed by any
+    method, to be accurate; modes faster than those and overdamped (very stiff bearings with
+    strong damping) only cost the explicit method steps, so then Radau IIA is the cheaper one.
+    `modes`: the model's eigenvalues, if already at hand."""
     if method not in METHODS:
         raise ValueError(f"method {method!r}: allowed are {', '.join(METHODS)}")
     if method != "auto":
@@ -96,15 +96,16 @@ class CompiledStepper:
         modes = eigenvalues(model)
         self.method = choose_method(model, method, modes)
         self.method_code = walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT
+        fastest = np.abs(modes).max()  # |λ|max, 1/s
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
-        self.first_step = 0.1 / np.abs(modes).max()
+        self.first_step = 0.1 / fastest
         self.absolute_tolerance = tolerance * model.state_scales()
         self.max_step = float(max_step)
-        self.event_time_tolerance = (EVENT_ERROR_FRACTION * self.tolerance / np.abs(modes).max()
+        if self.method_code == walk.EXPLICIT:
+            self.max_step = min(self.max_step, EXPLICIT_STEP_BOUND / fastest)
+        self.event_time_tolerance = (EVENT_ERROR_FRACTION * self.tolerance / fastest
                                      if event_time_tolerance is None
                                      else float(event_time_tolerance))
-        if self.method_code == walk.EXPLICIT:
-            self.max_step = min(self.max_step, EXPLICIT_STEP_BOUND / np.abs(modes).max())
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.system_fields = tuple(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks

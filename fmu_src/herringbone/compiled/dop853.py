@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 from scipy.integrate._ivp.dop853_coefficients import A, B, E3, E5, N_STAGES
 

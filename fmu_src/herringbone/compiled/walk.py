@@ -12,8 +12,9 @@ a segment ends where an event function crosses zero (as segments.py defines them
     2 + i: point i's approach δ + η·δ̇ crosses zero (falling while it is loaded, rising while it
        is not), only where contact can be lost.
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
-by secant iterations on steps of the method itself taken from the step's start, and the segment
-ends on the far side of the crossing, past it by at most `event_time_tolerance` seconds: a
+by steps of the method itself taken from the step's start (aimed by Newton's method for a phase
+event, whose slope φp's rate is in the state, by secants for a contact), and the segment ends
+on the far side of the crossing, past it by at most `event_time_tolerance` seconds: a
 switch misplaced by δt leaves a force error of about ω_max·δt times the force that switched,
 and the caller keeps that to a hundredth of the relative tolerance. Every segment therefore
 ends with a true step of the method, which keeps its order (a step across a switch would drop
