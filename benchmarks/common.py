@@ -11,6 +11,7 @@ The worker imports fmpy and numpy only; everything from `herringbone` is importe
 """
 from __future__ import annotations
 
+import bisect
 import csv
 import datetime
 import glob
@@ -267,11 +268,10 @@ def _worker(spec_path) -> None:
                       modelIdentifier=description.coSimulation.modelIdentifier,
                       instanceName="gear")
     inputs = spec["inputs"]
-    input_times = np.array(inputs["times"])
 
     def torques_at(t, step):
         # the row in force at t (a change time on the grid counts, whatever the rounding)
-        row = max(int(np.searchsorted(input_times, t + 1e-9 * step, side="right")) - 1, 0)
+        row = max(bisect.bisect_right(inputs["times"], t + 1e-9 * step) - 1, 0)
         return inputs["M_motor"][row], inputs["M_load"][row]
 
     input_refs = (ctypes.c_uint * 2)(variables["M_motor"].valueReference,

@@ -59,7 +59,7 @@ class HerringboneGear(Fmi2Slave):
         self.output_values = None  # model.output_vector at the current position
         self.output_index = {}
         self.problem = None  # what stops the run, logged once and reported by every doStep
-        self.position = None
+        self.run = None  # integrator.Run, advanced in place by every doStep
         self.stepper = None
         self.model = None
 
@@ -111,15 +111,13 @@ class HerringboneGear(Fmi2Slave):
                 if not math.isfinite(value):
                     self._fail(f"input {name} is {value}; allowed: any finite number")
             # masters add up their times in their own way: forgive rounding, not a skipped step
-            drift = abs(current_time - self.position.time)
+            drift = abs(current_time - self.run.time)
             if drift > 1e-6 * step_size + 1e-12 * abs(current_time):
                 self._fail(f"doStep from t = {current_time!r} s, but the FMU is at "
-                           f"t = {self.position.time!r} s (roll back with fmi2SetFMUstate)")
+                           f"t = {self.run.time!r} s (roll back with fmi2SetFMUstate)")
             if self.problem is None:
                 try:
-                    self.position = self.stepper.advance(self.position,
-                                                         current_time + step_size, torques)
-                    self._update_outputs()
+                    self.stepper.run_to(self.run, current_time + step_size, torques)
                 except Exception as error:  # never let an exception reach the host
                     self._fail(f"doStep from t = {current_time:g} s by {step_size:g} s "
                                f"failed: {error}")
@@ -129,13 +127,14 @@ class HerringboneGear(Fmi2Slave):
         return True
 
     def _get_fmu_state(self):
-        return {"position": self.position, "outputs": self.output_values,
-                "values": dict(self.values), "problem": self.problem}
+        # the run changes in place: a state holds an immutable snapshot of it (a Position)
+        position = self.stepper.position(self.run) if self.run is not None else None
+        return {"position": position, "values": dict(self.values), "problem": self.problem}
 
     def _set_fmu_state(self, state):
-        # positions are immutable (every step makes a new one), so sharing them is safe
-        self.position = state["position"]
-        self.output_values = state["outputs"]
+        position = state["position"]
+        self.run = self.stepper.start(position) if position is not None else None
+        self.output_values = self.run.outputs if self.run is not None else None
         self.values = dict(state["values"])
         self.problem = state["problem"]
 
@@ -160,13 +159,14 @@ class HerringboneGear(Fmi2Slave):
             self.stepper = CompiledStepper(self.model, self.values["solver_tolerance"],
                                            method=self.values["solver_method"],
                                            max_step=max_step)
-            self.position = start_position(self.model, self.values["M_motor"])
-            compiled_seconds = warm_up(self.stepper, self.position)
+            position = start_position(self.model, self.values["M_motor"])
+            compiled_seconds = warm_up(self.stepper, position)
             if compiled_seconds is not None:
                 self.log(f"{self.instance_name}: first start: compiled the integrator in "
                          f"{compiled_seconds:.1f} s; cached for later starts",
                          Fmi2Status.ok)
-            self._update_outputs()
+            self.run = self.stepper.start(position)
+            self.output_values = self.run.outputs  # updated in place by every doStep
         except herringbone.SceneError as error:
             # the scene's own message names the variable; drop its file prefix
             self._fail(str(error).split(": ", 1)[-1].replace("[parameters] ", "parameter "))
@@ -187,19 +187,10 @@ class HerringboneGear(Fmi2Slave):
             return f"is {value!r}; allowed: {allowed}"
         return None
 
-    def _update_outputs(self):
-        if self.position.outputs is not None:
-            self.output_values = self.position.outputs
-        else:
-            segment = self.position.segment
-            self.output_values = self.model.output_vector(self.position.state,
-                                                          segment.contact_set, segment.loaded)
-
     def _output(self, name):
+        values = self.output_values
         # before a valid start (bad parameters) there is nothing to show
-        if self.output_values is None:
-            return 0.0
-        return float(self.output_values[self.output_index[name]])
+        return 0.0 if values is None else values.item(self.output_index[name])
 
     def _fail(self, message):
         if self.problem is None:

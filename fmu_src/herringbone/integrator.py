@@ -86,6 +86,27 @@ CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that ent
                    "gradually")
 
 
+class Run:
+    """A run on the compiled loop, held in the arrays walk.advance updates in place, so that a
+    communication step allocates nothing. It is mutable and has one owner (the FMU slave keeps
+    one); `CompiledStepper.position` takes an immutable snapshot of it, for saving and
+    restoring, and `CompiledStepper.start` makes a run from one."""
+
+    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs")
+
+    def __init__(self, clock, place, state, loaded, first_steps, outputs):
+        self.clock = clock  # [time (s), step size to try next (s)]
+        self.place = place  # [contact interval, mesh cycle]
+        self.state = state  # [y, ẏ]
+        self.loaded = loaded  # per point of the set (padded to the widest set): 1 loaded, 0 not
+        self.first_steps = first_steps  # per contact interval, its first step size (0: none)
+        self.outputs = outputs  # equations.outputs at the run's position (model.output_layout)
+
+    @property
+    def time(self) -> float:
+        return float(self.clock[0])
+
+
 class CompiledStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
                  max_step: float = math.inf, event_time_tolerance: float | None = None):
@@ -110,41 +131,57 @@ class CompiledStepper:
         self.system_fields = tuple(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
 
-    def advance(self, position: Position, end: float, torques: tuple[float, float],
-                sample_times=(), on_sample=None) -> Position:
-        """Integrate to `end`; for every t in `sample_times` with position.time <= t < end,
-        call on_sample(t, outputs) with the outputs at t (the run stops there exactly)."""
-        for t in [t for t in sample_times if position.time <= t < end]:
-            position = self._advance(position, t, torques)
-            segment = position.segment
-            on_sample(t, self.model.outputs(position.state, segment.contact_set, segment.loaded))
-        return self._advance(position, end, torques)
-
-    def _advance(self, position: Position, end: float, torques) -> Position:
-        if end <= position.time:
-            return position
+    def start(self, position: Position) -> Run:
+        """A run from a position (which it does not change)."""
         contact_set = position.segment.contact_set
-        state = position.state.copy()
         loaded = np.zeros(self.tables.shape[2])
         loaded[:len(contact_set)] = position.segment.loaded
         h = position.step_hint if position.step_hint is not None else self.first_step
-        outputs = np.empty(self.model.output_layout_size)
+        outputs = (position.outputs.copy() if position.outputs is not None else
+                   self.model.output_vector(position.state, contact_set,
+                                            position.segment.loaded))
+        first_steps = (position.first_steps.copy() if position.first_steps is not None
+                       else np.zeros(len(self.lengths)))
+        return Run(np.array([position.time, h]),
+                   np.array([contact_set.index, contact_set.cycle], dtype=np.int64),
+                   position.state.copy(), loaded, first_steps, outputs)
+
+    def position(self, run: Run) -> Position:
+        """A snapshot of the run: its own copies, unchanged by the run going on."""
+        interval, cycle = (int(k) for k in run.place)
+        contact_set = self.model.mesh.contact_set(cycle, interval)
+        return Position(run.time, run.state.copy(),
+                        Segment(contact_set, run.loaded[:len(contact_set)].copy()),
+                        float(run.clock[1]), run.outputs.copy(), run.first_steps.copy())
+
+    def run_to(self, run: Run, end: float, torques: tuple[float, float]) -> None:
+        """Integrate the run to `end` with the torques held, in place."""
+        if end <= run.clock[0]:
+            return
         # float(): an int would make numba compile another version
-        time, interval, cycle, h, status, steps = walk.advance(
+        status, steps = walk.advance(
             self.system_fields, self.lengths, self.counts, self.tables, self.method_code,
-            float(position.time), contact_set.index, contact_set.cycle, float(h), state, loaded,
-            float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
-            self.tolerance, self.max_step, self.event_time_tolerance, outputs)
+            run.clock, run.place, run.state, run.loaded, run.first_steps, float(end),
+            float(torques[0]), float(torques[1]), self.absolute_tolerance, self.tolerance, self.max_step,
+            self.event_time_tolerance, run.outputs)
         self.accepted_steps += steps
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",
                       walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",
                       walk.NOT_FINITE: "the state is no longer finite",
                       walk.CHATTER: CHATTER_MESSAGE}[status]
-            raise IntegrationError(f"integration failed at t = {time:.9g} s: {reason}")
-        if (cycle, interval) != (contact_set.cycle, contact_set.index):
-            contact_set = self.model.mesh.contact_set(cycle, interval)
-        return Position(time, state, Segment(contact_set, loaded[:len(contact_set)]), h, outputs)
+            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: {reason}")
+
+    def advance(self, position: Position, end: float, torques: tuple[float, float],
+                sample_times=(), on_sample=None) -> Position:
+        """Integrate to `end`; for every t in `sample_times` with position.time <= t < end,
+        call on_sample(t, outputs) with the outputs at t (the run stops there exactly)."""
+        run = self.start(position)
+        for t in [t for t in sample_times if position.time <= t < end]:
+            self.run_to(run, t, torques)
+            on_sample(t, self.model.named_outputs(run.outputs))
+        self.run_to(run, end, torques)
+        return self.position(run)
 
 
 def warm_up(stepper: CompiledStepper, position: Position) -> float | None:

@@ -194,7 +194,10 @@ class GearTrainModel:
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
         """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
         carry load (all points of the set where contact cannot be lost)."""
-        values = self.output_vector(state, contact_set, loaded)
+        return self.named_outputs(self.output_vector(state, contact_set, loaded))
+
+    def named_outputs(self, values) -> dict[str, float]:
+        """The vector `output_vector` gives, by output name."""
         return {name: float(values[i]) for name, i in self.output_layout}
 
     def output_vector(self, state, contact_set, loaded) -> np.ndarray:

@@ -33,6 +33,9 @@ class Position:
     segment: segments.Segment
     step_hint: float | None = None  # the step size to try first (None: let the method choose)
     outputs: np.ndarray | None = None  # model.output_vector here, if the stepper computed it
+    # per contact interval, the step size the compiled integrator starts it with (None: no
+    # interval entered yet; the scipy stepper goes without)
+    first_steps: np.ndarray | None = None
 
 
 def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: float = 0.0):
