@@ -173,3 +173,17 @@ def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
     assert cache.package_digest() != before
     cache.package_digest.cache_clear()  # the real package's digest again for later tests
     monkeypatch.undo()
+
+
+@pytest.mark.parametrize("scene_name", ["reference", "torsional", "contact_loss"])
+def test_packed_system_unpacks_to_the_same_arrays(scene_name):
+    """The compiled loop takes the System packed into two arrays; unpacked it must be the
+    System field for field (a field added to one side and not the other fails here)."""
+    from herringbone.compiled.equations import System, pack_system, unpack_system
+
+    system = GearTrainModel(herringbone.load_scene(f"models/{scene_name}.toml")).system
+    unpacked = unpack_system(*pack_system(system))
+    assert len(unpacked) == len(System._fields)
+    for name, original, copy in zip(System._fields, system, unpacked):
+        assert np.array_equal(np.asarray(original), np.asarray(copy)), name
+        assert np.asarray(original).shape == np.asarray(copy).shape, name

@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from .compiled import walk
+from .compiled.equations import pack_system
 from .model import GearTrainModel
 from .segments import Segment
 from .stepping import IntegrationError, Position
@@ -128,7 +129,7 @@ class CompiledStepper:
                                      if event_time_tolerance is None
                                      else float(event_time_tolerance))
         self.lengths, self.counts, self.tables = model.mesh.period_table()
-        self.system_fields = tuple(model.system)
+        self.system_floats, self.system_ints = pack_system(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
 
     def start(self, position: Position) -> Run:
@@ -160,7 +161,7 @@ class CompiledStepper:
             return
         # float(): an int would make numba compile another version
         status, steps = walk.advance(
-            self.system_fields, self.lengths, self.counts, self.tables, self.method_code,
+            self.system_floats, self.system_ints, self.lengths, self.counts, self.tables, self.method_code,
             run.clock, run.place, run.state, run.loaded, run.first_steps, float(end),
             float(torques[0]), float(torques[1]), self.absolute_tolerance, self.tolerance, self.max_step,
             self.event_time_tolerance, run.outputs)

@@ -60,6 +60,39 @@ class System(NamedTuple):
     contact_loss: bool
 
 
+def pack_system(system: System) -> tuple[np.ndarray, np.ndarray]:
+    """The System as two flat arrays, floats and ints, that `unpack_system` takes apart in
+    compiled code: numba types each of a call's arguments at every call, and the 21 fields
+    take it 1 µs, two arrays 0.05 µs. Laid out by field order, with the sizes first."""
+    sizes = (len(system.mass), len(system.element_stiffness), len(system.coupling_row))
+    floats = np.concatenate([
+        system.mass, system.rigid_rotation, system.element_rows_relative.ravel(),
+        system.element_stiffness, system.element_damping, system.motor_acceleration,
+        system.load_acceleration, system.elastic_acceleration, system.damping_acceleration,
+        system.contact_base_acceleration, system.contact_tilt_acceleration,
+        system.contact_row_base_relative, system.contact_row_tilt_relative,
+        [system.mesh_damping_factor, system.axial_travel_per_radian, system.radius_wheel]])
+    ints = np.concatenate([[*sizes, system.pinion, system.wheel, system.contact_loss],
+                           system.coupling_row, system.coupling_column]).astype(np.int64)
+    return floats, ints
+
+
+@njit(cache=True, error_model="numpy")
+def unpack_system(floats, ints):
+    """pack_system's inverse: a System whose arrays are views of the two."""
+    coordinates, elements, entries = ints[0], ints[1], ints[2]
+    row, column = ints[6:6 + entries], ints[6 + entries:6 + 2 * entries]
+    at = np.cumsum(np.array([0, coordinates, coordinates, elements * coordinates, elements,
+                             elements, coordinates, coordinates, entries, entries, coordinates,
+                             coordinates, coordinates, coordinates]))
+    return System(ints[3], ints[4], floats[at[0]:at[1]], floats[at[1]:at[2]],
+                  floats[at[2]:at[3]].reshape((elements, coordinates)), floats[at[3]:at[4]],
+                  floats[at[4]:at[5]], floats[at[5]:at[6]], floats[at[6]:at[7]], row, column,
+                  floats[at[7]:at[8]], floats[at[8]:at[9]], floats[at[9]:at[10]],
+                  floats[at[10]:at[11]], floats[at[11]:at[12]], floats[at[12]:at[13]],
+                  floats[at[13]], floats[at[13] + 1], floats[at[13] + 2], ints[5] != 0)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def point_at(points, i, travel):
     """Stiffness c, lever arm ζ and lead error e of point i after the axial travel."""

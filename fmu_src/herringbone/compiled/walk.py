@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from . import dop853, radau
-from .equations import System, approach_rates, approaches, derivative, outputs
+from .equations import approach_rates, approaches, derivative, outputs, unpack_system
 
 EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
 OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER = 0, 1, 2, 3, 4
@@ -169,15 +169,15 @@ def hermite_root(g0, g1, d0, d1):
 
 
 @njit(cache=True, error_model="numpy")
-def advance(system_fields, lengths, counts, tables, method, clock, place, state, loaded,
-            first_steps, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
+def advance(system_floats, system_ints, lengths, counts, tables, method, clock, place, state,
+            loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
             event_time_tolerance, outputs_at_end):
     """Returns (status, accepted steps). The position is read from and written back to
     clock = [time, step size to try], place = [contact interval, mesh cycle], `state`,
     `loaded` and `first_steps` (per contact interval, the step size to start it with; 0:
-    none yet), also where the run fails; `outputs_at_end` gets equations.outputs there. `system_fields`
-    is tuple(System): numba types a plain tuple in C, a named one in Python (2 µs a call)."""
-    system = System(*system_fields)
+    none yet), also where the run fails; `outputs_at_end` gets equations.outputs there. The
+    system comes packed (equations.pack_system)."""
+    system = unpack_system(system_floats, system_ints)
     time, interval, cycle, h, status, steps = _advance(
         system, lengths, counts, tables, method, clock[0], place[0], place[1], clock[1], state,
         loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance,
