@@ -22,7 +22,10 @@ from scipy.integrate._ivp.dop853_coefficients import A, B, E3, E5, N_STAGES
 from .equations import derivative
 
 ERROR_EXPONENT = -1.0 / 8.0  # the step-size controller's exponent: −1/(order of E5 + 1)
-SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
+# SAFETY below Hairer's 0.9: the error estimate swings 0.03-0.6 from step to step at one h while
+# the fastest modes ring after a switch, and at 0.9 one step in nine was rejected; at 0.85, one
+# in forty, for 6 % more accepted steps and 3 % fewer steps in all (staggered scene)
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.85, 0.2, 10.0
 BETA = 0.04  # weight of the previous error in the step-size control
 STAGE_ROWS = N_STAGES + 1
 # The nonzero weights by Hairer's names (dop853.f): stage i is y + h·Σ a_ij·k_j, the result
