@@ -12,6 +12,8 @@ returns False (fmi2Discard), so the host keeps running and shows the message.
 import math
 from pathlib import Path
 
+import numpy as np
+
 from fmi_units import RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
                        Integer, String)
@@ -56,8 +58,11 @@ class HerringboneGear(Fmi2Slave):
         self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})
         motor_torque, load_torque = self.scene.inputs.at(0.0)
         self.values.update(M_motor=motor_torque, M_load=load_torque)
-        self.output_values = None  # model.output_vector at the current position
-        self.output_index = {}
+        # model.output_vector at the current position (zeros until a valid start): the
+        # outputs' getters read it where the scene's layout puts them
+        scene_model = GearTrainModel(self.scene)
+        layout = dict(scene_model.output_layout)
+        self.output_values = np.zeros(scene_model.output_layout_size)
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.run = None  # integrator.Run, advanced in place by every doStep
         self.stepper = None
@@ -70,8 +75,8 @@ class HerringboneGear(Fmi2Slave):
             self._declare(name, parameter, Fmi2Causality.input, Fmi2Variability.continuous)
         for name in output_names(self.scene):
             output = OUTPUTS[name]
-            getter = (lambda n=name: int(self._output(n))) if output.kind is int \
-                else (lambda n=name: self._output(n))
+            getter = (lambda i=layout[name]: int(self.output_values.item(i))) \
+                if output.kind is int else (lambda i=layout[name]: self.output_values.item(i))
             if output.kind is int:
                 self.register_variable(Integer(name, description=output.description,
                                                causality=Fmi2Causality.output,
@@ -134,7 +139,8 @@ class HerringboneGear(Fmi2Slave):
     def _set_fmu_state(self, state):
         position = state["position"]
         self.run = self.stepper.start(position) if position is not None else None
-        self.output_values = self.run.outputs if self.run is not None else None
+        self.output_values = (self.run.outputs if self.run is not None
+                              else np.zeros_like(self.output_values))
         self.values = dict(state["values"])
         self.problem = state["problem"]
 
@@ -154,7 +160,6 @@ class HerringboneGear(Fmi2Slave):
             scene = self.scene.with_parameters(**given).with_inputs(
                 M_motor=self.values["M_motor"], M_load=self.values["M_load"])
             self.model = GearTrainModel(scene)
-            self.output_index = dict(self.model.output_layout)
             max_step = self.values["max_step"] or math.inf
             self.stepper = CompiledStepper(self.model, self.values["solver_tolerance"],
                                            method=self.values["solver_method"],
@@ -186,11 +191,6 @@ class HerringboneGear(Fmi2Slave):
                 or (name == "max_step" and value < 0.0):
             return f"is {value!r}; allowed: {allowed}"
         return None
-
-    def _output(self, name):
-        values = self.output_values
-        # before a valid start (bad parameters) there is nothing to show
-        return 0.0 if values is None else values.item(self.output_index[name])
 
     def _fail(self, message):
         if self.problem is None:

@@ -161,10 +161,10 @@ class CompiledStepper:
             return
         # float(): an int would make numba compile another version
         status, steps = walk.advance(
-            self.system_floats, self.system_ints, self.lengths, self.counts, self.tables, self.method_code,
-            run.clock, run.place, run.state, run.loaded, run.first_steps, float(end),
-            float(torques[0]), float(torques[1]), self.absolute_tolerance, self.tolerance, self.max_step,
-            self.event_time_tolerance, run.outputs)
+            self.system_floats, self.system_ints, self.lengths, self.counts, self.tables,
+            self.method_code, run.clock, run.place, run.state, run.loaded, run.first_steps,
+            float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
+            self.tolerance, self.max_step, self.event_time_tolerance, run.outputs)
         self.accepted_steps += steps
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",

@@ -170,8 +170,8 @@ def hermite_root(g0, g1, d0, d1):
 
 @njit(cache=True, error_model="numpy")
 def advance(system_floats, system_ints, lengths, counts, tables, method, clock, place, state,
-            loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance, max_step,
-            event_time_tolerance, outputs_at_end):
+            loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
+            relative_tolerance, max_step, event_time_tolerance, outputs_at_end):
     """Returns (status, accepted steps). The position is read from and written back to
     clock = [time, step size to try], place = [contact interval, mesh cycle], `state`,
     `loaded` and `first_steps` (per contact interval, the step size to start it with; 0:
@@ -180,8 +180,8 @@ def advance(system_floats, system_ints, lengths, counts, tables, method, clock, 
     system = unpack_system(system_floats, system_ints)
     time, interval, cycle, h, status, steps = _advance(
         system, lengths, counts, tables, method, clock[0], place[0], place[1], clock[1], state,
-        loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance, relative_tolerance,
-        max_step, event_time_tolerance)
+        loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
+        relative_tolerance, max_step, event_time_tolerance)
     clock[0], clock[1] = time, h
     place[0], place[1] = interval, cycle
     outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
