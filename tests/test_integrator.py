@@ -187,3 +187,27 @@ def test_packed_system_unpacks_to_the_same_arrays(scene_name):
     for name, original, copy in zip(System._fields, system, unpacked):
         assert np.array_equal(np.asarray(original), np.asarray(copy)), name
         assert np.asarray(original).shape == np.asarray(copy).shape, name
+
+
+@pytest.mark.parametrize("speed, acceleration, angle, target", [
+    (150.0, 1e3, 0.012, 0.015),  # forward: reaches the interval's end (0.015 rad)
+    (150.0, -4e4, 0.012, 0.015),  # forward, slowing hard
+    (-150.0, 2e3, 0.002, 0.0)])  # backward: falls to the interval's start
+def test_phase_event_prediction_is_the_quadratic_root(reference_model, speed, acceleration,
+                                                      angle, target):
+    """DOP853 aims a step at the predicted phase event, ending 1e-4 of it past: the prediction
+    must be far closer than that where φp moves as a quadratic over one step."""
+    from herringbone.compiled.walk import PREDICTION_MARGIN, phase_event_ahead
+
+    system = reference_model.system
+    n = reference_model.size
+    state, rate = np.zeros(2 * n), np.zeros(2 * n)
+    state[system.pinion], state[n + system.pinion] = angle, speed
+    rate[n + system.pinion] = acceleration
+    # 0.5·a·t² + v·t − (target − angle) = 0, the root reached first
+    roots = np.roots([0.5 * acceleration, speed, angle - target])
+    exact = min(r.real for r in roots if abs(r.imag) < 1e-300 and r.real > 0)
+    predicted = phase_event_ahead(system, state, rate, 0.015)
+    assert abs(predicted - exact) <= 1e-3 * PREDICTION_MARGIN * exact
+    state[n + system.pinion] = 0.0
+    assert phase_event_ahead(system, state, rate, 0.015) == math.inf
