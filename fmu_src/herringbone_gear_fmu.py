@@ -66,7 +66,6 @@ class HerringboneGear(Fmi2Slave):
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.run = None  # integrator.Run, advanced in place by every doStep
         self.stepper = None
-        self.model = None
 
         for name, parameter in {**parameters_of(self.scene.components),
                                 **SOLVER_SETTINGS}.items():
@@ -159,12 +158,12 @@ class HerringboneGear(Fmi2Slave):
             given = {k: v for k, v in self.values.items() if k in self.scene.parameters}
             scene = self.scene.with_parameters(**given).with_inputs(
                 M_motor=self.values["M_motor"], M_load=self.values["M_load"])
-            self.model = GearTrainModel(scene)
+            model = GearTrainModel(scene)
             max_step = self.values["max_step"] or math.inf
-            self.stepper = CompiledStepper(self.model, self.values["solver_tolerance"],
+            self.stepper = CompiledStepper(model, self.values["solver_tolerance"],
                                            method=self.values["solver_method"],
                                            max_step=max_step)
-            position = start_position(self.model, self.values["M_motor"])
+            position = start_position(model, self.values["M_motor"])
             compiled_seconds = warm_up(self.stepper, position)
             if compiled_seconds is not None:
                 self.log(f"{self.instance_name}: first start: compiled the integrator in "

@@ -4,7 +4,8 @@
 start from `position`, integrate with the torques held to exactly `end`, stopping on every contact
 switch, contact loss and regain; the result depends only on the position passed in, so a saved
 position re-runs identically. One call is one pass through compiled code, however many switches
-the span holds.
+the span holds. A caller that steps on and on (the FMU) keeps a `Run` instead, which `run_to`
+advances in place, and takes a Position of it only to save it.
 
 Methods (`method`):
 - "dop853": explicit, order 8. Its steps are held to h·|λ|max <= 3.5 (|λ|max the fastest
@@ -32,8 +33,8 @@ from .stepping import IntegrationError, Position
 METHODS = ("auto", "dop853", "radau")
 # The FMU's default: the error per step relative to the static mesh force that keeps every
 # shipped scene within 1e-6 of it at communication steps from 1e-5 to 1e-2 s. Measured (0.1 s,
-# against a run at 1e-12): at most 4.6e-7 (torsional scene, 1e-4 s steps); 1.9e-7 to 3.4e-7 for
-# the others. At 2e-7 the torsional scene came to 9.7e-7.
+# against a run at 1e-12): at most 3.3e-7 (torsional scene, 1e-4 s steps); 1.5e-7 to 1.8e-7 for
+# the others. At 2e-7 the torsional scene came to 9.7e-7 (before the safety factor of 0.85).
 DEFAULT_TOLERANCE = 1e-7
 # "auto" takes the implicit method when the fastest eigenvalue of the linearized train is this
 # many times faster than the fastest oscillating one: the excess is overdamped motion that an

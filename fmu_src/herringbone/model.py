@@ -178,12 +178,6 @@ class GearTrainModel:
         return equations.point_geometry(self.system, contact_set.table, len(contact_set),
                                         float(y[self.pinion]))
 
-    def point_approach(self, state, contact_set) -> np.ndarray:
-        """δ + η·δ̇ of every point of the set: its load per unit stiffness."""
-        approach = np.empty(len(contact_set))
-        equations.approaches(self.system, contact_set.table, len(contact_set), state, approach)
-        return approach
-
     def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
         """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""
         rate = np.empty_like(state)

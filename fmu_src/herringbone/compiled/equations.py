@@ -114,6 +114,15 @@ def _contact_motion(system, state):
     return base, tilt, base_rate, tilt_rate, system.axial_travel_per_radian * state[system.pinion]
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def point_approach(system, motion, lever_arm, lead_error):
+    """δ + η·δ̇ of a point with this lever arm and lead error, from _contact_motion's sums: its
+    load per unit stiffness (the point's force is its stiffness times this)."""
+    base, tilt, base_rate, tilt_rate, _ = motion
+    return (base + lever_arm * tilt + lead_error
+            + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
+
+
 @njit(cache=True, error_model="numpy")
 def point_geometry(system, points, count, pinion_travel_angle):
     """Stiffness, lever arm and lead error of every point of a set, as arrays."""
@@ -128,11 +137,11 @@ def point_geometry(system, points, count, pinion_travel_angle):
 def approaches(system, points, count, state, out):
     """out[i] = δ + η·δ̇ of point i: its load per unit stiffness. A point is loaded while this
     is positive, even where its stiffness ramps from zero."""
-    base, tilt, base_rate, tilt_rate, travel = _contact_motion(system, state)
+    motion = _contact_motion(system, state)
+    travel = motion[4]
     for i in range(count):
         _, lever_arm, lead_error = point_at(points, i, travel)
-        out[i] = (base + lever_arm * tilt + lead_error
-                  + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
+        out[i] = point_approach(system, motion, lever_arm, lead_error)
 
 
 @njit(cache=True, error_model="numpy")
@@ -170,13 +179,13 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
     """out = d(state)/dt with the contact set and its loaded points (loaded[i] = 1) fixed.
     `out` must not be `state`."""
     n = system.mass.shape[0]
-    base, tilt, base_rate, tilt_rate, travel = _contact_motion(system, state)
+    motion = _contact_motion(system, state)
+    travel = motion[4]
     total = moment = 0.0  # Σ F and Σ ζ·F of the points
     for i in range(count):
         if loaded[i] != 0.0:
             stiffness, lever_arm, lead_error = point_at(points, i, travel)
-            force = stiffness * (base + lever_arm * tilt + lead_error
-                                 + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
+            force = stiffness * point_approach(system, motion, lever_arm, lead_error)
             total += force
             moment += lever_arm * force
     for j in range(n):
@@ -198,12 +207,12 @@ def outputs(system, points, count, loaded, state, out):
     force (both halves), n_contacts, dte, then the shaft and bearing forces, then the speeds."""
     n = system.mass.shape[0]
     out[:FIRST_ELEMENT_FORCE] = 0.0
-    base, tilt, base_rate, tilt_rate, travel = _contact_motion(system, state)
+    motion = _contact_motion(system, state)
+    travel = motion[4]
     for i in range(count):
         if loaded[i] != 0.0:
             stiffness, lever_arm, lead_error = point_at(points, i, travel)
-            force = stiffness * (base + lever_arm * tilt + lead_error
-                                 + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
+            force = stiffness * point_approach(system, motion, lever_arm, lead_error)
             side = K_MESH_LEFT if points[HALF, i] == 0.0 else K_MESH_RIGHT
             out[K_MESH] += stiffness
             out[side] += stiffness
