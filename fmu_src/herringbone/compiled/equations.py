@@ -133,7 +133,8 @@ def point_geometry(system, points, count, pinion_travel_angle):
     return stiffness, lever_arm, lead_error
 
 
-@njit(cache=True, error_model="numpy")
+# inlined: walk.py evaluates it at every step, where a call's reference counting costs more
+@njit(cache=True, error_model="numpy", inline="always")
 def approaches(system, points, count, state, out):
     """out[i] = δ + η·δ̇ of point i: its load per unit stiffness. A point is loaded while this
     is positive, even where its stiffness ramps from zero."""

@@ -49,8 +49,12 @@ MAX_PHASE_REVERSALS = 1000
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
 
+# The helpers the loop calls at every step are inlined (inline="always"): a compiled call hands
+# over each array of the System by reference, which numba counts atomically on the way in and
+# out, 15 arrays a call; inlined, the loop ran 9 % faster (staggered and reference scenes).
 
-@njit(cache=True, error_model="numpy")
+
+@njit(cache=True, error_model="numpy", inline="always")
 def event_values(system, points, count, length, state, approach, out):
     out[0] = state[system.pinion] - length
     out[1] = state[system.pinion]
@@ -60,7 +64,7 @@ def event_values(system, points, count, length, state, approach, out):
             out[2 + i] = approach[i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def phase_event_ahead(system, state, rate, length):
     """When φp would reach the end of its interval (moving forward) or its start (moving
     back), from its rate and acceleration: the zero of the quadratic by one Newton step from
@@ -78,7 +82,7 @@ def phase_event_ahead(system, state, rate, length):
     return ahead if ahead > 0.0 else math.inf
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def first_crossing(before, after, number, loaded):
     """The event whose function crosses zero first (by linear interpolation) between two
     states, in its direction, ending strictly past zero; −1 if none does."""
@@ -111,7 +115,7 @@ def trial_step(method, system, points, count, loaded, motor_torque, load_torque,
     return h
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def near_contact(before, after, count):
     """Whether some point's approach comes within ten times its change over the step of zero
     at either end: only such a point can cross zero and back inside the step, since a step
