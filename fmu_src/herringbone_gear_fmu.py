@@ -66,6 +66,7 @@ class HerringboneGear(Fmi2Slave):
         self.problem = None  # what stops the run, logged once and reported by every doStep
         self.run = None  # integrator.Run, advanced in place by every doStep
         self.stepper = None
+        self.real_output_entries = {}  # value reference -> entry of output_values (get_real)
 
         for name, parameter in {**parameters_of(self.scene.components),
                                 **SOLVER_SETTINGS}.items():
@@ -82,11 +83,11 @@ class HerringboneGear(Fmi2Slave):
                                                variability=Fmi2Variability.discrete,
                                                getter=getter))
             else:
-                self.register_variable(RealWithUnit(name, unit=output.unit,
-                                                    description=output.description,
-                                                    causality=Fmi2Causality.output,
-                                                    variability=Fmi2Variability.continuous,
-                                                    getter=getter))
+                variable = RealWithUnit(name, unit=output.unit, description=output.description,
+                                        causality=Fmi2Causality.output,
+                                        variability=Fmi2Variability.continuous, getter=getter)
+                self.register_variable(variable)
+                self.real_output_entries[variable.value_reference] = layout[name]
         self.register_variable(Integer(
             "internal_steps", description="internal steps the integrator has taken since "
             "initialization (a diagnostic of its cost)", causality=Fmi2Causality.local,
@@ -104,6 +105,16 @@ class HerringboneGear(Fmi2Slave):
                                RealWithUnit(name, unit=parameter.unit, **arguments))
 
     # --- FMI callbacks -----------------------------------------------------------------------
+
+    def get_real(self, vrs):
+        # A master reads the outputs after every doStep. pythonfmu's get_real calls one getter
+        # per variable, 0.35 µs each; they all sit in output_values, read here in one pass.
+        # Anything else (a parameter, a wrong reference) takes pythonfmu's way and its errors.
+        entries = self.real_output_entries
+        if all(vr in entries for vr in vrs):
+            values = self.output_values
+            return [values.item(entries[vr]) for vr in vrs]
+        return super().get_real(vrs)
 
     def exit_initialization_mode(self):
         self._start()
