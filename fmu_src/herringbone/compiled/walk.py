@@ -18,8 +18,18 @@ on the far side of the crossing, past it by at most `event_time_tolerance` secon
 switch misplaced by δt leaves a force error of about ω_max·δt times the force that switched,
 and the caller keeps that to a hundredth of the relative tolerance. Every segment therefore
 ends with a true step of the method, which keeps its order (a step across a switch would drop
-it to first order). An event that crosses and re-crosses inside one step is not seen; the
-steps of both methods are short against the time a separated tooth takes to return.
+it to first order). Where several events cross inside one step, the earliest is located
+(trials are judged against the bracket's low end, where nothing has crossed yet, and a last
+trial just before the located crossing makes sure no other came first). A point that lifts
+off and lands again inside one step (or touches and leaves) is caught from the cubic through
+its approach and approach rate at the step's ends (`grazing_fraction`).
+
+What follows an event (`next_segment`): the loaded points of the segment are decided by the
+sign of their approach, all of them, whatever the event was. So a point that crossed in the
+same bracket as the located event (a whole train separating, or landing, at once) starts the
+segment on its own side; and no segment starts with a loaded point in tension or an unloaded
+one penetrating. A debug run (`contact_slack` >= 0) also looks inside every step for such a
+point by other means (`contact_violated_inside`).
 
 Two step-size rules serve the switches (DOP853 only for the first): a step that would pass the
 next phase event is aimed to end just past its predicted crossing, so one trial step locates
@@ -37,8 +47,12 @@ from . import dop853, radau
 from .equations import approach_rates, approaches, derivative, outputs, unpack_system
 
 EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
-OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER = 0, 1, 2, 3, 4
+OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER, CONTACT_VIOLATED = 0, 1, 2, 3, 4, 5
+# where a debug run looks inside each step for a point in tension or penetrating unloaded
+INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
+# trial steps to locate one event (a bisection alone halves the bracket 60 times)
+MAX_LOCATION_TRIALS = 60
 # A contact set that throws the pinion back into the previous one, and that one forward again:
 # beyond this many reversals in a row the train is stuck on the switch (a point entering at
 # full load with sharp face edges, at low speed), which an edge ramp resolves
@@ -98,6 +112,18 @@ def first_crossing(before, after, number, loaded):
 
 
 @njit(cache=True, error_model="numpy")
+def crossings(before, after, number, loaded):
+    """How many events cross zero between two states, each in its direction."""
+    crossed = 0
+    for event in range(number):
+        rising = event == 0 or (event >= 2 and loaded[event - 2] == 0.0)
+        if (rising and before[event] <= 0.0 < after[event]) or (
+                not rising and before[event] >= 0.0 > after[event]):
+            crossed += 1
+    return crossed
+
+
+@njit(cache=True, error_model="numpy")
 def trial_step(method, system, points, count, loaded, motor_torque, load_torque, state, rate,
                h, absolute_tolerance, relative_tolerance, jacobian, real, real_pivots, complex_,
                complex_pivots, stages, work, out):
@@ -113,6 +139,28 @@ def trial_step(method, system, points, count, loaded, motor_torque, load_torque,
                    absolute_tolerance, relative_tolerance, real, real_pivots, complex_,
                    complex_pivots, stages, out)
     return h
+
+
+@njit(cache=True, error_model="numpy")
+def contact_violated_inside(method, system, points, count, loaded, motor_torque, load_torque,
+                            state, rate, h, absolute_tolerance, relative_tolerance, jacobian,
+                            real, real_pivots, complex_, complex_pivots, stages, work, trial,
+                            approach, slack):
+    """Debug check of a step from `state` of size h, by trial steps to INSIDE_FRACTIONS of it:
+    whether a loaded point's approach falls below −slack (tension) or an unloaded one's rises
+    above slack (penetration without load) anywhere there. It looks for what the event
+    search (crossings at step ends, the cubic for a dip within a step) would have missed,
+    by other means, at seven times the cost of a step."""
+    for fraction in INSIDE_FRACTIONS:
+        trial_step(method, system, points, count, loaded, motor_torque, load_torque, state,
+                   rate, fraction * h, absolute_tolerance, relative_tolerance, jacobian, real,
+                   real_pivots, complex_, complex_pivots, stages, work, trial)
+        approaches(system, points, count, trial, approach)
+        for i in range(count):
+            if (loaded[i] != 0.0 and approach[i] < -slack) or (
+                    loaded[i] == 0.0 and approach[i] > slack):
+                return True
+    return False
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -180,17 +228,18 @@ def hermite_root(g0, g1, d0, d1):
 @njit(cache=True, error_model="numpy")
 def advance(system_floats, system_ints, lengths, counts, tables, method, clock, place, state,
             loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-            relative_tolerance, max_step, event_time_tolerance, outputs_at_end):
+            relative_tolerance, max_step, event_time_tolerance, contact_slack, outputs_at_end):
     """Returns (status, accepted steps). The position is read from and written back to
     clock = [time, step size to try], place = [contact interval, mesh cycle], `state`,
     `loaded` and `first_steps` (per contact interval, the step size to start it with; 0:
     none yet), also where the run fails; `outputs_at_end` gets equations.outputs there. The
-    system comes packed (equations.pack_system)."""
+    system comes packed (equations.pack_system). contact_slack >= 0 (m) turns on the debug
+    check of `contact_violated_inside` on every step; < 0 leaves it off."""
     system = unpack_system(system_floats, system_ints)
     time, interval, cycle, h, status, steps = _advance(
         system, lengths, counts, tables, method, clock[0], place[0], place[1], clock[1], state,
         loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-        relative_tolerance, max_step, event_time_tolerance)
+        relative_tolerance, max_step, event_time_tolerance, contact_slack)
     clock[0], clock[1] = time, h
     place[0], place[1] = interval, cycle
     outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
@@ -200,7 +249,7 @@ def advance(system_floats, system_ints, lengths, counts, tables, method, clock, 
 @njit(cache=True, error_model="numpy")
 def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
              first_steps, end, motor_torque, load_torque, absolute_tolerance,
-             relative_tolerance, max_step, event_time_tolerance):
+             relative_tolerance, max_step, event_time_tolerance, contact_slack):
     size = state.shape[0]
     max_points = tables.shape[2]
     rate, new_state, trial_state, work = (np.empty(size), np.empty(size), np.empty(size),
@@ -208,6 +257,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
     stages = np.empty((dop853.STAGE_ROWS, size))
     values_before, values_after = np.empty(2 + max_points), np.empty(2 + max_points)
     values_trial, values_low = np.empty(2 + max_points), np.empty(2 + max_points)
+    values_high = np.empty(2 + max_points)
     approach = np.empty(max_points)
     rate_after = np.empty(size)
     slopes_before, slopes_after = np.zeros(max_points), np.zeros(max_points)
@@ -322,6 +372,14 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
                     new_state[:] = trial_state
                     values_after[:] = values_trial
         if event < 0:
+            if contact_slack >= 0.0 and system.contact_loss:
+                factored_h = 0.0  # the check's trial steps factorize for their own sizes
+                if contact_violated_inside(
+                        method, system, points, count, loaded, motor_torque, load_torque, state,
+                        rate, h_step, absolute_tolerance, relative_tolerance, jacobian, real,
+                        real_pivots, complex_, complex_pivots, stages, work, trial_state,
+                        approach, contact_slack):
+                    return time, interval, cycle, h, CONTACT_VIOLATED, steps
             state[:] = new_state
             rate[:] = rate_after
             values_before[:] = values_after
@@ -337,6 +395,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         # latest trial. A contact event is found by secant steps.
         low = 0.0
         values_low[:] = values_before
+        values_high[:] = values_after
         older_h, older_value = low, values_low[event]  # the two latest points, for the secant
         newer_h, newer_value = high, values_after[event]
         pinion_rate = size // 2 + system.pinion
@@ -347,7 +406,9 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             first_estimate = high * hermite_root(values_low[event], values_after[event],
                                                  high * state[pinion_rate],
                                                  high * newer_slope)
-        for _ in range(60):
+        for _ in range(MAX_LOCATION_TRIALS):
+            if high - low <= 2.0 * tolerance:
+                break  # whatever crossed in between crossed together, to the tolerance
             estimate = first_estimate
             first_estimate = -1.0
             if estimate < 0.0:
@@ -359,15 +420,22 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             if not low <= estimate < high:
                 estimate = 0.5 * (low + high)
             if high - estimate <= 2.0 * tolerance:
-                break  # the crossing lies within the tolerance before `high`
-            # aim just past the estimate, so that a good estimate ends the search at once
-            trial_h = estimate + tolerance
+                # located, unless another event that had also crossed by `high` crossed
+                # earlier: then a trial just before this crossing says which
+                if crossings(values_low, values_high, events, loaded) == 1:
+                    break
+                trial_h = high - 2.0 * tolerance
+            else:
+                # aim just past the estimate, so that a good estimate ends the search at once
+                trial_h = estimate + tolerance
             factored_h = trial_step(method, system, points, count, loaded, motor_torque,
                                     load_torque, state, rate, trial_h, absolute_tolerance,
                                     relative_tolerance, jacobian, real, real_pivots, complex_,
                                     complex_pivots, stages, work, trial_state)
             event_values(system, points, count, length, trial_state, approach, values_trial)
-            crossed = first_crossing(values_before, values_trial, events, loaded)
+            # against the bracket's low end, where nothing has crossed yet: of several events
+            # crossed by the trial, the earliest is taken
+            crossed = first_crossing(values_low, values_trial, events, loaded)
             if crossed >= 0:
                 if crossed != event:  # another event crosses first: locate that one
                     event = crossed
@@ -376,6 +444,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
                     older_h, older_value = newer_h, newer_value
                 high = trial_h
                 new_state[:] = trial_state
+                values_high[:] = values_trial
             else:
                 older_h, older_value = newer_h, newer_value
                 low = trial_h
@@ -384,6 +453,16 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             newer_slope = trial_state[pinion_rate]
 
         # --- the next segment ----------------------------------------------------------------
+        # (a debug run looks inside the step to the event, where no other point may have
+        # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
+        if contact_slack >= 0.0 and system.contact_loss and high > 16.0 * tolerance:
+            factored_h = 0.0
+            if contact_violated_inside(
+                    method, system, points, count, loaded, motor_torque, load_torque, state,
+                    rate, high, absolute_tolerance, relative_tolerance, jacobian, real,
+                    real_pivots, complex_, complex_pivots, stages, work, trial_state, approach,
+                    contact_slack):
+                return time, interval, cycle, h, CONTACT_VIOLATED, steps
         state[:] = new_state
         time = end if landing and high == h_step else time + high
         stalled_events = stalled_events + 1 if high <= 1e-12 * h_step else 0
@@ -418,20 +497,20 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
 @njit(cache=True, error_model="numpy")
 def next_segment(system, lengths, counts, tables, event, interval, cycle, state, loaded,
                  approach):
-    """What follows an event (segments.py): a contact changes its loaded flag; a phase event
-    moves to the next (or previous) contact set, re-expresses the pinion entry of `state` from
-    the new set's start (by lengths, not absolute angles, so it stays exact however far the train
-    has turned) and loads its points by sign. Updates state and loaded; returns the new
-    (interval, cycle)."""
-    if event >= 2:
-        loaded[event - 2] = 1.0 - loaded[event - 2]
-        return interval, cycle
+    """What follows an event: a phase event moves to the next (or previous) contact set and
+    re-expresses the pinion entry of `state` from the new set's start (by lengths, not
+    absolute angles, so it stays exact however far the train has turned); then every point
+    of the set is loaded by the sign of its approach. That rule, not a flip of the point
+    whose event fired, is what keeps the loaded set true to the state: a point that crossed
+    zero in the same bracket as the located event (a whole train separating or landing at
+    once) starts the segment on its own side, with its own event ahead of it. Updates state
+    and loaded; returns the new (interval, cycle)."""
     if event == 0:
         state[system.pinion] -= lengths[interval]
         interval += 1
         if interval == lengths.shape[0]:
             interval, cycle = 0, cycle + 1
-    else:
+    elif event == 1:
         interval -= 1
         if interval < 0:
             interval, cycle = lengths.shape[0] - 1, cycle - 1
