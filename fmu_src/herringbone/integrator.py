@@ -20,11 +20,12 @@ Methods (`method`):
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import numpy as np
 
-from .compiled import walk
+from .compiled import dop853, walk
 from .compiled.equations import pack_system
 from .model import GearTrainModel
 from .segments import Segment
@@ -47,6 +48,16 @@ STIFFNESS_RATIO = 10.0
 # 3.4e-7 with this bound. 3.5 leaves room for the stiffest contact set, about 20 % stiffer
 # than the mean the eigenvalues are taken at.
 EXPLICIT_STEP_BOUND = 3.5
+# Within that bound the step is held where the method integrates every mode of the train true
+# to its own eigenvalue (`explicit_step_bound`). A mode rings for as long as its damping lets
+# it, so the method's error in its decay rate and frequency adds up over its ringing, not over
+# one step, and the per-step error estimate cannot see that: at h·|λ| = 3.5 DOP853 damps a mode
+# by 0.67 % a step, which is four times the physical damping of a stiff bearing mode with no
+# bearing damping (ζ = 0.0016), and such a scene came out 1.8e-4 of the force scale off at
+# tolerance 1e-7. The error of a mode's eigenvalue is allowed this fraction of its decay rate
+# per unit of the tolerance (3e-3 at the default 1e-7), plus the tolerance times its frequency,
+# which bounds an undamped mode. Measured (tests/test_integrator.py): that scene 1.8e-4 -> ...
+EIGENVALUE_ERROR_PER_TOLERANCE = 3e4
 # A switch located δt late or early leaves a force error of about |λ|max·δt times the force that
 # switched (at most the static mesh force): events are located to this fraction of the tolerance
 # over |λ|max, so that what they add is a hundredth of a step's error.
@@ -81,6 +92,30 @@ def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> st
     return "radau" if np.abs(modes).max() > STIFFNESS_RATIO * fastest_oscillation else "dop853"
 
 
+def explicit_step_bound(modes, tolerance: float) -> float:
+    """The longest DOP853 step (s) that integrates each mode λ of `modes` with an eigenvalue
+    error |ln R(h·λ)/h − λ| of at most EIGENVALUE_ERROR_PER_TOLERANCE·tolerance times its decay
+    rate −Re λ plus tolerance·|λ|, and no longer than EXPLICIT_STEP_BOUND/|λ|max. The error
+    grows with h over that range, so it is found by bisection. The rigid rotation (λ = 0) and
+    what rounding leaves of it are not modes that ring."""
+    fastest = np.abs(modes).max()
+    modes = modes[(modes.imag >= 0.0) & (np.abs(modes) > 1e-6 * fastest)]
+    allowed = (EIGENVALUE_ERROR_PER_TOLERANCE * tolerance * -modes.real
+               + tolerance * np.abs(modes))
+
+    def true_to_modes(h):
+        error = np.abs(np.log(dop853.stability_function(h * modes)) / h - modes)
+        return bool(np.all(error <= allowed))
+
+    low, high = 0.0, EXPLICIT_STEP_BOUND / fastest
+    if true_to_modes(high):
+        return high
+    for _ in range(50):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if true_to_modes(middle) else (low, middle)
+    return low
+
+
 CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
                    "load at once (sharp face edges, edge_ramp = 0) and throw it back, at low "
                    "speed faster than it comes on; give edge_ramp > 0 (the contact ellipse's "
@@ -111,9 +146,14 @@ class Run:
 
 class CompiledStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
-                 max_step: float = math.inf, event_time_tolerance: float | None = None):
+                 max_step: float = math.inf, event_time_tolerance: float | None = None,
+                 check_contact: bool | None = None):
         """event_time_tolerance: how far past an event a segment may end, in seconds (default:
-        EVENT_ERROR_FRACTION of the tolerance over |λ|max)."""
+        EVENT_ERROR_FRACTION of the tolerance over |λ|max). check_contact (default: the
+        environment variable HERRINGBONE_CHECK_CONTACT set to 1): a debug run, which looks
+        inside every step for a point in tension or penetrating without load, beyond what a
+        tolerance's share of the force scale on one point allows, and fails the run
+        if it finds one (seven times the cost)."""
         self.model = model
         self.tolerance = float(tolerance)
         modes = eigenvalues(model)
@@ -125,10 +165,14 @@ class CompiledStepper:
         self.absolute_tolerance = tolerance * model.state_scales()
         self.max_step = float(max_step)
         if self.method_code == walk.EXPLICIT:
-            self.max_step = min(self.max_step, EXPLICIT_STEP_BOUND / fastest)
+            self.max_step = min(self.max_step, explicit_step_bound(modes, self.tolerance))
         self.event_time_tolerance = (EVENT_ERROR_FRACTION * self.tolerance / fastest
                                      if event_time_tolerance is None
                                      else float(event_time_tolerance))
+        if check_contact is None:
+            check_contact = os.environ.get("HERRINGBONE_CHECK_CONTACT") == "1"
+        self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
+                              if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.system_floats, self.system_ints = pack_system(model.system)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
@@ -165,13 +209,16 @@ class CompiledStepper:
             self.system_floats, self.system_ints, self.lengths, self.counts, self.tables,
             self.method_code, run.clock, run.place, run.state, run.loaded, run.first_steps,
             float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
-            self.tolerance, self.max_step, self.event_time_tolerance, run.outputs)
+            self.tolerance, self.max_step, self.event_time_tolerance, self.contact_slack,
+            run.outputs)
         self.accepted_steps += steps
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",
                       walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",
                       walk.NOT_FINITE: "the state is no longer finite",
-                      walk.CHATTER: CHATTER_MESSAGE}[status]
+                      walk.CHATTER: CHATTER_MESSAGE,
+                      walk.CONTACT_VIOLATED: "a point carried tension, or penetrated without "
+                      "load, inside a step (contact check of a debug run)"}[status]
             raise IntegrationError(f"integration failed at t = {run.time:.9g} s: {reason}")
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],

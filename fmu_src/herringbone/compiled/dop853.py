@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 from scipy.integrate._ivp.dop853_coefficients import A, B, E3, E5, N_STAGES
 
@@ -49,6 +50,16 @@ E31, E36, E37, E38, E39, E310, E311, E312 = E3[0], *E3[5:12]
 assert all(A[i, j] == 0.0 for i, j in ((3, 1), (4, 1), (5, 1), (5, 2)) + tuple(
     (i, j) for i in range(6, 12) for j in (1, 2))) and not B[1:5].any() \
     and not E5[1:5].any() and not E3[1:5].any() and E5[12] == E3[12] == 0.0
+
+
+def stability_function(z):
+    """R(z): the factor one step multiplies the mode y' = λ·y by, at z = h·λ (an array). The
+    exact factor is e^z; ln(R(z))/h is the eigenvalue the method integrates the mode with."""
+    z = np.asarray(z, dtype=complex)
+    stages = np.ones(z.shape + (N_STAGES,), dtype=complex)
+    for i in range(1, N_STAGES):  # explicit: each stage from the ones before it
+        stages[..., i] = 1.0 + z * (stages[..., :i] @ A[i, :i])
+    return 1.0 + z * (stages @ B[:N_STAGES])
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
