@@ -1,0 +1,29 @@
+"""The project's own description: docs/model.md is current, and nothing points outside the
+repository (a clone has nothing beside it)."""
+import subprocess
+
+from conftest import MODELS
+from herringbone.document import with_generated_tables
+
+ROOT = MODELS.parent
+
+
+def test_model_document_lists_every_parameter_as_the_package_has_it():
+    text = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
+    assert text == with_generated_tables(text), (
+        "docs/model.md section 12 is out of date: run "
+        "`python -m herringbone.document docs/model.md`")
+
+
+def test_nothing_points_outside_the_repository():
+    tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True)
+    if tracked.returncode != 0:  # not a git checkout (an unpacked source archive)
+        return
+    offenders = []
+    for name in tracked.stdout.split():
+        path = ROOT / name
+        if path.suffix in (".py", ".md", ".toml", ".txt", ".c", ".h", ".sh") and path.is_file():
+            text = path.read_text(encoding="utf-8", errors="replace")
+            if "../shared" in text or "MODEL.md" in text or "NOTES.md" in text:
+                offenders.append(name)
+    assert not offenders, f"these files point outside the repository: {offenders}"
