@@ -7,6 +7,7 @@ scene; `python build_fmu.py --examples DIR` builds the drive-train examples into
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import shutil
 import subprocess
@@ -38,11 +39,14 @@ _AFTER_UNIT_DEFINITIONS = ("TypeDefinitions", "LogCategories", "DefaultExperimen
 
 
 def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
-                    handle_state: bool = True) -> Path:
+                    handle_state: bool = True, serialize_state: bool = False,
+                    no_feedthrough: bool = False) -> Path:
     """Build `slave_script` (one pythonfmu Fmi2Slave class) into the FMU file `output`.
 
     `project_files` (files or package directories, copied recursively) land in the FMU's
-    `resources/`, which the FMU puts on `sys.path` at run time.  Directories among them are also
+    `resources/`, which the FMU puts on `sys.path` at run time.  `serialize_state` declares
+    canSerializeFMUstate (the slave's state must then be JSON data, or the slave must override
+    pythonfmu's `_fmu_state_to_bytes`); `no_feedthrough`: see `fix_model_description`.  Directories among them are also
     put on the build's PYTHONPATH, since the builder imports the script to write the model
     description.  The model description is then fixed by `fix_model_description`.  `output` (its
     parent directories are created) is replaced only once the FMU is complete and valid.
@@ -59,6 +63,8 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
                    "-d", tmp, *map(str, project_files)]
         if handle_state:
             command.append("--handle-state")
+        if serialize_state:
+            command.append("--serialize-state")
         import_paths = [str(p.parent) for p in project_files if p.is_dir() or p.suffix == ".py"]
         if os.environ.get("PYTHONPATH"):
             import_paths.append(os.environ["PYTHONPATH"])
@@ -67,7 +73,7 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
         built = sorted(Path(tmp).glob("*.fmu"))
         if run.returncode != 0 or len(built) != 1:
             raise RuntimeError(f"pythonfmu build of {slave_script} failed:\n{run.stderr}")
-        fix_model_description(fmu_path=built[0])
+        fix_model_description(fmu_path=built[0], no_feedthrough=no_feedthrough)
         problems = validate(fmu_path=built[0])
         if problems:
             raise RuntimeError(f"{slave_script.name}: fmpy validate found\n" + "\n".join(problems))
@@ -76,31 +82,53 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     return output
 
 
-def fix_model_description(fmu_path: Path) -> None:
+def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     """Rewrite the modelDescription.xml inside the FMU zip `fmu_path` in place.
 
-    pythonfmu 0.7.0 writes no `<InitialUnknowns>` and cannot declare units.  This regenerates
-    `<ModelStructure>` (Outputs and InitialUnknowns, 1-based indices into ModelVariables, per
-    FMI 2.0 section 3.4.8) and adds a `<UnitDefinitions>` entry for every `unit`/`displayUnit`
-    used by a variable (a slave sets them on the `<Real>` element, see examples/).
-    Idempotent; all other zip entries are copied unchanged.
+    pythonfmu 0.7.0 writes no `<InitialUnknowns>`, cannot declare units, and stamps every
+    build with a new GUID and the time.  This regenerates `<ModelStructure>` (Outputs and
+    InitialUnknowns, 1-based indices into ModelVariables, per FMI 2.0 section 3.4.8; an output
+    depends on no input directly: in co-simulation the outputs at a communication point follow
+    from the state, so `dependencies=""`), adds a `<UnitDefinitions>` entry for every
+    `unit`/`displayUnit` used by a variable (a slave sets them on the `<Real>` element, see
+    examples/), drops generationDateAndTime and sets the GUID to a hash of the FMU's content.
+    The zip is rewritten in name order with fixed timestamps and permissions, so that the same
+    content makes the same bytes.  Idempotent; all other entries' contents are unchanged.
     """
     fmu_path = Path(fmu_path)
     with zipfile.ZipFile(fmu_path) as zf:
         entries = {info: zf.read(info) for info in zf.infolist()}
     root = ET.fromstring(entries[next(i for i in entries if i.filename == "modelDescription.xml")])
-    _rebuild_model_structure(root)
+    _rebuild_model_structure(root, no_feedthrough)
     _add_unit_definitions(root)
+    root.attrib.pop("generationDateAndTime", None)
+    root.set("guid", "")
     ET.indent(root, space="  ")
-    xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    contents = {info.filename: data for info, data in entries.items()}
+    contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    root.set("guid", "{%s}" % _content_guid(contents))
+    contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
     def write(staging: Path) -> None:
         with zipfile.ZipFile(staging, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-            for info, data in entries.items():
-                zf.writestr(info.filename, xml if info.filename == "modelDescription.xml" else data,
-                            compress_type=zipfile.ZIP_DEFLATED)
+            for name in sorted(contents):
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                info.external_attr = (0o40755 << 16 | 0x10) if name.endswith("/") \
+                    else 0o644 << 16
+                zf.writestr(info, contents[name], compress_type=zipfile.ZIP_DEFLATED)
 
     _replace_file(target=fmu_path, write=write)
+
+
+def _content_guid(contents: dict[str, bytes]) -> str:
+    """A GUID (8-4-4-4-12 hex digits) from the SHA-256 of every entry's name and content (the
+    model description with an empty guid): identical FMUs share it, any change moves it."""
+    digest = hashlib.sha256()
+    for name in sorted(contents):
+        for part in (name.encode(), contents[name]):
+            digest.update(len(part).to_bytes(8, "little") + part)
+    hex_digits = digest.hexdigest()[:32]
+    return "-".join(hex_digits[a:b] for a, b in ((0, 8), (8, 12), (12, 16), (16, 20), (20, 32)))
 
 
 def _replace_file(target: Path, write) -> None:
@@ -116,7 +144,7 @@ def _replace_file(target: Path, write) -> None:
         raise
 
 
-def _rebuild_model_structure(root: ET.Element) -> None:
+def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:
     variables = root.find("ModelVariables").findall("ScalarVariable")
     outputs, initial_unknowns = [], []
     for index, var in enumerate(variables, start=1):
@@ -132,11 +160,15 @@ def _rebuild_model_structure(root: ET.Element) -> None:
     for old in root.findall("ModelStructure"):
         root.remove(old)
     structure = ET.SubElement(root, "ModelStructure")
-    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", initial_unknowns)):
+    # InitialUnknowns keep FMI's default dependencies: on every known (the outputs at the start
+    # follow from the parameters and the inputs' start values)
+    for tag, indices, extra in (("Outputs", outputs,
+                                 {"dependencies": ""} if no_feedthrough else {}),
+                                ("InitialUnknowns", initial_unknowns, {})):
         if indices:
             node = ET.SubElement(structure, tag)
             for index in indices:
-                ET.SubElement(node, "Unknown", index=str(index))
+                ET.SubElement(node, "Unknown", index=str(index), **extra)
 
 
 def _add_unit_definitions(root: ET.Element) -> None:
@@ -198,7 +230,8 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
         scene_copy = Path(tmp) / "scene.toml"
         shutil.copyfile(scene, scene_copy)
         return build_slave_fmu(slave_script=GEAR_SLAVE, project_files=[GEAR_PACKAGE, scene_copy],
-                               output=output, handle_state=True)
+                               output=output, handle_state=True, serialize_state=True,
+                               no_feedthrough=True)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -13,7 +13,8 @@ from fmpy.logging import addLoggerProxy
 class Instance:
     """Instantiate, set start values, initialize; then step, read outputs, save and restore."""
 
-    def __init__(self, fmu_path, start_values=None, name="gear"):
+    def __init__(self, fmu_path, start_values=None, name="gear", start_time=0.0,
+                 tolerance=None):
         self.description = read_model_description(str(fmu_path))
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.unzipped = extract(str(fmu_path))
@@ -31,11 +32,11 @@ class Instance:
                                modelIdentifier=self.description.coSimulation.modelIdentifier,
                                instanceName=name)
         self.slave.instantiate(callbacks=self.callbacks, loggingOn=True)
-        self.slave.setupExperiment(startTime=0.0)
+        self.slave.setupExperiment(startTime=start_time, tolerance=tolerance)
         self.slave.enterInitializationMode()
         self.set(**(start_values or {}))
         self.slave.exitInitializationMode()
-        self.time = 0.0
+        self.time = start_time
 
     def set(self, **values):
         for name, value in values.items():

@@ -123,6 +123,13 @@ CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that ent
                    "gradually")
 
 
+NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
+
+
+class StepBudgetExceeded(IntegrationError):
+    """run_to took its `max_steps` steps without reaching its end (the run stays usable)."""
+
+
 class Run:
     """A run on the compiled loop, held in the arrays walk.advance updates in place, so that a
     communication step allocates nothing. It is mutable and has one owner (the FMU slave keeps
@@ -160,6 +167,7 @@ class CompiledStepper:
         self.method = choose_method(model, method, modes)
         self.method_code = walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT
         fastest = np.abs(modes).max()  # |λ|max, 1/s
+        self.fastest_rate = float(fastest)
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
         self.first_step = 0.1 / fastest
         self.absolute_tolerance = tolerance * model.state_scales()
@@ -200,8 +208,11 @@ class CompiledStepper:
                         Segment(contact_set, run.loaded[:len(contact_set)].copy()),
                         float(run.clock[1]), run.outputs.copy(), run.first_steps.copy())
 
-    def run_to(self, run: Run, end: float, torques: tuple[float, float]) -> None:
-        """Integrate the run to `end` with the torques held, in place."""
+    def run_to(self, run: Run, end: float, torques: tuple[float, float],
+               max_steps: int | None = None) -> None:
+        """Integrate the run to `end` with the torques held, in place. Raises IntegrationError
+        where the integration fails, StepBudgetExceeded (the run left consistent where it
+        stopped) after `max_steps` internal steps (None: no bound)."""
         if end <= run.clock[0]:
             return
         # float(): an int would make numba compile another version
@@ -210,8 +221,11 @@ class CompiledStepper:
             self.method_code, run.clock, run.place, run.state, run.loaded, run.first_steps,
             float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
             self.tolerance, self.max_step, self.event_time_tolerance, self.contact_slack,
-            run.outputs)
+            run.outputs, NO_STEP_BUDGET if max_steps is None else int(max_steps))
         self.accepted_steps += steps
+        if status == walk.OVER_BUDGET:
+            raise StepBudgetExceeded(f"stopped at t = {run.time:.9g} s after {steps} internal "
+                                     f"steps short of t = {end:.9g} s")
         if status != walk.OK:
             reason = {walk.STALLED: "contact switches without progress (grazing contact)",
                       walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",

@@ -47,7 +47,7 @@ from . import dop853, radau
 from .equations import approach_rates, approaches, derivative, outputs, unpack_system
 
 EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
-OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER, CONTACT_VIOLATED = 0, 1, 2, 3, 4, 5
+OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER, CONTACT_VIOLATED, OVER_BUDGET = range(7)
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
 INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
@@ -228,8 +228,11 @@ def hermite_root(g0, g1, d0, d1):
 @njit(cache=True, error_model="numpy")
 def advance(system_floats, system_ints, lengths, counts, tables, method, clock, place, state,
             loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-            relative_tolerance, max_step, event_time_tolerance, contact_slack, outputs_at_end):
-    """Returns (status, accepted steps). The position is read from and written back to
+            relative_tolerance, max_step, event_time_tolerance, contact_slack, outputs_at_end,
+            max_steps):
+    """Returns (status, accepted steps). At most `max_steps` steps are taken: beyond them the
+    run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
+    The position is read from and written back to
     clock = [time, step size to try], place = [contact interval, mesh cycle], `state`,
     `loaded` and `first_steps` (per contact interval, the step size to start it with; 0:
     none yet), also where the run fails; `outputs_at_end` gets equations.outputs there. The
@@ -239,7 +242,7 @@ def advance(system_floats, system_ints, lengths, counts, tables, method, clock, 
     time, interval, cycle, h, status, steps = _advance(
         system, lengths, counts, tables, method, clock[0], place[0], place[1], clock[1], state,
         loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-        relative_tolerance, max_step, event_time_tolerance, contact_slack)
+        relative_tolerance, max_step, event_time_tolerance, contact_slack, max_steps)
     clock[0], clock[1] = time, h
     place[0], place[1] = interval, cycle
     outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
@@ -249,7 +252,7 @@ def advance(system_floats, system_ints, lengths, counts, tables, method, clock, 
 @njit(cache=True, error_model="numpy")
 def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
              first_steps, end, motor_torque, load_torque, absolute_tolerance,
-             relative_tolerance, max_step, event_time_tolerance, contact_slack):
+             relative_tolerance, max_step, event_time_tolerance, contact_slack, max_steps):
     size = state.shape[0]
     max_points = tables.shape[2]
     rate, new_state, trial_state, work = (np.empty(size), np.empty(size), np.empty(size),
@@ -281,6 +284,8 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
     opening = -1  # the contact interval whose first step is being taken (forward entry)
 
     while time < end:
+        if steps >= max_steps:  # checked here, where the position is a consistent one
+            return time, interval, cycle, h, OVER_BUDGET, steps
         h_wanted = min(h, max_step)
         # stretch a step by a hair rather than leave a remainder of rounding size
         landing = end - time <= h_wanted * (1.0 + 1e-7)
