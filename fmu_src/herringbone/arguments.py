@@ -58,7 +58,7 @@ class Argument:
             allowed = ", ".join(repr(choice) for choice in self.choices)
         else:
             allowed = self.allowed.describe() + (" or inf" if self.infinite else "")
-            allowed += " (a whole number)" if self.whole else ""
+            allowed = f"a whole number {allowed}" if self.whole else allowed
         return f"{allowed} ({self.meaning})"
 
     def problem(self, value) -> str | None:
