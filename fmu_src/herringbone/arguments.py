@@ -106,15 +106,21 @@ REFERENCE_TOLERANCE_ARGUMENT = Argument(
 COMPILED_TOLERANCE_ARGUMENT = Argument(
     "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
     "compiled integrator", COMPILED_TOLERANCE)
-REFERENCE_METHOD = Argument("method", "--method", "scipy's solve_ivp methods",
+REFERENCE_METHOD = Argument("method", None, "scipy's solve_ivp methods",
                             choices=REFERENCE_METHODS)
-COMPILED_METHOD = Argument("method", "--method", "the compiled integrator's methods",
+COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
                            choices=COMPILED_METHODS)
-MAX_STEP = Argument("max_step", "--max-step", "largest internal step, seconds; inf: no limit",
+MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
                     POSITIVE, infinite=True)
-# The FMU's max_step setting says "no limit" with 0 (FMI Reals have no inf in a start value).
+# The FMU's solver settings, for herringbone_gear_fmu.py (which keeps its own copy today): the
+# same ranges under the FMU's variable names. max_step says "no limit" with 0 there (a start
+# value in the model description cannot be inf).
+FMU_SOLVER_TOLERANCE = Argument("solver_tolerance", None, "error per step relative to the "
+                                "static mesh force", COMPILED_TOLERANCE)
 FMU_MAX_STEP = Argument("max_step", None, "largest internal step, seconds; 0: no limit",
                         Range(0.0, None))
+FMU_SOLVER_METHOD = Argument("solver_method", None, "the compiled integrator's methods",
+                             choices=COMPILED_METHODS)
 INITIAL_PINION_ANGLE = Argument("initial_pinion_angle", None, "pinion angle at t = 0, rad")
 PINION_SPEED = Argument("pinion_speed", None, "pinion speed, rad/s", POSITIVE)
 SPEED_COUNT = Argument("COUNT", None, "number of speeds", Range(2.0, None), whole=True)
