@@ -6,7 +6,6 @@ scene; `python build_fmu.py --examples DIR` builds the drive-train examples into
 """
 from __future__ import annotations
 
-import argparse
 import hashlib
 import os
 import shutil
@@ -235,18 +234,30 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """CLI entry point; returns the process exit code."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """CLI entry point; returns the process exit code: 2, with one line on stderr naming the
+    culprit and what is allowed, for a bad argument or scene (checked before building)."""
+    sys.path.insert(0, str(GEAR_PACKAGE.parent))
+    from herringbone.arguments import (OneLineParser, output_folder, output_path,
+                                       output_path_problem)
+
+    parser = OneLineParser(prog="build_fmu", description=__doc__.splitlines()[0],
+                           help_command="python build_fmu.py --help")
     parser.add_argument("scene", nargs="?", type=Path, default=ROOT / "models" / "reference.toml",
-                        help="scene file (default: models/reference.toml)")
-    parser.add_argument("-o", "--output", type=Path, default=ROOT / "dist" / "HerringboneGear.fmu",
+                        metavar="SCENE", help="scene file (default: models/reference.toml)")
+    # a string default: argparse passes it through `type`, which checks it like a given one
+    parser.add_argument("-o", "--output", type=output_path,
+                        default=str(ROOT / "dist" / "HerringboneGear.fmu"),
                         help="FMU to write (default: dist/HerringboneGear.fmu)")
     parser.add_argument("--simulate", action="store_true",
                         help="then simulate the scene through the FMU with fmpy: a summary, "
                              "and the outputs in results/<scene>_fmu.csv")
-    parser.add_argument("--examples", type=Path, metavar="DIR",
+    parser.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
     args = parser.parse_args(argv)
+    results_problem = output_path_problem(Path("results") / "scene_fmu.csv")
+    if args.simulate and results_problem is not None:
+        parser.error(f"--simulate writes results/<scene>_fmu.csv: {results_problem}; run it "
+                     "from a folder you can write in")
     if args.examples is not None:
         for path in build_example_fmus(output_dir=args.examples):
             print(path)

@@ -15,7 +15,6 @@ time per simulated second) and benchmark.md (the tables, the goals of issue 4, t
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -303,34 +302,46 @@ def plot(rows, path) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="error_vs_runtime", description=__doc__.split("\n")[0],
-                                     epilog="Defaults: the shipped scenes (reference, torsional, "
-                                     "staggered, lead_error), 0.2 s, steps 1e-5 1e-4 1e-3 1e-2, "
-                                     "tolerances 1e-5 … 1e-10, all methods, budget 120 s. "
-                                     "--quick: reference, 0.01 s, steps 1e-4 1e-3, tolerances "
-                                     "1e-6 1e-8, fmu RK45 DOP853. Explicit options override both.")
+    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
+    from herringbone.arguments import (COMPILED_TOLERANCE_ARGUMENT, POSITIVE,
+                                       REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, Argument,
+                                       OneLineParser, Range, output_folder)
+
+    step = Argument("step", None, "seconds", POSITIVE).option_type
+    budget = Argument("budget", None, "wall seconds", POSITIVE).option_type
+    repeat = Argument("repeat", None, "runs", Range(1.0), whole=True).option_type
+    parser = OneLineParser(prog="error_vs_runtime", description=__doc__.split("\n")[0],
+                           help_command="herringbone benchmark error-vs-runtime --help",
+                           epilog="Defaults: the shipped scenes (reference, torsional, "
+                           "staggered, lead_error), 0.2 s, steps 1e-5 1e-4 1e-3 1e-2, "
+                           "tolerances 1e-5 … 1e-10, all methods, budget 120 s. "
+                           "--quick: reference, 0.01 s, steps 1e-4 1e-3, tolerances "
+                           "1e-6 1e-8, fmu RK45 DOP853. Explicit options override both.")
     parser.add_argument("--scenes", nargs="+", help="scene names (models/NAME.toml), files or "
                         "globs")
-    parser.add_argument("--stop-time", type=float, help="simulated seconds per run")
-    parser.add_argument("--steps", nargs="+", type=float, help="FMU communication steps [s]")
-    parser.add_argument("--tolerances", nargs="+", type=float,
+    parser.add_argument("--stop-time", type=STOP_TIME.option_type,
+                        help="simulated seconds per run")
+    parser.add_argument("--steps", nargs="+", type=step, help="FMU communication steps [s]")
+    parser.add_argument("--tolerances", nargs="+",
+                        type=COMPILED_TOLERANCE_ARGUMENT.option_type,
                         help="solver tolerances (FMU solver_tolerance and scipy rtol; the FMU's "
                              "default is always added)")
     parser.add_argument("--methods", nargs="+", help=f"fmu and/or {' '.join(SCIPY_METHODS)}")
     parser.add_argument("--fmu-methods", nargs="+", default=None,
                         help="FMU solver_method values to sweep (only if the FMU declares "
                              "solver_method; default: the FMU's own default)")
-    parser.add_argument("--scipy-step", type=float, default=1e-3,
+    parser.add_argument("--scipy-step", type=step, default=1e-3,
                         help="output interval of the scipy runs [s] (default 1e-3)")
-    parser.add_argument("--budget", type=float,
+    parser.add_argument("--budget", type=budget,
                         help="wall seconds per configuration: a run stops there, tighter "
                              "tolerances of that method are skipped")
-    parser.add_argument("--reference-tolerance", type=float, default=1e-12,
+    parser.add_argument("--reference-tolerance",
+                        type=REFERENCE_TOLERANCE_ARGUMENT.option_type, default=1e-12,
                         help="tolerance of the reference integration (default 1e-12)")
-    parser.add_argument("--output-dir", type=Path, default=common.DEFAULT_OUTPUT_DIR,
+    parser.add_argument("--output-dir", type=output_folder, default=common.DEFAULT_OUTPUT_DIR,
                         help="where the CSV, PNG and markdown go (default results/benchmark; "
                              "FMUs and references are cached there whatever this says)")
-    parser.add_argument("--repeat", type=int, default=3,
+    parser.add_argument("--repeat", type=repeat, default=3,
                         help="runs of each FMU configuration, the median wall time kept "
                              "(default 3)")
     parser.add_argument("--quick", action="store_true", help="a minute's check of the pipeline")

@@ -19,7 +19,6 @@ Writes extreme_scenes.csv and extreme_scenes.md to the output directory.
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -213,31 +212,43 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="extreme_scenes", description=__doc__.split("\n")[0])
+    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
+    from herringbone.arguments import (POSITIVE, REFERENCE_TOLERANCE_ARGUMENT, Argument,
+                                       OneLineParser, Range, output_folder)
+
+    def positive(meaning, infinite=False):
+        return Argument(meaning, None, meaning, POSITIVE, infinite=infinite).option_type
+
+    parser = OneLineParser(prog="extreme_scenes", description=__doc__.split("\n")[0],
+                           help_command="herringbone benchmark extreme-scenes --help")
     parser.add_argument("--scenes", nargs="+", default=["models/*.toml"],
                         help="scene names, files or globs (default: models/*.toml)")
     parser.add_argument("--no-scenes", action="store_true", help="only the long run")
-    parser.add_argument("--span-scale", type=float,
+    parser.add_argument("--span-scale", type=positive("fraction of the stop time"),
                         help="simulate this fraction of each scene's stop time (default 1)")
-    parser.add_argument("--max-span", type=float, default=1.0,
+    parser.add_argument("--max-span", type=positive("simulated seconds"), default=1.0,
                         help="at most this many simulated seconds per scene (default 1)")
-    parser.add_argument("--budget", type=float, default=600.0,
+    parser.add_argument("--budget", type=positive("wall seconds", infinite=True), default=600.0,
                         help="wall seconds per FMU run before it is stopped (default 600)")
-    parser.add_argument("--reference-tolerance", type=float, default=1e-12)
+    parser.add_argument("--reference-tolerance",
+                        type=REFERENCE_TOLERANCE_ARGUMENT.option_type, default=1e-12)
     parser.add_argument("--long-scene", type=Path, default=None,
                         help="scene of the long run (default: models/long_run.toml, else "
                              "models/torsional.toml)")
-    parser.add_argument("--periods", type=float,
+    parser.add_argument("--periods",
+                        type=Argument("periods", None, "mesh periods; 0: no long run",
+                                      Range(0.0)).option_type,
                         help="mesh periods of the long run (default 1e4; 0: no long run)")
-    parser.add_argument("--long-step", type=float, default=1e-3,
+    parser.add_argument("--long-step", type=positive("seconds"), default=1e-3,
                         help="communication step of the long run (default 1e-3 s)")
-    parser.add_argument("--long-budget", type=float, default=math.inf,
+    parser.add_argument("--long-budget", type=positive("wall seconds", infinite=True),
+                        default=math.inf,
                         help="wall seconds before the long run is stopped (default: none)")
-    parser.add_argument("--window-periods", type=float,
+    parser.add_argument("--window-periods", type=positive("mesh periods"),
                         help="mesh periods recorded at the start and at the end (default 25)")
-    parser.add_argument("--window-step", type=float, default=1e-5,
+    parser.add_argument("--window-step", type=positive("seconds"), default=1e-5,
                         help="communication step inside the recorded windows (default 1e-5 s)")
-    parser.add_argument("--output-dir", type=Path, default=common.DEFAULT_OUTPUT_DIR,
+    parser.add_argument("--output-dir", type=output_folder, default=common.DEFAULT_OUTPUT_DIR,
                         help="where the CSV and markdown go (default results/benchmark; FMUs "
                              "and references are cached there whatever this says)")
     parser.add_argument("--quick", action="store_true",

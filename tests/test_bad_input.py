@@ -16,7 +16,13 @@ Routes (a row takes every route that can carry its value):
         host lives on). FMI can carry only Real values into a Real variable and whole numbers
         into an Integer one, so strings, booleans, fractions and NaN of integers go by the api;
 - cli:  `herringbone run FILE` (and for some rows `herringbone info FILE` and
-        `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback.
+        `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback;
+- call: (issue 13) a run argument handed to the API functions the row names (simulate,
+        reference_simulate, simulate_with, stability_chart, monodromy) raises ValueError
+        (SceneError for the scene) with a one-line message, before any model is built;
+- argv: (issue 13) a command line with a bad option or argument (`herringbone run|info|
+        stability|benchmark`, `python build_fmu.py`) exits with code 2, nothing on stdout,
+        one line on stderr naming the option and what is allowed, and writes nothing.
 """
 import math
 import subprocess
@@ -194,8 +200,142 @@ FILE_CASES = [
          ("z_pinion", ">= 1"), ("api", "cli"), ("run", "build_fmu")),
 ]
 
+
+# Run arguments (issue 13): "call" rows hand `value` (keyword arguments) to each API function in
+# `commands`, which must raise ValueError (SceneError for the scene) before any work; "argv"
+# rows run a command line, `value` its arguments ({scene}: models/reference.toml, {file}: a
+# plain file, so "{file}/x" lies in no folder), `commands` the program: herringbone or build_fmu.
+COMPILED_TOL = ("tolerance", "[1e-12, 0.01]")
+REFERENCE_TOL = ("tolerance", "[1e-12, 1e-05]")
+RUNS = ("simulate", "reference_simulate")
+SPANS = RUNS + ("simulate_with",)
+
+
+def _call_cases():
+    rows = []  # (id, culprit, keyword arguments, words, functions)
+    for label, value in (("negative", -1), ("zero", 0.0), ("nan", NAN), ("plus-inf", INF),
+                         ("string", "1 s"), ("boolean", True)):
+        rows.append((f"stop_time-{label}", "stop_time", {"stop_time": value},
+                     ("stop_time", "> 0"), SPANS))
+    for label, value in (("zero", 0.0), ("negative", -1e-4), ("nan", NAN), ("plus-inf", INF)):
+        rows.append((f"output_interval-{label}", "output_interval", {"output_interval": value},
+                     ("output_interval", "> 0"), SPANS))
+    rows.append(("output_interval-longer-than-stop_time", "output_interval",
+                 {"stop_time": 1e-3, "output_interval": 1e-2},
+                 ("output_interval", "<= stop_time"), SPANS))
+    for label, value in (("zero", 0.0), ("negative", -1e-7), ("below-minimum", 1e-13),
+                         ("above-maximum", 0.5), ("one", 1.0), ("nan", NAN)):
+        rows.append((f"compiled-tolerance-{label}", "tolerance", {"tolerance": value},
+                     COMPILED_TOL, ("simulate",)))
+    for label, value in (("zero", 0.0), ("below-minimum", 1e-13), ("above-maximum", 1e-4),
+                         ("one", 1.0), ("nan", NAN)):
+        rows.append((f"reference-tolerance-{label}", "tolerance", {"tolerance": value},
+                     REFERENCE_TOL, ("reference_simulate",)))
+    for label, value in (("unknown", "rk4"), ("capitals", "DOP853"), ("none", None)):
+        rows.append((f"compiled-method-{label}", "method", {"method": value},
+                     ("method", "'auto'", "'dop853'", "'radau'"), ("simulate",)))
+    for label, value in (("unknown", "rk4"), ("lower-case", "dop853")):
+        rows.append((f"reference-method-{label}", "method", {"method": value},
+                     ("method", "'DOP853'", "'Radau'"), ("reference_simulate",)))
+    for label, value in (("zero", 0.0), ("negative", -1e-3), ("nan", NAN)):
+        rows.append((f"max_step-{label}", "max_step", {"max_step": value},
+                     ("max_step", "> 0 or inf"), ("simulate",)))
+    for label, value in (("nan", NAN), ("plus-inf", INF), ("string", "0")):
+        rows.append((f"initial_pinion_angle-{label}", "initial_pinion_angle",
+                     {"initial_pinion_angle": value}, ("initial_pinion_angle", "finite"),
+                     ("reference_simulate", "simulate_with")))
+    for label, kwargs, functions in (("", {}, SPANS), ("-chart", {"speeds": [100.0]},
+                                                       ("stability_chart",)),
+                                     ("-monodromy", {"pinion_speed": 100.0}, ("monodromy",))):
+        rows.append((f"scene-a-path{label}", "scene", {"scene": "models/reference.toml", **kwargs},
+                     ("scene", "herringbone.Scene", "load_scene"), functions))
+    for label, value in (("negative", [100.0, -1.0]), ("zero", [0.0, 100.0]),
+                         ("nan", [NAN]), ("plus-inf", [100.0, INF]), ("empty", [])):
+        rows.append((f"speeds-{label}", "speeds", {"speeds": value}, ("speeds", "> 0"),
+                     ("stability_chart",)))
+    for label, value in (("zero", 0.0), ("negative", -5.0), ("plus-inf", INF),
+                         ("string", "fast")):
+        rows.append((f"pinion_speed-{label}", "pinion_speed", {"pinion_speed": value},
+                     ("pinion_speed", "> 0"), ("monodromy",)))
+    return [Case(f"call-{id}", "argument", name, kwargs, words, ("call",), functions)
+            for id, name, kwargs, words, functions in rows]
+
+
+RUN = ("run", "{scene}")
+STABILITY = ("stability", "{scene}")
+RUN_TOL = ("--tolerance", "[1e-12, 1e-05]")
+SWEEP = ("--speeds", "0 < FROM < TO")
+OPTION_ROWS = [  # (id, culprit, arguments, words, program)
+    ("run-stop-time-negative", "--stop-time", RUN + ("--stop-time", "-1"),
+     ("--stop-time -1", "> 0"), "herringbone"),
+    ("run-stop-time-nan", "--stop-time", RUN + ("--stop-time", "nan"),
+     ("--stop-time nan", "> 0"), "herringbone"),
+    ("run-stop-time-not-a-number", "--stop-time", RUN + ("--stop-time", "1s"),
+     ("--stop-time 1s", "not a number", "> 0"), "herringbone"),
+    ("run-output-interval-zero", "--output-interval", RUN + ("--output-interval", "0"),
+     ("--output-interval 0", "> 0"), "herringbone"),
+    ("run-output-interval-inf", "--output-interval", RUN + ("--output-interval", "inf"),
+     ("--output-interval inf", "> 0"), "herringbone"),
+    ("run-output-interval-longer-than-stop-time", "--output-interval",
+     RUN + ("--stop-time", "1e-3", "--output-interval", "1e-2"),
+     ("--output-interval", "<= the stop time"), "herringbone"),
+    # the scene's own output interval (1e-4 s) outlasts a stop time shorter than it
+    ("run-stop-time-below-the-scenes-interval", "--output-interval",
+     RUN + ("--stop-time", "1e-5"), ("--output-interval", "<= the stop time"), "herringbone"),
+    ("run-tolerance-zero", "--tolerance", RUN + ("--tolerance", "0"), RUN_TOL, "herringbone"),
+    ("run-tolerance-one", "--tolerance", RUN + ("--tolerance", "1"), RUN_TOL, "herringbone"),
+    ("run-tolerance-too-tight", "--tolerance", RUN + ("--tolerance", "1e-13"), RUN_TOL,
+     "herringbone"),
+    ("run-unknown-option", "--bogus", RUN + ("--bogus",), ("--bogus", "--help"), "herringbone"),
+    ("run-missing-scene", "SCENE", ("run",), ("SCENE", "required"), "herringbone"),
+    ("run-output-in-no-folder", "--output", RUN + ("-o", "{file}/out.csv"),
+     ("--output", "is a file, not a folder", "folder"), "herringbone"),
+    ("run-output-a-folder", "--output", RUN + ("-o", "{tmp}"), ("--output", "is a folder"),
+     "herringbone"),
+    # without -o it writes results/<scene>.csv: here "results" is a file
+    ("run-default-output-in-no-folder", "results", RUN, ("results", "-o FILE"),
+     "herringbone"),
+    ("info-missing-scene", "SCENE", ("info",), ("SCENE", "required"), "herringbone"),
+    ("info-unknown-option", "--bogus", ("info", "{scene}", "--bogus"), ("--bogus",),
+     "herringbone"),
+    ("stability-speeds-descending", "--speeds", STABILITY + ("--speeds", "100", "50", "3"),
+     SWEEP + ("FROM 100 is not below TO 50",), "herringbone"),
+    ("stability-speeds-zero", "--speeds", STABILITY + ("--speeds", "0", "50", "3"),
+     SWEEP + ("FROM 0",), "herringbone"),
+    ("stability-speeds-one-count", "--speeds", STABILITY + ("--speeds", "10", "50", "1"),
+     SWEEP + ("COUNT 1", "COUNT >= 2"), "herringbone"),
+    ("stability-speeds-fraction-count", "--speeds", STABILITY + ("--speeds", "10", "50", "2.5"),
+     SWEEP + ("COUNT 2.5", "whole number"), "herringbone"),
+    ("stability-speeds-nan", "--speeds", STABILITY + ("--speeds", "nan", "50", "3"),
+     SWEEP + ("FROM nan",), "herringbone"),
+    ("stability-speeds-two-values", "--speeds", STABILITY + ("--speeds", "10", "50"),
+     ("--speeds", "3 arguments"), "herringbone"),
+    ("stability-output-in-no-folder", "--output", STABILITY + ("-o", "{file}/chart.png"),
+     ("--output", "is a file, not a folder"), "herringbone"),
+    ("unknown-command", "COMMAND", ("frob",), ("COMMAND 'frob'", "'run'", "'stability'"),
+     "herringbone"),
+    ("no-command", "COMMAND", (), ("COMMAND", "required"), "herringbone"),
+    ("benchmark-unknown", "bogus", ("benchmark", "bogus"),
+     ("'bogus'", "error-vs-runtime, extreme-scenes"), "herringbone"),
+    ("benchmark-tolerance-one", "--tolerances", ("benchmark", "--tolerances", "1e-6", "1"),
+     ("--tolerances 1", "[1e-12, 0.01]"), "herringbone"),
+    ("benchmark-repeat-zero", "--repeat", ("benchmark", "--repeat", "0"),
+     ("--repeat 0", "whole number >= 1"), "herringbone"),
+    ("benchmark-periods-negative", "--periods",
+     ("benchmark", "extreme-scenes", "--periods", "-1"), ("--periods -1", ">= 0"),
+     "herringbone"),
+    ("build_fmu-unknown-option", "--bogus", ("--bogus",), ("--bogus", "build_fmu.py --help"),
+     "build_fmu"),
+    ("build_fmu-output-in-no-folder", "--output", ("{scene}", "-o", "{file}/x.fmu"),
+     ("--output", "is a file, not a folder"), "build_fmu"),
+    ("build_fmu-examples-a-file", "--examples", ("--examples", "{file}"),
+     ("--examples", "is a file", "folder"), "build_fmu"),
+]
+OPTION_CASES = [Case(f"argv-{id}", "option", name, arguments, words, ("argv",), (program,))
+                for id, name, arguments, words, program in OPTION_ROWS]
+
 CASES = (_parameter_cases() + _solver_cases() + _input_cases() + _experiment_cases()
-         + FILE_CASES)
+         + FILE_CASES + _call_cases() + OPTION_CASES)
 
 
 def _cases(route):
@@ -395,3 +535,111 @@ def test_command_line_exits_2_with_one_line(which, case, tmp_path):
     assert run.stdout == ""
     assert_one_clear_message(run.stderr, case.words + (str(path),), f"{which} stderr")
     assert not (tmp_path / "x.fmu").exists()
+
+
+# --- run arguments through the API and the command line (issue 13) ------------------------------
+
+class Untouchable:
+    """A stepper for simulate_with that fails the test if the run begins."""
+
+    def __getattr__(self, name):
+        raise AssertionError(f"the run began (stepper.{name}) before its arguments were checked")
+
+
+def _refuse_work(*args, **kwargs):
+    raise AssertionError("the model was built before the arguments were checked")
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Building a model is the first work of every run and chart: make it fail the test."""
+    import importlib
+
+    for module in ("reference", "integrator", "stability"):
+        monkeypatch.setattr(importlib.import_module(f"herringbone.{module}"), "GearTrainModel",
+                            _refuse_work)
+
+
+def _api_function(name):
+    from herringbone.reference import simulate_with
+    from herringbone.stability import monodromy, stability_chart
+
+    return {"simulate": herringbone.simulate,
+            "reference_simulate": herringbone.reference_simulate,
+            "simulate_with": lambda scene, **kwargs: simulate_with(Untouchable(), scene, **kwargs),
+            "stability_chart": stability_chart, "monodromy": monodromy}[name]
+
+
+@pytest.mark.parametrize("function, case", [
+    pytest.param(function, case, id=f"{function}-{case.id}")
+    for case in CASES if "call" in case.routes for function in case.commands])
+def test_api_refuses_a_bad_argument_before_any_work(function, case, reference_scene, no_work):
+    arguments = dict(case.value)
+    scene = arguments.pop("scene", reference_scene)
+    expected = SceneError if case.name == "scene" else ValueError
+    with pytest.raises(expected) as error:
+        _api_function(function)(scene, **arguments)
+    assert_one_clear_message(str(error.value), case.words, function)
+
+
+def test_the_api_accepts_the_bounds_of_its_ranges(reference_scene):
+    """The allowed ranges are closed where they say so: a run at each bound goes through."""
+    span = dict(stop_time=2e-5, output_interval=2e-5)
+    for tolerance in (1e-12, 1e-2):
+        assert len(herringbone.simulate(reference_scene, **span, tolerance=tolerance)["time"]) == 2
+    result = herringbone.reference_simulate(reference_scene, **span, tolerance=1e-5)
+    assert np.isfinite(result["F_mesh"]).all()
+
+
+ARGV_CASES = [case for case in CASES if "argv" in case.routes]
+
+
+def _argv(case, folder):
+    a_file = folder / "plain.txt"
+    a_file.write_text("not a folder\n")
+    (folder / "results").write_text("a file where the default output folder would be\n")
+    values = [v.format(scene=MODELS / "reference.toml", file=a_file, tmp=folder)
+              for v in case.value]
+    if case.commands == ("build_fmu",):
+        return [sys.executable, str(ROOT / "build_fmu.py"), *values]
+    return [str(Path(sys.executable).parent / "herringbone"), *values]
+
+
+@pytest.fixture(scope="module")
+def command_line_runs(tmp_path_factory):
+    """Every argv row run at once, one process per core (a process start costs about a
+    second): {case id: (finished process, the folder it ran in)}."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    def run(case):
+        folder = tmp_path_factory.mktemp(case.id)
+        return case.id, (subprocess.run(_argv(case, folder), capture_output=True, text=True,
+                                        cwd=folder, timeout=60), folder)
+
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+        return dict(pool.map(run, ARGV_CASES))
+
+
+@pytest.mark.parametrize("case", [pytest.param(case, id=case.id) for case in ARGV_CASES])
+def test_a_bad_command_line_argument_exits_2_with_one_line(case, command_line_runs):
+    run, folder = command_line_runs[case.id]
+    assert run.returncode == 2, f"exit code {run.returncode}; stderr: {run.stderr}"
+    assert run.stdout == ""
+    assert_one_clear_message(run.stderr, case.words, "stderr")
+    assert sorted(p.name for p in folder.iterdir()) == ["plain.txt", "results"]  # nothing written
+
+
+def test_the_table_covers_every_option_and_run_argument():
+    """A checked option or API argument added without a row here fails this test."""
+    from herringbone import arguments
+    from herringbone.cli import _parser
+
+    _, commands = _parser()
+    options = {action.option_strings[-1] for parser in commands.values()
+               for action in parser._actions if action.option_strings and action.type}
+    assert options <= {case.name for case in CASES if "argv" in case.routes}
+    names = {value.name for value in vars(arguments).values()
+             if isinstance(value, arguments.Argument)}
+    # COUNT: by the --speeds rows; the FMU's solver settings: by the "solver" rows
+    assert names - {"COUNT"} <= {case.name for case in CASES}

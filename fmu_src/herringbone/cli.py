@@ -2,12 +2,13 @@
 `stability` chart of a scene, `benchmark` the FMU against scipy (from a source checkout)."""
 from __future__ import annotations
 
-import argparse
 import csv
 import sys
 import time
 from pathlib import Path
 
+from .arguments import (OUTPUT_INTERVAL, REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, OneLineParser,
+                        number, output_path, output_path_problem, speed_sweep_problem)
 from .scene import SceneError, load_scene
 
 # The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
@@ -16,76 +17,108 @@ BENCHMARK_SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "
 
 
 def main(argv=None) -> int:
+    """Exit code 0 on success; 2, with one line on stderr naming the argument and what is
+    allowed, for a bad argument or scene (checked before any work)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["benchmark"]:  # its options belong to the script: argparse must not see them
         return _benchmark(argv[1:])
-    parser = argparse.ArgumentParser(prog="herringbone", description=__doc__)
-    commands = parser.add_subparsers(dest="command", required=True)
-    run = commands.add_parser("run", help="simulate a scene with the reference integration, "
-                              "print a summary and write a CSV of the outputs")
-    run.add_argument("scene", type=Path)
-    run.add_argument("--stop-time", type=float, help="simulated seconds (default: the scene's)")
-    run.add_argument("--output-interval", type=float, help="seconds between output samples")
-    run.add_argument("--tolerance", type=float, default=1e-10,
-                     help="error per step relative to the static mesh force (default 1e-10)")
-    run.add_argument("-o", "--output", type=Path,
-                     help="CSV file to write (default: results/<scene>.csv)")
-    info = commands.add_parser("info", help="geometry, mesh phase and modes of a scene")
-    info.add_argument("scene", type=Path)
-    stability = commands.add_parser("stability", help="Floquet chart: the largest multiplier "
-                                    "of the linear mesh against pinion speed, with its "
-                                    "unstable bands (PNG and a list of the bands)")
-    stability.add_argument("scene", type=Path)
-    stability.add_argument("--speeds", type=float, nargs=3, default=(50.0, 3000.0, 300),
-                           metavar=("FROM", "TO", "COUNT"),
-                           help="pinion speeds, rad/s (default 50 3000 300)")
-    stability.add_argument("-o", "--output", type=Path,
-                           help="PNG to write (default: results/<scene>_stability.png)")
-    commands.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
-                        "benchmarks/error_vs_runtime.py (the default) or "
-                        "benchmarks/extreme_scenes.py of the source checkout; "
-                        "`herringbone benchmark --help` lists the options")
+    parser, commands = _parser()
     args = parser.parse_args(argv)
     try:
         if args.command == "info":
             from .report import info_main
             return info_main([str(args.scene)])
         if args.command == "stability":
-            return _stability(args)
-        return _run(args)
+            return _stability(args, commands["stability"])
+        return _run(args, commands["run"])
     except SceneError as error:
         print(f"herringbone: {error}", file=sys.stderr)
         return 2
 
 
-def _run(args) -> int:
+def _parser():
+    """The parser and its command parsers; every value is checked by its `type=` (arguments.py),
+    and every error is one line (OneLineParser)."""
+    parser = OneLineParser(prog="herringbone", description=__doc__)
+    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    run = subparsers.add_parser("run", help="simulate a scene with the reference integration, "
+                                "print a summary and write a CSV of the outputs")
+    run.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    run.add_argument("--stop-time", type=STOP_TIME.option_type,
+                     help="simulated seconds (default: the scene's)")
+    run.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
+                     help="seconds between output samples, at most the stop time "
+                          "(default: the scene's)")
+    tolerance = REFERENCE_TOLERANCE_ARGUMENT.allowed
+    run.add_argument("--tolerance", type=REFERENCE_TOLERANCE_ARGUMENT.option_type, default=1e-10,
+                     help="error per step relative to the static mesh force, "
+                          f"{tolerance.low:g} to {tolerance.high:g} (default 1e-10)")
+    run.add_argument("-o", "--output", type=output_path,
+                     help="CSV file to write (default: results/<scene>.csv)")
+    info = subparsers.add_parser("info", help="geometry, mesh phase and modes of a scene")
+    info.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    stability = subparsers.add_parser("stability", help="Floquet chart: the largest multiplier "
+                                      "of the linear mesh against pinion speed, with its "
+                                      "unstable bands (PNG and a list of the bands)")
+    stability.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    stability.add_argument("--speeds", type=number, nargs=3, default=(50.0, 3000.0, 300),
+                           metavar=("FROM", "TO", "COUNT"),
+                           help="pinion speeds, rad/s: 0 < FROM < TO, COUNT >= 2 speeds "
+                                "(default 50 3000 300)")
+    stability.add_argument("-o", "--output", type=output_path,
+                           help="PNG to write (default: results/<scene>_stability.png)")
+    subparsers.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
+                          "benchmarks/error_vs_runtime.py (the default) or "
+                          "benchmarks/extreme_scenes.py of the source checkout; "
+                          "`herringbone benchmark --help` lists the options")
+    return parser, {"run": run, "stability": stability}
+
+
+def _output(parser, given, default: Path) -> Path:
+    """The file to write: `given` (checked by its type) or `default`, which is checked here."""
+    if given is not None:
+        return given
+    problem = output_path_problem(default)
+    if problem is not None:
+        parser.error(f"cannot write {default}: {problem}; give -o FILE in a folder you can "
+                     "write in")
+    return default
+
+
+def _run(args, parser) -> int:
     from .reference import reference_simulate
 
     scene = load_scene(args.scene)
+    stop_time = args.stop_time or scene.experiment.stop_time
+    interval = args.output_interval or scene.experiment.output_interval
+    if interval > stop_time:
+        parser.error(f"--output-interval {interval:g} s is longer than the stop time "
+                     f"{stop_time:g} s; allowed: > 0 and <= the stop time (give a shorter "
+                     "--output-interval or a longer --stop-time)")
+    output = _output(parser, args.output, Path("results") / f"{scene.name}.csv")
     started = time.perf_counter()
     results = reference_simulate(scene, stop_time=args.stop_time,
                                  output_interval=args.output_interval, tolerance=args.tolerance)
     wall = time.perf_counter() - started
-    output = args.output or Path("results") / f"{scene.name}.csv"
     write_csv(results, output)
     print(summary(scene, results, wall))
     print(f"outputs written to {output}")
     return 0
 
 
-def _stability(args) -> int:
+def _stability(args, parser) -> int:
     import numpy as np
 
     from .stability import plot_stability_chart, stability_chart
 
-    scene = load_scene(args.scene)
     low, high, count = args.speeds
-    if not 0.0 < low < high or count < 2:
-        print("herringbone: --speeds FROM TO COUNT needs 0 < FROM < TO and COUNT >= 2",
-              file=sys.stderr)
-        return 2
+    problem = speed_sweep_problem(low, high, count)
+    if problem is not None:
+        parser.error(f"--speeds {low:g} {high:g} {count:g}: {problem}; allowed: "
+                     "0 < FROM < TO (rad/s), COUNT >= 2 speeds")
+    scene = load_scene(args.scene)
+    output = _output(parser, args.output, Path("results") / f"{scene.name}_stability.png")
     chart = stability_chart(scene, np.linspace(low, high, int(count)))
-    output = args.output or Path("results") / f"{scene.name}_stability.png"
     output.parent.mkdir(parents=True, exist_ok=True)
     plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
     rpm = 60.0 / (2.0 * np.pi)
@@ -103,6 +136,12 @@ def _stability(args) -> int:
 def _benchmark(arguments: list[str]) -> int:
     import importlib.util
 
+    if arguments[:1] and not arguments[0].startswith("-") \
+            and arguments[0] not in BENCHMARK_SCRIPTS:
+        print(f"herringbone benchmark: unknown benchmark {arguments[0]!r}; allowed: "
+              f"{', '.join(BENCHMARK_SCRIPTS)} (`herringbone benchmark --help` lists the "
+              "options)", file=sys.stderr)
+        return 2
     name = arguments.pop(0) if arguments[:1] and arguments[0] in BENCHMARK_SCRIPTS \
         else "error-vs-runtime"
     script = BENCHMARKS / f"{BENCHMARK_SCRIPTS[name]}.py"

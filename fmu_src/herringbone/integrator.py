@@ -25,13 +25,14 @@ import time
 
 import numpy as np
 
+from .arguments import COMPILED_METHODS, check_compiled_run
 from .compiled import dop853, walk
 from .compiled.equations import pack_system
 from .model import GearTrainModel
 from .segments import Segment
 from .stepping import IntegrationError, Position
 
-METHODS = ("auto", "dop853", "radau")
+METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
 # The FMU's default: the error per step relative to the static mesh force that keeps every
 # shipped scene within 1e-6 of it at communication steps from 1e-5 to 1e-2 s. Measured (0.1 s,
 # against a run at 1e-12): at most 3.3e-7 (torsional scene, 1e-4 s steps); 1.5e-7 to 1.8e-7 for
@@ -261,8 +262,11 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
 def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
              method="auto", max_step=math.inf):
     """reference_simulate's twin on the compiled integrator (what the FMU runs): a scene's
-    outputs every output_interval, {"time": …, output name: …}."""
+    outputs every output_interval, {"time": …, output name: …}. Arguments outside
+    arguments.check_compiled_run's ranges raise ValueError before any work."""
     from .reference import simulate_with
+
+    check_compiled_run(scene, stop_time, output_interval, tolerance, method, max_step)
 
     stepper = CompiledStepper(GearTrainModel(scene), tolerance, method, max_step)
     return simulate_with(stepper, scene, stop_time, output_interval)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arguments import check_reference_run, check_run_times
 from .model import GearTrainModel
 from .stepping import ScipyStepper, start_position
 
@@ -30,7 +31,11 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
     applied to every state entry through GearTrainModel.state_scales.
     initial_pinion_angle: φp at t = 0 (MODEL.md starts at 0; any other angle must give the same
     run shifted in mesh phase).
+    Arguments outside arguments.check_reference_run's ranges (tolerance in [1e-12, 1e-5], a
+    solve_ivp method) raise ValueError before any work.
     """
+    check_reference_run(scene, stop_time, output_interval, tolerance, method,
+                        initial_pinion_angle)
     return simulate_with(ScipyStepper(GearTrainModel(scene), tolerance, method), scene,
                          stop_time, output_interval, initial_pinion_angle)
 
@@ -39,7 +44,9 @@ def simulate_with(stepper, scene, stop_time=None, output_interval=None,
                   initial_pinion_angle=0.0):
     """Run a scene with a stepper (stepping.ScipyStepper, integrator.CompiledStepper: anything
     with `model` and `advance(position, end, torques, sample_times, on_sample)`), sampling the
-    outputs every output_interval; returns {"time": …, output name: …}."""
+    outputs every output_interval; returns {"time": …, output name: …}. A bad span or start
+    raises ValueError before any work (arguments.check_run_times)."""
+    check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
     stop_time = scene.experiment.stop_time if stop_time is None else stop_time
     output_interval = scene.experiment.output_interval if output_interval is None \
         else output_interval

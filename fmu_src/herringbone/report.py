@@ -5,12 +5,12 @@ Output is plain ASCII so that any console shows it.
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 
 import numpy as np
 
+from .arguments import OneLineParser
 from .gear import GearGeometry
 from .mesh import Mesh
 from .model import mass_matrix, natural_modes
@@ -92,8 +92,8 @@ def scene_report(scene) -> str:
 
 def info_main(argv: list[str]) -> int:
     """`herringbone info SCENE`: print the scene report; 0 on success, 2 with one line on
-    stderr for a scene that cannot be loaded (argparse itself exits 2 on bad usage)."""
-    parser = argparse.ArgumentParser(prog="herringbone info",
+    stderr for a scene that cannot be loaded or bad usage."""
+    parser = OneLineParser(prog="herringbone info",
                                      description="Geometry, mesh phasing, natural frequencies "
                                                  "and resonance speeds of a scene.")
     parser.add_argument("scene", metavar="SCENE", help="scene file (TOML)")

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from .arguments import check_scene, check_speeds
 from .model import GearTrainModel
 
 SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
@@ -159,11 +160,10 @@ def mesh_stretches(model: GearTrainModel):
 def monodromy(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> np.ndarray:
     """Φ over one mesh period at a constant pinion speed (rad/s, > 0; an array gives a stack),
     in the rigid-free coordinates [η, η̇], q = rigid_free_basis(model)·η: 2(n−1) square. The
-    period starts at the first switch phase (the multipliers do not depend on where)."""
-    speeds = np.asarray(pinion_speed, dtype=float)
-    if not np.all(speeds > 0.0):
-        raise ValueError(f"pinion_speed must be > 0 rad/s, got {pinion_speed!r}")
-    model = GearTrainModel(scene)
+    period starts at the first switch phase (the multipliers do not depend on where). A speed
+    that is not finite and > 0, or an empty array, raises ValueError; a non-Scene, SceneError."""
+    speeds = check_speeds(pinion_speed, "pinion_speed")
+    model = GearTrainModel(check_scene(scene))
     stretches, lengths = mesh_stretches(model)
     return periodic_monodromy(np.eye(model.size - 1), stretches, lengths / speeds[..., None],
                               substeps, step_phase)
@@ -206,8 +206,10 @@ def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...
 
 
 def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> StabilityChart:
-    """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them."""
-    speeds = np.sort(np.asarray(speeds, dtype=float))
+    """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them. A
+    speed that is not finite and > 0, or no speed, raises ValueError before any work."""
+    check_scene(scene)
+    speeds = np.sort(check_speeds(speeds))
     largest = largest_multiplier(scene, speeds, substeps, step_phase)
     return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
                           scene.parameters["z_pinion"])

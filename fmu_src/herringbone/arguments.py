@@ -1,0 +1,263 @@
+"""The allowed values of the run arguments: one home for the Python API, the command line and
+(later) the FMU's solver settings.
+
+Every argument is an `Argument`: its name in the API, its option on the command line, what is
+allowed (a parameters.Range, or a list of choices) and what it means. `Argument.check(value)`
+returns the value or raises ONE ValueError naming the argument and what is allowed
+("stop_time is -1.0; allowed: > 0 (simulated seconds)"); `Argument.option_type` is the same check
+as an argparse `type=`. `check_reference_run` and `check_compiled_run` check every argument of a
+run at once, before any work; `OneLineParser` is an argparse parser whose errors are one line.
+FMU_SOLVER_TOLERANCE, FMU_MAX_STEP and FMU_SOLVER_METHOD are the FMU's solver settings, for
+the slave (fmu_src/herringbone_gear_fmu.py) to check with.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import numbers
+import os
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from .parameters import FINITE, POSITIVE, Range
+from .scene import Scene, SceneError
+
+# Below this the error control works on rounding noise (the FMU's bound; scipy itself raises
+# an rtol below 100 machine epsilons, 2.2e-14, with a warning).
+TIGHTEST_TOLERANCE = 1e-12
+# The compiled integrator, as the FMU's solver_tolerance: its steps are bounded by stability
+# (integrator.EXPLICIT_STEP_BOUND) and end at every contact switch, so even at 1e-2 it stays
+# within 7e-4 of the mesh force (reference scene, 0.01 s, against the reference at 1e-10).
+COMPILED_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-2)
+# The scipy reference: nothing bounds its steps but the tolerance, so coarse ones step over
+# contact switches. Measured on the reference scene over 0.01 s against 1e-10: F_mesh 31 % off
+# at 1e-4 (and n_contacts wrong), 5e-4 at 1e-5, 1e-6 at 1e-6.
+REFERENCE_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-5)
+COMPILED_METHODS = ("auto", "dop853", "radau")  # integrator.METHODS
+REFERENCE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")  # scipy's solve_ivp
+
+
+@dataclass(frozen=True)
+class Argument:
+    """One argument: `name` in the API, `option` on the command line, the values allowed
+    (`allowed`, or `choices` for names), `meaning` shown after what is allowed. `infinite`:
+    +inf is allowed too (it means "no limit")."""
+
+    name: str
+    option: str | None
+    meaning: str
+    allowed: Range = FINITE
+    choices: tuple[str, ...] | None = None
+    infinite: bool = False
+    whole: bool = False
+
+    def describe(self) -> str:
+        """What is allowed, in words: "> 0 (simulated seconds)"."""
+        if self.choices is not None:
+            allowed = ", ".join(repr(choice) for choice in self.choices)
+        else:
+            allowed = self.allowed.describe() + (" or inf" if self.infinite else "")
+            allowed = f"a whole number {allowed}" if self.whole else allowed
+        return f"{allowed} ({self.meaning})"
+
+    def problem(self, value) -> str | None:
+        """Why `value` is not allowed ("is -1.0; allowed: …"), or None if it is."""
+        if self.choices is not None:
+            return None if isinstance(value, str) and value in self.choices \
+                else f"is {value!r}; allowed: {self.describe()}"
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            return f"must be a number, got {type(value).__name__} {value!r}; " \
+                   f"allowed: {self.describe()}"
+        value = float(value)
+        fits = (self.infinite and value == math.inf) or self.allowed.contains(value)
+        if not fits or (self.whole and value != int(value)):
+            return f"is {value!r}; allowed: {self.describe()}"
+        return None
+
+    def check(self, value):
+        """`value` itself if it is allowed; else ValueError("<name> is …; allowed: …")."""
+        problem = self.problem(value)
+        if problem is not None:
+            raise ValueError(f"{self.name} {problem}")
+        return value
+
+    def option_type(self, text: str):
+        """argparse `type=`: the value of `text`, or ArgumentTypeError "TEXT: allowed: …"."""
+        if self.choices is not None:
+            value = text
+        else:
+            try:
+                value = float(text)
+            except ValueError:
+                raise argparse.ArgumentTypeError(f"{text}: not a number; "
+                                                 f"allowed: {self.describe()}") from None
+        if self.problem(value) is not None:
+            raise argparse.ArgumentTypeError(f"{text}: allowed: {self.describe()}")
+        return int(value) if self.whole else value
+
+
+STOP_TIME = Argument("stop_time", "--stop-time", "simulated seconds", POSITIVE)
+OUTPUT_INTERVAL = Argument("output_interval", "--output-interval",
+                           "seconds between output samples, at most the stop time", POSITIVE)
+REFERENCE_TOLERANCE_ARGUMENT = Argument(
+    "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
+    "scipy reference", REFERENCE_TOLERANCE)
+COMPILED_TOLERANCE_ARGUMENT = Argument(
+    "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
+    "compiled integrator", COMPILED_TOLERANCE)
+REFERENCE_METHOD = Argument("method", None, "scipy's solve_ivp methods",
+                            choices=REFERENCE_METHODS)
+COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
+                           choices=COMPILED_METHODS)
+MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
+                    POSITIVE, infinite=True)
+# The FMU's solver settings, for herringbone_gear_fmu.py (which keeps its own copy today): the
+# same ranges under the FMU's variable names. max_step says "no limit" with 0 there (a start
+# value in the model description cannot be inf).
+FMU_SOLVER_TOLERANCE = Argument("solver_tolerance", None, "error per step relative to the "
+                                "static mesh force", COMPILED_TOLERANCE)
+FMU_MAX_STEP = Argument("max_step", None, "largest internal step, seconds; 0: no limit",
+                        Range(0.0, None))
+FMU_SOLVER_METHOD = Argument("solver_method", None, "the compiled integrator's methods",
+                             choices=COMPILED_METHODS)
+INITIAL_PINION_ANGLE = Argument("initial_pinion_angle", None, "pinion angle at t = 0, rad")
+PINION_SPEED = Argument("pinion_speed", None, "pinion speed, rad/s", POSITIVE)
+SPEED_COUNT = Argument("COUNT", None, "number of speeds", Range(2.0, None), whole=True)
+
+
+def check_scene(scene) -> Scene:
+    """`scene` if it is a Scene; else SceneError saying how to get one."""
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene must be a herringbone.Scene, got {type(scene).__name__} "
+                         f"{scene!r}; load one with herringbone.load_scene(path) or build one "
+                         "with herringbone.scene_from_dict(...)")
+    return scene
+
+
+def check_run_times(scene, stop_time=None, output_interval=None, initial_pinion_angle=0.0):
+    """Check the run's span and start (None: the scene's [experiment] value, itself checked
+    when the scene was loaded); ValueError naming the first culprit."""
+    check_scene(scene)
+    stop = scene.experiment.stop_time if stop_time is None else STOP_TIME.check(stop_time)
+    interval = scene.experiment.output_interval if output_interval is None \
+        else OUTPUT_INTERVAL.check(output_interval)
+    if interval > stop:
+        raise ValueError(f"output_interval is {float(interval)!r}, longer than stop_time "
+                         f"{float(stop)!r}; allowed: > 0 and <= stop_time (seconds between "
+                         "output samples)")
+    INITIAL_PINION_ANGLE.check(initial_pinion_angle)
+
+
+def check_reference_run(scene, stop_time=None, output_interval=None, tolerance=1e-10,
+                        method="DOP853", initial_pinion_angle=0.0) -> None:
+    """Every argument of reference.reference_simulate; ValueError (SceneError for the scene)
+    naming the first culprit and what is allowed."""
+    check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
+    REFERENCE_TOLERANCE_ARGUMENT.check(tolerance)
+    REFERENCE_METHOD.check(method)
+
+
+def check_compiled_run(scene, stop_time=None, output_interval=None, tolerance=1e-7,
+                       method="auto", max_step=math.inf) -> None:
+    """Every argument of integrator.simulate; ValueError (SceneError for the scene) naming the
+    first culprit and what is allowed."""
+    check_run_times(scene, stop_time, output_interval)
+    COMPILED_TOLERANCE_ARGUMENT.check(tolerance)
+    COMPILED_METHOD.check(method)
+    MAX_STEP.check(max_step)
+
+
+def check_speeds(speeds, name="speeds"):
+    """A non-empty array of pinion speeds, each finite and > 0 rad/s; else ValueError."""
+    import numpy as np
+
+    try:
+        values = np.asarray(speeds, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers, got {speeds!r}; allowed: "
+                         f"{PINION_SPEED.describe()}") from None
+    bad = values[~(np.isfinite(values) & (values > 0.0))]
+    if values.size == 0 or bad.size:
+        what = "is empty" if values.size == 0 else f"holds {float(bad.flat[0])!r}"
+        raise ValueError(f"{name} {what}; allowed: {PINION_SPEED.describe()}")
+    return values
+
+
+def speed_sweep_problem(low: float, high: float, count: float) -> str | None:
+    """Why FROM TO COUNT of `herringbone stability --speeds` is not allowed, or None."""
+    for label, value in (("FROM", low), ("TO", high)):
+        if PINION_SPEED.problem(value) is not None:
+            return f"{label} {value:g} is not a finite speed > 0"
+    if not low < high:
+        return f"FROM {low:g} is not below TO {high:g}"
+    if SPEED_COUNT.problem(count) is not None:
+        return f"COUNT {count:g} is not a whole number >= 2"
+    return None
+
+
+def number(text: str) -> float:
+    """argparse `type=` for a plain number: float(text), or ArgumentTypeError "TEXT: …"."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text}: not a number") from None
+
+
+def output_path_problem(path: Path) -> str | None:
+    """Why a file cannot be written at `path` (its folder created as needed), or None: the
+    nearest existing ancestor must be a folder we may write in, and `path` no folder."""
+    path = Path(path)
+    if path.is_dir():
+        return f"{path} is a folder"
+    ancestor = path.parent
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        return f"{ancestor} is a file, not a folder"
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        return f"the folder {ancestor} is not writable"
+    return None
+
+
+def output_path(text: str) -> Path:
+    """argparse `type=` for a file to write: the Path, or ArgumentTypeError saying why not."""
+    problem = output_path_problem(Path(text))
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text}: cannot write there: {problem}; allowed: a "
+                                         "file in a folder that exists or can be made and "
+                                         "that you can write in")
+    return Path(text)
+
+
+def output_folder(text: str) -> Path:
+    """argparse `type=` for a folder to write files in: the Path, or ArgumentTypeError."""
+    path = Path(text)
+    problem = (f"{path} is a file" if path.exists() and not path.is_dir()
+               else output_path_problem(path / "file"))
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text}: cannot write there: {problem}; allowed: a "
+                                         "folder that exists or can be made and that you can "
+                                         "write in")
+    return path
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line on stderr, "PROG: --option VALUE: allowed: …",
+    and exit code 2: no usage block (`PROG --help` shows it, and the line says so).
+    help_command: how to ask for that help, if not `PROG --help`."""
+
+    def __init__(self, *args, help_command: str | None = None, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.help_command = help_command or f"{self.prog} --help"
+
+    def error(self, message):
+        # argparse says "argument --stop-time: -1: allowed …": drop the word, keep the option
+        if message.startswith("argument "):
+            option, _, rest = message[len("argument "):].partition(": ")
+            choice = re.fullmatch(r"invalid choice: (.*) \(choose from (.*)\)", rest)
+            rest = f"{choice[1]}: allowed: {choice[2]}" if choice else rest
+            message = f"{option.split('/')[-1]} {rest}"
+        print(f"{self.prog}: {message}; see `{self.help_command}`", file=sys.stderr)
+        sys.exit(2)
