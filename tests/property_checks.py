@@ -275,13 +275,20 @@ def _toml_value(value) -> str:
 
 def save_regression_scene(scene, failure: str, folder: Path = REGRESSION_DIR) -> Path:
     """Write the scene with `failure` as its header to folder/found_<digest>.toml (the digest of
-    the scene itself, so the same scene found twice is one file); returns the path."""
+    the scene itself, so the same scene found twice is one file, its header saying every
+    failure found on it); returns the path."""
     body = scene_toml(scene, "")
     digest = hashlib.sha1(body.encode()).hexdigest()[:10]
     path = folder / f"found_{digest}.toml"
+    header = f"Found by tests/test_properties.py: {failure}"
+    if path.exists():
+        known = path.read_text(encoding="utf-8").split("\n[", 1)[0]
+        if " ".join(failure.split()) not in " ".join(known.replace("#", " ").split()):
+            path.write_text(known + "\n" + scene_toml(scene, "Also: " + failure),
+                            encoding="utf-8")
+        return path
     folder.mkdir(parents=True, exist_ok=True)
-    path.write_text(scene_toml(scene, f"Found by tests/test_properties.py: {failure}"),
-                    encoding="utf-8")
+    path.write_text(scene_toml(scene, header), encoding="utf-8")
     return path
 
 

@@ -93,6 +93,11 @@ def test_a_saved_scene_loads_back_to_the_same_scene(seed, tmp_path):
     assert loaded.components == scene.components
     assert loaded.experiment == scene.experiment and loaded.inputs == scene.inputs
     assert checks.save_regression_scene(scene, "again", tmp_path) == path  # one file a scene
+    assert checks.save_regression_scene(scene, "again", tmp_path) == path
+    header = [line for line in path.read_text().splitlines() if line.startswith("#")]
+    assert header == ["# Found by tests/test_properties.py: a test: nothing failed",
+                      "# Also: again"]
+    assert herringbone.load_scene(path).parameters == scene.parameters
 
 
 def test_seeded_scenes_are_reproducible_and_cover_the_spans():
