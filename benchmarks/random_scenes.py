@@ -138,6 +138,13 @@ def summary(rows: list[dict], elapsed: float, command: str) -> str:
         worst = sorted(measured, key=lambda r: -r[f"error_{label}"])[:5]
         lines.append("  worst: " + ", ".join(f"seed {r['seed']}: {r[f'error_{label}']:.3g}"
                                              for r in worst))
+    # the truth is only as good as the reference: where it disagrees with itself, a compiled
+    # run off it may be right; count the compiled runs off a self-consistent reference apart
+    trusted = [r for r in rows if r.get("error_reference_1e-10", math.inf) <= 1e-6]
+    for label, bound in BOUNDS[:2]:
+        beyond = [r["seed"] for r in trusted if r.get(f"error_{label}", 0.0) > bound]
+        lines.append(f"{label} beyond {bound:g} where the reference agrees with itself to 1e-6: "
+                     f"{len(beyond)} of {len(trusted)} (seeds {beyond[:10]})")
     lines.append("failures (a run that raised or was stopped):")
     for label, _, _ in RUNS:
         failed = [r for r in rows if f"failure_{label}" in r]
