@@ -178,6 +178,36 @@ class GearTrainModel:
         return equations.point_geometry(self.system, contact_set.table, len(contact_set),
                                         float(y[self.pinion]))
 
+    def point_approaches(self, state, contact_set: ContactSet) -> np.ndarray:
+        """δ + η·δ̇ of every point of the set (its load per unit stiffness), in numpy: at one
+        state (a vector; gives one value a point) or at each column of a 2-D array of states
+        (gives a row a point). The compiled equations.approaches computes the same."""
+        y, rate = state[:self.size], state[self.size:]
+        travel = self.axial_travel_per_radian * y[self.pinion]
+        lever_arm = contact_set.lever_arm0[:, None] + np.multiply.outer(
+            contact_set.lever_arm_slope, travel).reshape(len(contact_set), -1)
+        lead_error = contact_set.lead_error0[:, None] + np.multiply.outer(
+            contact_set.lead_error_slope, travel).reshape(len(contact_set), -1)
+        base, tilt = self._contact_base_relative @ y, self._contact_tilt_relative @ y
+        base_rate = self._contact_base_relative @ rate
+        tilt_rate = self._contact_tilt_relative @ rate
+        approach = (base + lever_arm * tilt + lead_error
+                    + self.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
+        return approach if state.ndim == 2 else approach[:, 0]
+
+    def point_forces(self, state, contact_set: ContactSet, loaded) -> np.ndarray:
+        """The force (N) each point of the set carries at a state, c·(δ + η·δ̇) where it is
+        loaded and 0 where it is not, in numpy (shapes as point_approaches). With contact loss
+        a correct run never shows a negative one."""
+        y = state[:self.size]
+        travel = self.axial_travel_per_radian * y[self.pinion]
+        stiffness = contact_set.stiffness0[:, None] + np.multiply.outer(
+            contact_set.stiffness_slope, travel).reshape(len(contact_set), -1)
+        loaded = np.asarray(loaded, dtype=float)
+        forces = (loaded[:, None] * stiffness) * self.point_approaches(
+            state if state.ndim == 2 else state[:, None], contact_set)
+        return forces if state.ndim == 2 else forces[:, 0]
+
     def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
         """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""
         rate = np.empty_like(state)
