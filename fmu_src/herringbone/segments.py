@@ -76,7 +76,8 @@ def contact_band(model: GearTrainModel) -> float:
 
 def point_approaches(model: GearTrainModel, contact_set: ContactSet,
                      state: np.ndarray) -> np.ndarray:
-    """δ + η·δ̇ of every point of the set (the compiled equations.approaches)."""
+    """δ + η·δ̇ of every point of the set by the compiled equations.approaches (the initial
+    condition's, which every integrator starts from)."""
     out = np.empty(len(contact_set))
     equations.approaches(model.system, contact_set.table, len(contact_set), state, out)
     return out
@@ -99,7 +100,7 @@ def loaded_points(model: GearTrainModel, contact_set: ContactSet, state: np.ndar
     depends on its flag: it is taken with the flags by sign)."""
     if not model.contact_loss:
         return np.ones(len(contact_set))
-    approach = point_approaches(model, contact_set, state)
+    approach = model.point_approaches(state, contact_set)  # as the event functions read it
     loaded = (approach > 0.0).astype(float)
     at_zero = np.abs(approach) <= contact_band(model)
     if at_zero.any():
@@ -140,11 +141,13 @@ def event_values(model: GearTrainModel, segment: Segment, states: np.ndarray) ->
     """h of every event (rows) at every state (columns of `states`, one state a column)."""
     contact_set = segment.contact_set
     phase = states[model.pinion]
-    values = [phase - contact_set.length, -phase]
+    values = np.empty((2 + (len(contact_set) if model.contact_loss else 0), states.shape[1]))
+    values[PHASE_END] = phase - contact_set.length
+    values[PHASE_START] = -phase
     if model.contact_loss:
         signs = 1.0 - 2.0 * segment.loaded  # loaded: watch −approach rise through zero
-        values += list(signs[:, None] * model.point_approaches(states, contact_set))
-    return np.array(values)
+        values[2:] = signs[:, None] * model.point_approaches(states, contact_set)
+    return values
 
 
 def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray,

@@ -36,6 +36,9 @@ MAX_PHASE_REVERSALS = 1000
 # several nodes, or bulges between two, which the cubic test sees.
 INTERIOR_NODES = 7
 SLOPE_SPACING = 1e-5  # of a step: the half-spacing of the differences that give the slopes
+# Only points whose approach comes this many times its largest change between nodes near zero
+# get slopes (and so the bulge test): a smoother one cannot reach zero between two nodes.
+NEAR_ZERO = 4.0
 # The debug check of contact forces (check_tension) reads the step at this many points.
 TENSION_NODES = 33
 STALL_RESOLUTION = 64 * np.finfo(float).eps  # of the time: a segment this short made no progress
@@ -176,15 +179,24 @@ class ScipyStepper:
         return event, reached
 
     def _values_and_slopes(self, step, segment, times):
-        """The event functions at the times, and their slopes by central differences on the
-        dense output (a step's hundred-thousandth apart: the truncation error is 1e-10 of the
-        slope; rounding of the approach, ~1e-21 m, adds ~1e-10 m/s)."""
-        spacing = SLOPE_SPACING * (step.end - step.start)
-        count = len(times)
-        states = step.dense(np.concatenate([times, times - spacing, times + spacing]))
+        """The event functions at the times, and their slopes: φp's from its rate in the state;
+        a point's, where its approach comes near zero (within NEAR_ZERO times its largest change
+        between nodes), by central differences on the dense output, a step's hundred-thousandth
+        apart (truncation 1e-10 of the slope; the approach's rounding, ~1e-21 m, adds
+        ~1e-10 m/s); elsewhere 0, which no bulge test flags."""
+        states = step.dense(times)
         values = segments.event_values(self.model, segment, states)
-        slopes = (values[:, 2 * count:] - values[:, count:2 * count]) / (2.0 * spacing)
-        return values[:, :count], slopes
+        slopes = np.zeros_like(values)
+        speed = states[self.model.size + self.model.pinion]
+        slopes[segments.PHASE_END], slopes[segments.PHASE_START] = speed, -speed
+        contact = values[2:]
+        near = contact.max(axis=1) > -NEAR_ZERO * np.abs(np.diff(contact, axis=1)).max(axis=1)
+        if near.any():
+            spacing = SLOPE_SPACING * (step.end - step.start)
+            shifted = step.dense(np.concatenate([times - spacing, times + spacing]))
+            ahead = segments.event_values(self.model, segment, shifted)[2:][near]
+            slopes[2:][near] = (ahead[:, len(times):] - ahead[:, :len(times)]) / (2.0 * spacing)
+        return values, slopes
 
     def _locate(self, step, segment, offsets, event, left, right, bump):
         """The time in [left, right] where event function `event` first rises through zero;
