@@ -193,3 +193,34 @@ def test_a_bulge_between_two_nodes_is_seen_from_their_slopes():
     flagged = stepping._bumps(values, slopes, times)
     assert flagged[0].tolist() == [k == 4 for k in range(8)]
     assert not stepping._bumps(values - 2.0, slopes, times).any()
+
+
+@pytest.mark.parametrize("peak, loss_at", [(1.02, 0.54), (0.98, None)])
+def test_a_loss_and_landing_between_two_nodes_of_a_step_is_located(reference_scene, peak,
+                                                                   loss_at):
+    """A step [0, 1] over which the pinion moves along its axis so that every point's approach
+    is A·(1 − p(t)), p = peak − 50·(t − 0.56)², A its static approach: above zero at all nine
+    nodes the step is read at. With peak 1.02 it dips below zero on (0.54, 0.58), between the
+    fifth and sixth node: the loss is located at 0.54 to 1e-12 (the bulge's top found on the
+    dense output, then the crossing by brentq). With peak 0.98 it stays above: no event."""
+    model = GearTrainModel(reference_scene)
+    position = stepping.start_position(model, 500.0)
+    segment = position.segment
+    start = position.state.copy()
+    start[model.pinion] = 0.5 * segment.contact_set.length  # clear of the phase events
+    static = model.point_approaches(start, segment.contact_set)
+    axial = np.zeros(2 * model.size)
+    axial[model.coordinates.index("x_pinion")] = -static[0]  # moves every approach by this
+
+    def dense(t):  # like scipy's dense output: a state, or one a column for an array of times
+        states = start[:, None] + axial[:, None] * (peak - 50.0 * (np.atleast_1d(t) - 0.56) ** 2)
+        return states if np.ndim(t) else states[:, 0]
+
+    nodes = np.linspace(0.0, 1.0, stepping.INTERIOR_NODES + 2)
+    assert np.all(model.point_approaches(dense(nodes), segment.contact_set) > 0.0)
+    event, reached = stepping.ScipyStepper(model, 1e-10)._first_event(
+        stepping._Step(0.0, 1.0, dense), segment, np.zeros(2 + len(segment.loaded)))
+    if loss_at is None:
+        assert event is None and reached == 1.0
+    else:
+        assert event >= 2 and reached == pytest.approx(loss_at, abs=1e-12)
