@@ -1,4 +1,4 @@
-"""The reference integration: scipy's DOP853, restarted at every switch (MODEL.md section 10).
+"""The reference integration: scipy's DOP853, restarted at every switch.
 
 Speed is a lesser concern here; this is the anchor every faster integrator is measured against.
 Each segment of the run (segments.py) is integrated on its own with the contact set and loaded
