@@ -352,7 +352,7 @@ class _OverBudget(Exception):
 
 
 def run_scipy(scene, method, tolerance, stop_time, output_interval, record, budget=math.inf):
-    """herringbone's ScipyStepper (solve_ivp restarted at every contact switch, as the
+    """herringbone's ScipyStepper (a scipy OdeSolver restarted at every contact switch, as the
     reference) sampling its dense output every output_interval: an offline run, which is
     scipy's cheapest way through (no restart per communication step). Same result layout as
     run_fmu; stops at the first sample past `budget` seconds of wall time."""

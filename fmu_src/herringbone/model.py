@@ -92,6 +92,10 @@ class GearTrainModel:
         mesh_frequency = math.sqrt(self.mesh.mean_stiffness() / equivalent_mass)
         self.mesh_damping_factor = 2.0 * p["zeta_mesh"] / mesh_frequency  # η: h = η·c
         self.contact_loss = p["contact_loss"]
+        # g̃ of a point's base and tilt parts acting on [y, ẏ] as y + η·ẏ (point_approaches)
+        self._approach_rows = np.array([
+            np.concatenate([row, self.mesh_damping_factor * row])
+            for row in (self._contact_base_relative, self._contact_tilt_relative)])
         self.axial_travel_per_radian = g.axial_speed_per_radian
         # ÿ = P·(generalized force): q̈ = M⁻¹·f, then ÿ = q̈ − r̃·φ̈p
         to_relative = ((np.eye(self.size) - np.outer(self._relative_offset,
@@ -177,6 +181,36 @@ class GearTrainModel:
         """Stiffness, lever arm and lead error of each point at the state's pinion angle."""
         return equations.point_geometry(self.system, contact_set.table, len(contact_set),
                                         float(y[self.pinion]))
+
+    def point_approaches(self, state, contact_set: ContactSet) -> np.ndarray:
+        """δ + η·δ̇ of every point of the set (its load per unit stiffness), in numpy: at one
+        state (a vector; gives one value a point) or at each column of a 2-D array of states
+        (gives a row a point). The compiled equations.approaches computes the same.
+
+        With ζ = ζ0 + ζ1·s and e = e0 + e1·s linear in the axial travel s = v·y_pinion, the
+        approach is (g_b + ζ·g_t)·(y + η·ẏ) + e = B + e0 + ζ0·T + s·(ζ1·T + e1), where
+        B, T = g_b·(y + η·ẏ), g_t·(y + η·ẏ)."""
+        states = state if state.ndim == 2 else state[:, None]
+        base, tilt = self._approach_rows @ states
+        travel = self.axial_travel_per_radian * states[self.pinion]
+        approach = (base + contact_set.lead_error0[:, None]
+                    + contact_set.lever_arm0[:, None] * tilt
+                    + travel * (contact_set.lever_arm_slope[:, None] * tilt
+                                + contact_set.lead_error_slope[:, None]))
+        return approach if state.ndim == 2 else approach[:, 0]
+
+    def point_forces(self, state, contact_set: ContactSet, loaded) -> np.ndarray:
+        """The force (N) each point of the set carries at a state, c·(δ + η·δ̇) where it is
+        loaded and 0 where it is not, in numpy (shapes as point_approaches). With contact loss
+        a correct run never shows a negative one."""
+        y = state[:self.size]
+        travel = self.axial_travel_per_radian * y[self.pinion]
+        stiffness = contact_set.stiffness0[:, None] + np.multiply.outer(
+            contact_set.stiffness_slope, travel).reshape(len(contact_set), -1)
+        loaded = np.asarray(loaded, dtype=float)
+        forces = (loaded[:, None] * stiffness) * self.point_approaches(
+            state if state.ndim == 2 else state[:, None], contact_set)
+        return forces if state.ndim == 2 else forces[:, 0]
 
     def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
         """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""

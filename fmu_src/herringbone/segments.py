@@ -1,15 +1,26 @@
-"""Segments: stretches of a run over which the equations are smooth.
+"""Segments: stretches of a run over which the equations are smooth, and the scipy reference's
+own rule for where they end and what follows.
 
 Within a segment the contact set (which points exist, each point's linear piece) and the set of
 loaded points are fixed, so the right-hand side is smooth and any integrator keeps its order. A
-segment ends where one of its events crosses zero; every integrator (the scipy reference, the
-FMU's own) steps to that crossing, then takes the next segment from the compiled
-walk.next_segment (here wrapped for scipy's event objects):
+segment ends where one of its events crosses zero:
 
-- `phase_end`: φp reaches the end of the contact set's phase interval (moving forward);
-- `phase_start`: φp falls back below its start (the train turning backwards);
+- φp reaches the end of the contact set's phase interval (moving forward): the next set begins;
+- φp falls back below its start (the train turning backwards): the previous set begins;
 - a point's approach δ + η·δ̇ crosses zero: a loaded point loses contact, a free one regains it
   (only with `contact_loss`).
+
+This module is the reference's event rule, written apart from the compiled integrator's
+(compiled/walk.py) so that the two check each other instead of sharing their mistakes; only the
+equations of motion and the mesh geometry are common to both. Its rule for what follows an event
+looks at nothing but the state: at every segment start each point is loaded iff its approach is
+positive, and a point whose approach is at rounding level (`contact_band`) takes the sign of its
+approach rate, so that a point that has just lifted off is not loaded again and one that has just
+touched is.
+
+Event functions come as `h`, one per event, each firing where it rises through zero (a falling
+function enters negated): `phase_end` = φp − length, `phase_start` = −φp, then per point −approach
+while it is loaded and +approach while it is not.
 """
 from __future__ import annotations
 
@@ -17,9 +28,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compiled import walk
+from .compiled import equations
 from .mesh import ContactSet
 from .model import GearTrainModel
+
+PHASE_END, PHASE_START = 0, 1  # the phase events' numbers; point i's event is 2 + i
+# An approach within this fraction of the force scale's approach of one point (force scale /
+# c_point) is at rounding level: a located crossing leaves about |rate|·(time's rounding), some
+# 1e-19 m on the shipped scenes, against a band of 1e-14 m; a point in the band carries at most
+# 1e-10 of the force scale.
+CONTACT_BAND = 1e-10
+# φp within this fraction of an angular pitch of its interval's start or end is on the switch: a
+# located crossing leaves φp's rate times the time's rounding (5e-16 rad at 160 rad/s and 3 ms),
+# and the shortest interval is 1e-10 of a pitch (mesh.PHASE_TOLERANCE), so the band never holds
+# a whole interval.
+PHASE_BAND = 1e-12
 
 
 @dataclass(frozen=True)
@@ -28,19 +51,11 @@ class Segment:
     loaded: np.ndarray  # 1.0 for the points that carry load, 0.0 for the separated ones
 
 
-@dataclass(frozen=True)
-class Event:
-    """A zero crossing that ends a segment: kind "phase_end", "phase_start" or "contact"."""
-
-    kind: str
-    direction: float  # +1: fires when the function rises through zero, −1: when it falls
-    point: int = -1  # the contact point, for kind "contact"
-
-
 def start(model: GearTrainModel, pinion_angle: float, motor_torque: float,
           pinion_speed: float) -> tuple[Segment, np.ndarray]:
     """The first segment and state: rigid rotation at `pinion_speed` on the static deflection
-    under `motor_torque` (MODEL.md section 6)."""
+    under `motor_torque`, every point whose approach is not negative loaded (the initial
+    condition, shared by every integrator)."""
     contact_set = model.mesh.contact_set(*model.mesh.locate(pinion_angle))
     y = np.zeros(model.size)
     y[model.pinion] = pinion_angle - contact_set.pinion_angle
@@ -48,45 +63,100 @@ def start(model: GearTrainModel, pinion_angle: float, motor_torque: float,
     y_rate = np.zeros(model.size)
     y_rate[model.pinion] = pinion_speed
     state = np.concatenate([y, y_rate])
-    return Segment(contact_set, _loaded_by_sign(model, state, contact_set)), state
+    loaded = np.ones(len(contact_set))
+    if model.contact_loss:
+        loaded = (point_approaches(model, contact_set, state) >= 0.0).astype(float)
+    return Segment(contact_set, loaded), state
 
 
-def events(model: GearTrainModel, segment: Segment) -> list[Event]:
-    contact_events = [Event("contact", -1.0 if loaded else 1.0, point)
-                      for point, loaded in enumerate(segment.loaded)] if model.contact_loss else []
-    return [Event("phase_end", 1.0), Event("phase_start", -1.0)] + contact_events
+def contact_band(model: GearTrainModel) -> float:
+    """The approach (m) below which a point's contact is decided by its approach rate."""
+    return CONTACT_BAND * model.force_scale() / model.mesh.c_point
 
 
-def event_values(model: GearTrainModel, segment: Segment, state: np.ndarray) -> np.ndarray:
-    """The event functions of `events(model, segment)`, in that order, at a state."""
+def point_approaches(model: GearTrainModel, contact_set: ContactSet,
+                     state: np.ndarray) -> np.ndarray:
+    """δ + η·δ̇ of every point of the set by the compiled equations.approaches (the initial
+    condition's, which every integrator starts from)."""
+    out = np.empty(len(contact_set))
+    equations.approaches(model.system, contact_set.table, len(contact_set), state, out)
+    return out
+
+
+def point_approach_rates(model: GearTrainModel, segment: Segment, state: np.ndarray,
+                         torques: tuple[float, float]) -> np.ndarray:
+    """d/dt (δ + η·δ̇) of every point of the set, the segment's loaded points carrying load."""
     contact_set = segment.contact_set
-    count = len(contact_set)
-    values = np.empty(2 + count)
-    walk.event_values(model.system, contact_set.table, count, contact_set.length, state,
-                      np.empty(count), values)
-    return values if model.contact_loss else values[:2]
+    rate = model.derivative(state, contact_set, segment.loaded, *torques)
+    out = np.empty(len(contact_set))
+    equations.approach_rates(model.system, contact_set.table, len(contact_set), state, rate, out)
+    return out
 
 
-def after(model: GearTrainModel, segment: Segment, event: Event,
-          state: np.ndarray) -> tuple[Segment, np.ndarray]:
-    """The segment that follows an event, and the state re-expressed for it (the compiled
-    walk.next_segment, which the FMU's integrator runs too)."""
-    lengths, counts, tables = model.mesh.period_table()
-    old = segment.contact_set
-    state = state.copy()
-    loaded = np.zeros(tables.shape[2])
-    loaded[:len(old)] = segment.loaded
-    number = {"phase_end": 0, "phase_start": 1}.get(event.kind, 2 + event.point)
-    interval, cycle = walk.next_segment(model.system, lengths, counts, tables, number,
-                                        old.index, old.cycle, state, loaded,
-                                        np.empty(tables.shape[2]))
-    new = old if (cycle, interval) == (old.cycle, old.index) else model.mesh.contact_set(
-        cycle, interval)
-    return Segment(new, loaded[:len(new)]), state
-
-
-def _loaded_by_sign(model, state, contact_set) -> np.ndarray:
-    loaded = np.empty(len(contact_set))
-    walk.set_loaded_by_sign(model.system, contact_set.table, len(contact_set), state,
-                            np.empty(len(contact_set)), loaded)
+def loaded_points(model: GearTrainModel, contact_set: ContactSet, state: np.ndarray,
+                  torques: tuple[float, float]) -> np.ndarray:
+    """Which points carry load at a segment start: those whose approach is positive; one within
+    the contact band goes by its approach rate (its own force is then nil, so the rate hardly
+    depends on its flag: it is taken with the flags by sign)."""
+    if not model.contact_loss:
+        return np.ones(len(contact_set))
+    approach = model.point_approaches(state, contact_set)  # as the event functions read it
+    loaded = (approach > 0.0).astype(float)
+    at_zero = np.abs(approach) <= contact_band(model)
+    if at_zero.any():
+        rates = point_approach_rates(model, Segment(contact_set, loaded), state, torques)
+        loaded[at_zero] = np.where(rates[at_zero] != 0.0, rates[at_zero] > 0.0,
+                                   approach[at_zero] > 0.0)
     return loaded
+
+
+def neighbour_set(model: GearTrainModel, contact_set: ContactSet, forward: bool,
+                  state: np.ndarray) -> ContactSet:
+    """The next (or previous) contact set; re-expresses the pinion entry of `state` (in place)
+    from the new set's start, by interval lengths rather than absolute angles, so that it stays
+    exact however far the train has turned."""
+    step = 1 if forward else -1
+    new = model.mesh.contact_set(contact_set.cycle, contact_set.index + step)
+    state[model.pinion] += -contact_set.length if forward else new.length
+    return new
+
+
+def begin(model: GearTrainModel, contact_set: ContactSet, state: np.ndarray,
+          torques: tuple[float, float]) -> Segment:
+    """The segment that starts at `state`: the set that holds φp (moving on while φp lies past
+    an end of the interval by more than the phase band: an event due at once), its points loaded
+    by `loaded_points`. Updates the pinion entry of `state` in place."""
+    band = PHASE_BAND * model.geometry.angular_pitch
+    for _ in range(len(model.mesh.switch_phases) + 2):
+        if state[model.pinion] - contact_set.length > band:
+            contact_set = neighbour_set(model, contact_set, True, state)
+        elif state[model.pinion] < -band:
+            contact_set = neighbour_set(model, contact_set, False, state)
+        else:
+            break
+    return Segment(contact_set, loaded_points(model, contact_set, state, torques))
+
+
+def event_values(model: GearTrainModel, segment: Segment, states: np.ndarray) -> np.ndarray:
+    """h of every event (rows) at every state (columns of `states`, one state a column)."""
+    contact_set = segment.contact_set
+    phase = states[model.pinion]
+    values = np.empty((2 + (len(contact_set) if model.contact_loss else 0), states.shape[1]))
+    values[PHASE_END] = phase - contact_set.length
+    values[PHASE_START] = -phase
+    if model.contact_loss:
+        signs = 1.0 - 2.0 * segment.loaded  # loaded: watch −approach rise through zero
+        values[2:] = signs[:, None] * model.point_approaches(states, contact_set)
+    return values
+
+
+def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray,
+          torques: tuple[float, float]) -> tuple[Segment, np.ndarray]:
+    """The segment that follows event number `event` (PHASE_END, PHASE_START or 2 + point) at
+    `state`, and the state re-expressed for it: a phase event moves to the neighbouring set;
+    then every point's flag is decided afresh (`begin`)."""
+    state = state.copy()
+    contact_set = segment.contact_set
+    if event in (PHASE_END, PHASE_START):
+        contact_set = neighbour_set(model, contact_set, event == PHASE_END, state)
+    return begin(model, contact_set, state, torques), state

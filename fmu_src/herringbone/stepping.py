@@ -1,23 +1,53 @@
-"""Advancing a gear train through its segments with scipy's solve_ivp.
+"""Advancing a gear train through its segments with one of scipy's ODE solvers, step by step.
 
 Contract of `ScipyStepper.advance(position, end, torques)`: starting from `position` (time,
 state, segment), integrate with the torques held to exactly `end`, integrating each segment on
 its own and ending it exactly at its first event (segments.py), so the method keeps its order
 across every switch. The result depends only on the position passed in (its step-size hint
 included), never on earlier calls: a position saved and restored re-runs identically.
+
+Events are found by this module alone (the compiled integrator has its own rule), on the dense
+output of every accepted step: each event function is read at the step's ends and at
+INTERIOR_NODES points inside it, so that a function that crosses zero and returns within the
+step is seen unless it does so between two nodes; there the cubic through the values and slopes
+at the two nodes shows the bump, whose top is then found on the dense output. The earliest
+crossing in the event's direction is located by brentq to rounding, and the segment ends there.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
+import scipy.integrate
+from scipy.optimize import brentq, minimize_scalar
 
 from . import segments
 from .model import GearTrainModel
 
-# consecutive zero-length segments before a run is declared stuck (chattering contact)
+# consecutive segments without progress before a run is declared stuck (chattering contact)
 MAX_STALLED_SEGMENTS = 100
+# Phase events in a row that alternate forward and back: the pinion bounces on a switch where the
+# entering points take load at once (sharp face edges at low speed). It may get through in the
+# end (the sharp-edged low_speed scene did after 2 762 bounces in 1 ms) but the bounces are an
+# artefact of the sharp edge, which an edge ramp resolves.
+MAX_PHASE_REVERSALS = 1000
+# Points inside each step at which the events are read: a step of DOP853 spans at most about a
+# third of the fastest period, so an approach that dips below zero and back within it spans
+# several nodes, or bulges between two, which the cubic test sees.
+INTERIOR_NODES = 7
+SLOPE_SPACING = 1e-5  # of a step: the half-spacing of the differences that give the slopes
+# Only points whose approach comes this many times its largest change between nodes near zero
+# get slopes (and so the bulge test): a smoother one cannot reach zero between two nodes.
+NEAR_ZERO = 4.0
+# The debug check of contact forces (check_tension) reads the step at this many points.
+TENSION_NODES = 33
+STALL_RESOLUTION = 64 * np.finfo(float).eps  # of the time: a segment this short made no progress
+STALL_MESSAGE = ("contact switches without progress. If the pinion sits on a switch, its points "
+                 "take load at once (edge_ramp = 0) and throw it back: give edge_ramp > 0 "
+                 "(e.g. 1e-3 m)")
+CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
+                   "load at once (sharp face edges, edge_ramp = 0) and throw it back; give "
+                   "edge_ramp > 0 (e.g. 1e-3 m), which lets the load come on gradually")
 
 
 class IntegrationError(RuntimeError):
@@ -45,84 +75,183 @@ def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: flo
     return Position(0.0, state, segment)
 
 
+@dataclass
+class _Step:
+    """One accepted step of the solver: its span and dense output."""
+
+    start: float
+    end: float
+    dense: object  # scipy's DenseOutput: state at a time or at an array of times
+
+
 class ScipyStepper:
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "DOP853",
-                 max_step: float = np.inf):
+                 max_step: float = np.inf, check_tension: bool = False):
+        """method: a scipy.integrate OdeSolver ("DOP853", "RK45", "Radau", "BDF", "LSODA").
+        check_tension: after every step, read every point's approach at TENSION_NODES points
+        of it and raise IntegrationError where a loaded point pulls or a free one penetrates
+        by more than the contact band (segments.contact_band): a debug check, for tests."""
         self.model = model
         self.tolerance = tolerance
         self.absolute_tolerance = tolerance * model.state_scales()
         self.method = method
+        self.solver_class = getattr(scipy.integrate, method)
         self.max_step = max_step
+        self.check_tension = check_tension
+        self.fractions = np.linspace(0.0, 1.0, INTERIOR_NODES + 2)
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
         """Integrate to `end`; for every t in `sample_times` with position.time <= t < end,
         call on_sample(t, outputs) with the outputs at t."""
-        sample_times = [t for t in sample_times if position.time <= t < end]
-        stalled = 0
-        while position.time < end:
-            solution, event = self._integrate_segment(position, end, torques,
-                                                      dense_output=bool(sample_times))
-            reached = solution.t[-1]
-            segment = position.segment
-            while sample_times and sample_times[0] < reached:
-                t = sample_times.pop(0)
-                on_sample(t, self.model.outputs(solution.sol(t), segment.contact_set,
-                                                segment.loaded))
-            stalled = stalled + 1 if reached == position.time else 0
+        samples = [t for t in sample_times if position.time <= t < end]
+        time, hint, state = position.time, position.step_hint, position.state.copy()
+        segment = segments.begin(self.model, position.segment.contact_set, state, torques)
+        stalled = reversals = 0
+        last_phase_event = None
+        while time < end:
+            reached, state, event, hint = self._integrate_segment(
+                time, state, segment, hint, end, torques, samples, on_sample)
+            stalled = stalled + 1 if reached - time <= STALL_RESOLUTION * abs(reached) else 0
             if stalled > MAX_STALLED_SEGMENTS:
-                raise IntegrationError(f"stuck at t = {reached:.9g} s: contact switches "
-                                       "without progress. If the pinion sits on a switch, "
-                                       "its points take load at once (edge_ramp = 0) and "
-                                       "throw it back: give edge_ramp > 0 (e.g. 1e-3 m)")
-            state = solution.y[:, -1]
+                raise IntegrationError(f"stuck at t = {reached:.9g} s: {STALL_MESSAGE}")
+            if event in (segments.PHASE_END, segments.PHASE_START):
+                reversals = reversals + 1 if event != last_phase_event else 0
+                last_phase_event = event
+                if reversals > MAX_PHASE_REVERSALS:
+                    raise IntegrationError(f"stuck at t = {reached:.9g} s: {CHATTER_MESSAGE}")
+            time = reached
             if event is not None:
-                segment, state = segments.after(self.model, segment, event, state)
-            position = Position(reached, state, segment, _step_hint(solution, position))
-        return position
+                segment, state = segments.after(self.model, segment, event, state, torques)
+        return Position(time, state, segment, hint)
 
-    def _integrate_segment(self, position, end, torques, dense_output):
-        """One segment from position.time towards `end`; stops at its first event. The dense
-        output (three more evaluations a step for DOP853) is kept only for sampling."""
-        model, segment = self.model, position.segment
-        event_list = segments.events(model, segment)
-        cache = {}
+    def _integrate_segment(self, time, state, segment, hint, end, torques, samples, on_sample):
+        """Step one segment from `time` towards `end` until its first event; returns (time
+        reached, state there, the event's number or None, the step size to try next)."""
+        model = self.model
+        first_step = None if hint is None else min(hint, end - time)
+        solver = self.solver_class(
+            lambda t, x: model.derivative(x, segment.contact_set, segment.loaded, *torques),
+            time, state, end, rtol=self.tolerance, atol=self.absolute_tolerance,
+            max_step=self.max_step, first_step=first_step)
+        # an event whose function starts a hair above zero (within its band: the rule of
+        # segments.py decided which side it starts on) is watched from that value on
+        offsets = np.maximum(segments.event_values(model, segment, state[:, None])[:, 0], 0.0)
+        while True:
+            message = solver.step()
+            if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
+                raise IntegrationError(f"integration failed at t = {solver.t:.9g} s: {message}")
+            step = _Step(solver.t_old, solver.t, solver.dense_output())
+            if solver.status != "finished" or hint is None:
+                hint = step.end - step.start  # the last step not cut short by `end`
+            event, reached = self._first_event(step, segment, offsets)
+            if self.check_tension:
+                self._check_tension(step, reached, segment)
+            while samples and samples[0] < reached:
+                t = samples.pop(0)
+                on_sample(t, model.outputs(step.dense(t), segment.contact_set, segment.loaded))
+            if event is not None:
+                return reached, step.dense(reached), event, hint
+            if solver.status == "finished":
+                return step.end, solver.y.copy(), None, hint
 
-        def values(t, x):
-            key = (t, x.tobytes())
-            if key not in cache:
-                cache.clear()
-                cache[key] = segments.event_values(model, segment, x)
-            return cache[key]
+    def _first_event(self, step, segment, offsets):
+        """(event, time) of the earliest crossing inside the step, or (None, step's end)."""
+        times = step.start + (step.end - step.start) * self.fractions
+        values, slopes = self._values_and_slopes(step, segment, times)
+        values -= offsets[:, None]
+        # rises through zero between two nodes (the step's start is on the near side: had it
+        # been past, the step before would have ended there)
+        rising = (values[:, 1:] > 0.0) & ((values[:, :-1] <= 0.0)
+                                          | (np.arange(len(times) - 1) == 0))
+        bumps = _bumps(values, slopes, times)
+        candidates = rising | bumps
+        if not candidates.any():
+            return None, step.end
+        first_interval = candidates.any(axis=0).argmax()
+        found = [(self._locate(step, segment, offsets, event, times[first_interval],
+                               times[first_interval + 1], bumps[event, first_interval]), event)
+                 for event in np.flatnonzero(candidates[:, first_interval])]
+        found = [(t, int(event)) for t, event in found if t is not None]
+        if not found:
+            return None, step.end
+        reached, event = min(found)
+        return event, reached
 
-        def make_event(index, event):
-            def function(t, x):
-                return values(t, x)[index]
-            function.terminal = True
-            function.direction = event.direction
-            return function
+    def _values_and_slopes(self, step, segment, times):
+        """The event functions at the times, and their slopes: φp's from its rate in the state;
+        a point's, where its approach comes near zero (within NEAR_ZERO times its largest change
+        between nodes), by central differences on the dense output, a step's hundred-thousandth
+        apart (truncation 1e-10 of the slope; the approach's rounding, ~1e-21 m, adds
+        ~1e-10 m/s); elsewhere 0, which no bulge test flags."""
+        states = step.dense(times)
+        values = segments.event_values(self.model, segment, states)
+        slopes = np.zeros_like(values)
+        speed = states[self.model.size + self.model.pinion]
+        slopes[segments.PHASE_END], slopes[segments.PHASE_START] = speed, -speed
+        contact = values[2:]
+        near = contact.max(axis=1) > -NEAR_ZERO * np.abs(np.diff(contact, axis=1)).max(axis=1)
+        if near.any():
+            spacing = SLOPE_SPACING * (step.end - step.start)
+            shifted = step.dense(np.concatenate([times - spacing, times + spacing]))
+            ahead = segments.event_values(self.model, segment, shifted)[2:][near]
+            slopes[2:][near] = (ahead[:, len(times):] - ahead[:, :len(times)]) / (2.0 * spacing)
+        return values, slopes
 
-        first_step = None if position.step_hint is None else min(position.step_hint,
-                                                                 end - position.time)
-        solution = solve_ivp(lambda t, x: model.derivative(x, segment.contact_set,
-                                                           segment.loaded, *torques),
-                             (position.time, end), position.state, method=self.method,
-                             rtol=self.tolerance, atol=self.absolute_tolerance,
-                             dense_output=dense_output, first_step=first_step,
-                             max_step=self.max_step,
-                             events=[make_event(i, e) for i, e in enumerate(event_list)])
-        if solution.status < 0 or not np.all(np.isfinite(solution.y[:, -1])):
-            raise IntegrationError(f"integration failed at t = {position.time:.9g} s: "
-                                   f"{solution.message}")
-        if solution.status == 1:
-            fired = [i for i, t in enumerate(solution.t_events) if len(t)]
-            return solution, event_list[fired[0]]
-        return solution, None
+    def _locate(self, step, segment, offsets, event, left, right, bump):
+        """The time in [left, right] where event function `event` first rises through zero;
+        None if it does not (a bump that stays below zero)."""
+        def function(t):
+            state = step.dense(t)[:, None]
+            return segments.event_values(self.model, segment, state)[event, 0] - offsets[event]
+
+        if bump or function(left) >= 0.0:
+            # the top of the bulge (or, from a start on zero, the dip before the rise)
+            sign = 1.0 if bump else -1.0
+            extremum = minimize_scalar(lambda t: -sign * function(t), bounds=(left, right),
+                                       method="bounded",
+                                       options={"xatol": 1e-9 * (right - left)}).x
+            if bump:
+                if function(extremum) <= 0.0:
+                    return None
+                right = extremum
+            elif function(extremum) < 0.0:
+                left = extremum
+            else:
+                return left  # at zero and rising: due at once
+        return brentq(function, left, right, xtol=1e-300, rtol=4 * np.finfo(float).eps)
+
+    def _check_tension(self, step, reached, segment):
+        """The debug check (see __init__): raise where a point's force has the wrong sign."""
+        model = self.model
+        if not model.contact_loss:
+            return
+        band = segments.contact_band(model)
+        times = np.linspace(step.start, reached, TENSION_NODES)
+        contact_set = segment.contact_set
+        approach = model.point_approaches(step.dense(times), contact_set)
+        wrong = np.where(segment.loaded[:, None] != 0.0, approach < -band, approach > band)
+        if wrong.any():
+            point, node = (int(k[0]) for k in np.nonzero(wrong))
+            kind = "pulls" if segment.loaded[point] else "penetrates unloaded"
+            raise IntegrationError(
+                f"at t = {times[node]:.12g} s point {point} of contact interval "
+                f"{contact_set.index} (cycle {contact_set.cycle}) {kind}: approach "
+                f"{approach[point, node]:.3e} m")
 
 
-def _step_hint(solution, position):
-    """The last full step the method took (the final one is cut short by the segment's end)."""
-    steps = np.diff(solution.t)
-    if len(steps) >= 2:
-        return float(steps[-2])
-    return position.step_hint
+def _bumps(values, slopes, times):
+    """Per event (row) and interval between nodes: whether the function, below zero at both
+    nodes, may bulge up between them more than halfway to zero. It rises at the interval's
+    start and falls at its end, and the tangents there meet that high: they meet above the top
+    of a concave bulge, so none is missed that the nodes' slopes show."""
+    span = np.diff(times)
+    g0, g1 = values[:, :-1], values[:, 1:]
+    d0, d1 = slopes[:, :-1] * span, slopes[:, 1:] * span
+    higher = np.maximum(g0, g1)
+    turning = (d0 > 0.0) & (d1 < 0.0) & (higher <= 0.0)
+    if not turning.any():
+        return turning
+    with np.errstate(divide="ignore", invalid="ignore"):
+        meet = np.where(turning, (g1 - d1 - g0) / (d0 - d1), 0.0)
+    return turning & (g0 + d0 * meet > 0.5 * higher)
