@@ -145,7 +145,8 @@ def approaches(system, points, count, state, out):
         out[i] = point_approach(system, motion, lever_arm, lead_error)
 
 
-@njit(cache=True, error_model="numpy")
+# inlined: walk.py evaluates it at every step where contact can be lost
+@njit(cache=True, error_model="numpy", inline="always")
 def approach_rates(system, points, count, state, rate, out):
     """out[i] = d/dt (δ + η·δ̇) of point i, from the state and its derivative `rate`: with the
     values of `approaches` at both ends of a step, it shows a point that lifts off and lands

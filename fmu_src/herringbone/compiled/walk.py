@@ -50,6 +50,12 @@ EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
 OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER, CONTACT_VIOLATED, OVER_BUDGET = range(7)
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
 INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
+# A cubic through a mode's values and slopes at the ends of a step of h·ω = y misses it by
+# about y³/384 of the step's change h·|ġ|: 0.11 at the step bound's 3.5. A point whose cubic
+# comes this close to zero is looked at inside the step (`grazing_suspect`), at its cubic's
+# turning point and at PROBE_FRACTIONS.
+GRAZING_MARGIN = 0.12
+PROBE_FRACTIONS = (0.25, 0.5, 0.75)
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
 # trial steps to locate one event (a bisection alone halves the bracket 60 times)
 MAX_LOCATION_TRIALS = 60
@@ -164,30 +170,24 @@ def contact_violated_inside(method, system, points, count, loaded, motor_torque,
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def near_contact(before, after, count):
-    """Whether some point's approach comes within ten times its change over the step of zero
-    at either end: only such a point can cross zero and back inside the step, since a step
-    spans at most about a third of the fastest period. The cubic test below is run only then
-    (it costs the approaches' rates at both ends)."""
-    for i in range(count):
-        g0, g1 = before[2 + i], after[2 + i]
-        if min(abs(g0), abs(g1)) <= 10.0 * abs(g1 - g0):
-            return True
-    return False
-
-
-@njit(cache=True, error_model="numpy")
-def grazing_fraction(before, after, slopes_before, slopes_after, h, count, loaded):
-    """Where inside a step (a fraction of it) a point's approach, modelled by the cubic through
-    its values and slopes at the step's ends, turns back across zero though both ends lie on
-    the same side: a lift-off and landing (or a touch) too brief for the ends to show. The
-    earliest such turning point, or −1."""
+def grazing_suspect(before, after, slopes_before, slopes_after, h, count, loaded):
+    """Where inside a step (a fraction of it) some point's approach may cross zero and come
+    back though both ends lie on the same side: a lift-off and landing, or a touch, too brief
+    for the ends to show. Each point's approach is modelled by the cubic through its values and
+    slopes at the step's ends; a point is suspect where that cubic turns back towards zero and
+    comes within GRAZING_MARGIN·h·(|ġ0| + |ġ1|) of it (the cubic's own error, for a step of
+    up to h·|λ|max = 3.5 of the mode that moves the point). The earliest suspect turning point,
+    or −1 if there is none."""
     earliest = -1.0
     for i in range(count):
         g0, g1 = before[2 + i], after[2 + i]
         d0, d1 = h * slopes_before[i], h * slopes_after[i]
         sign = 1.0 if loaded[i] != 0.0 else -1.0  # loaded: watch for a dip below zero
         if sign * g0 < 0.0 or sign * g1 < 0.0:
+            continue
+        margin = GRAZING_MARGIN * (abs(d0) + abs(d1))
+        # the cubic's slope terms lift or lower it by at most 4/27 of |d0| + |d1|
+        if min(sign * g0, sign * g1) > margin + 4.0 / 27.0 * (abs(d0) + abs(d1)):
             continue
         # Hermite cubic p(s) = g0 + d0·s + c2·s² + c3·s³ on [0, 1]
         c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
@@ -204,10 +204,42 @@ def grazing_fraction(before, after, slopes_before, slopes_after, h, count, loade
                 root = math.sqrt(discriminant)
                 first, second = (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
         for s in (first, second):
-            if 0.0 < s < 1.0 and sign * (g0 + s * (d0 + s * (c2 + s * c3))) < 0.0:
+            if 0.0 < s < 1.0 and sign * (g0 + s * (d0 + s * (c2 + s * c3))) < margin:
                 if earliest < 0.0 or s < earliest:
                     earliest = s
     return earliest
+
+
+@njit(cache=True, error_model="numpy")
+def probe_inside(suspect, method, system, points, count, length, events, loaded, motor_torque,
+                 load_torque, state, rate, h, absolute_tolerance, relative_tolerance, jacobian,
+                 real, real_pivots, complex_, complex_pivots, stages, work, trial, approach,
+                 values_before, values_trial):
+    """Trial steps from `state` to fractions of the step h, in increasing order, the suspect
+    turning point among PROBE_FRACTIONS, until one shows an event crossed. Returns (the event,
+    or −1; the trial's step size, whose state is in `trial` and event values in
+    `values_trial`; the step size the implicit method's factors now belong to)."""
+    done = 0.0
+    trial_h = 0.0
+    for k in range(len(PROBE_FRACTIONS) + 1):
+        fraction = 2.0
+        for candidate in PROBE_FRACTIONS:  # the next fraction after `done`, the suspect's too
+            if done < candidate < fraction:
+                fraction = candidate
+        if done < suspect < fraction:
+            fraction = suspect
+        if fraction >= 1.0:
+            break
+        done = fraction
+        trial_h = fraction * h
+        trial_step(method, system, points, count, loaded, motor_torque, load_torque, state, rate,
+                   trial_h, absolute_tolerance, relative_tolerance, jacobian, real, real_pivots,
+                   complex_, complex_pivots, stages, work, trial)
+        event_values(system, points, count, length, trial, approach, values_trial)
+        event = first_crossing(values_before, values_trial, events, loaded)
+        if event >= 0:
+            return event, trial_h, trial_h
+    return -1, trial_h, trial_h
 
 
 @njit(cache=True, error_model="numpy")
@@ -272,6 +304,8 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
     events = 2 + (count if system.contact_loss else 0)
     derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
     event_values(system, points, count, length, state, approach, values_before)
+    if system.contact_loss:
+        approach_rates(system, points, count, state, rate, slopes_before)
     jacobian_fresh = False
     jacobian_state = -1  # the segment number the Jacobian belongs to (implicit method)
     segment_number = 0
@@ -356,24 +390,20 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         else:
             derivative(system, points, count, loaded, motor_torque, load_torque, new_state,
                        rate_after)
-        if event < 0 and system.contact_loss and near_contact(values_before, values_after,
-                                                              count):
-            # a point may lift off and land again (or touch and leave) inside the step
-            approach_rates(system, points, count, state, rate, slopes_before)
+        if system.contact_loss:
             approach_rates(system, points, count, new_state, rate_after, slopes_after)
-            fraction = grazing_fraction(values_before, values_after, slopes_before,
-                                        slopes_after, h_step, count, loaded)
-            if fraction > 0.0:
-                trial_h = fraction * h_step
-                factored_h = trial_step(method, system, points, count, loaded, motor_torque,
-                                        load_torque, state, rate, trial_h, absolute_tolerance,
-                                        relative_tolerance, jacobian, real, real_pivots,
-                                        complex_, complex_pivots, stages, work, trial_state)
-                event_values(system, points, count, length, trial_state, approach,
-                             values_trial)
-                event = first_crossing(values_before, values_trial, events, loaded)
-                if event >= 0:
-                    high = trial_h
+            # a point may lift off and land again (or touch and leave) inside the step, also
+            # before an event the step's end shows (a dip inside a short contact interval)
+            suspect = grazing_suspect(values_before, values_after, slopes_before, slopes_after,
+                                      h_step, count, loaded)
+            if suspect > 0.0:
+                found, trial_h, factored_h = probe_inside(
+                    suspect, method, system, points, count, length, events, loaded,
+                    motor_torque, load_torque, state, rate, h_step, absolute_tolerance,
+                    relative_tolerance, jacobian, real, real_pivots, complex_, complex_pivots,
+                    stages, work, trial_state, approach, values_before, values_trial)
+                if found >= 0:  # crossed by then: the bracket shrinks to the probe
+                    event, high = found, trial_h
                     new_state[:] = trial_state
                     values_after[:] = values_trial
         if event < 0:
@@ -388,6 +418,7 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
             state[:] = new_state
             rate[:] = rate_after
             values_before[:] = values_after
+            slopes_before[:] = slopes_after
             time = end if landing else time + h_step
             h = h_next
             stalled_events = 0
@@ -485,6 +516,10 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         segment_number += 1
         derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
         event_values(system, points, count, length, state, approach, values_before)
+        if system.contact_loss:
+            approach_rates(system, points, count, state, rate, slopes_before)
+    if system.contact_loss:
+        approach_rates(system, points, count, state, rate, slopes_before)
 
         h = h_next
         if event == 0:
