@@ -197,8 +197,36 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
     with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
         scene_copy = Path(tmp) / "scene.toml"
         shutil.copyfile(scene, scene_copy)
-        return build_slave_fmu(slave_script=GEAR_SLAVE, project_files=[GEAR_PACKAGE, scene_copy],
+        carried = carry_compiled_integrator(scene, Path(tmp))
+        return build_slave_fmu(slave_script=GEAR_SLAVE,
+                               project_files=[GEAR_PACKAGE, scene_copy, carried],
                                output=output, handle_state=True)
+
+
+def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
+    """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
+    load it from the user's cache, herringbone.compiled.cache), saying so first and showing
+    progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
+    carries in its resources (herringbone.first_start). Returns that folder. Raises
+    RuntimeError if the compile fails."""
+    from herringbone import first_start
+    from herringbone.compiled import cache
+
+    paths = [str(GEAR_PACKAGE.parent)] + ([os.environ["PYTHONPATH"]]
+                                          if os.environ.get("PYTHONPATH") else [])
+    sys.stdout.flush()
+    run = subprocess.run([sys.executable, "-m", "herringbone.first_start", str(scene)],
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(paths)})
+    if run.returncode != 0:
+        raise RuntimeError(f"compiling the integrator for {scene} failed (exit status "
+                           f"{run.returncode}; its messages are above)")
+    compiled = cache.kernels_folder()
+    carried = Path(folder) / first_start.CARRIED_FOLDER / compiled.name
+    carried.mkdir(parents=True)
+    for path in compiled.iterdir():
+        if path.suffix in (".nbi", ".nbc") or path.name == first_start.RECORD:
+            shutil.copyfile(path, carried / path.name)
+    return carried.parent
 
 
 def main(argv: list[str] | None = None) -> int:

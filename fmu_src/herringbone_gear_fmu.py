@@ -20,6 +20,7 @@ from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variabil
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
+from herringbone import first_start
 from herringbone.model import GearTrainModel, output_names
 from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
 from herringbone.integrator import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
@@ -49,6 +50,7 @@ class HerringboneGear(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        first_start.prepare(self, kwargs.get("logger"))  # before anything is compiled
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         experiment = self.scene.experiment
         type(self).default_experiment = DefaultExperiment(
@@ -175,11 +177,7 @@ class HerringboneGear(Fmi2Slave):
                                            method=self.values["solver_method"],
                                            max_step=max_step)
             position = start_position(model, self.values["M_motor"])
-            compiled_seconds = warm_up(self.stepper, position)
-            if compiled_seconds is not None:
-                self.log(f"{self.instance_name}: first start: compiled the integrator in "
-                         f"{compiled_seconds:.1f} s; cached for later starts",
-                         Fmi2Status.ok)
+            warm_up(self.stepper, position)  # a compile says so itself (first_start)
             self.run = self.stepper.start(position)
             self.output_values = self.run.outputs  # updated in place by every doStep
         except herringbone.SceneError as error:
