@@ -21,6 +21,7 @@ EXAMPLES = ROOT / "examples"
 GEAR_SLAVE = ROOT / "fmu_src" / "herringbone_gear_fmu.py"
 GEAR_PACKAGE = ROOT / "fmu_src" / "herringbone"
 UNITS_MODULE = ROOT / "fmu_src" / "fmi_units.py"  # shipped with every FMU: see its docstring
+RUNTIME_MODULE = ROOT / "fmu_src" / "fmu_runtime.py"  # the gear FMU's guards in C hosts
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -199,7 +200,7 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
         shutil.copyfile(scene, scene_copy)
         carried = carry_compiled_integrator(scene, Path(tmp))
         return build_slave_fmu(slave_script=GEAR_SLAVE,
-                               project_files=[GEAR_PACKAGE, scene_copy, carried],
+                               project_files=[GEAR_PACKAGE, scene_copy, carried, RUNTIME_MODULE],
                                output=output, handle_state=True)
 
 

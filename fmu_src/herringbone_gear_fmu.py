@@ -12,7 +12,10 @@ returns False (fmi2Discard), so the host keeps running and shows the message.
 import math
 from pathlib import Path
 
-import numpy as np
+import fmu_runtime  # first: a missing dependency is named before anything imports it
+
+fmu_runtime.check_dependencies()
+import numpy as np  # noqa: E402
 
 from fmi_units import RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
@@ -50,6 +53,7 @@ class HerringboneGear(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        fmu_runtime.finalize_python_first(self.resources)  # C hosts: no crash at exit
         first_start.prepare(self, kwargs.get("logger"))  # before anything is compiled
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         experiment = self.scene.experiment
