@@ -174,11 +174,11 @@ class HostLine:
             return None
         if not ctypes.c_bool.from_address(address + self._FLAG).value:
             return None  # the host turned logging off
-        functions = read(self._FUNCTIONS)
-        logger, environment = (read(0) if functions else None), \
-            (ctypes.c_void_p.from_address(functions + 32).value if functions else None)
-        if not logger:
+        functions = read(self._FUNCTIONS)  # fmi2CallbackFunctions: logger first, environment 5th
+        if not functions or not ctypes.c_void_p.from_address(functions).value:
             return None
+        logger = ctypes.c_void_p.from_address(functions).value
+        environment = ctypes.c_void_p.from_address(functions + 32).value
         function = self._LOGGER(logger)
         return lambda status, text: function(environment, self._name, status, None, text)
 
