@@ -94,8 +94,9 @@ def test_numba_is_asked_why_it_must_compile_and_the_compile_is_announced_first(t
     found = json.loads(run.stdout.splitlines()[-1])
     assert found["before"].startswith("there is no compiled code for this version")
     assert found["after"] is None
-    assert found["on_other_cpu"] == f"the code was compiled for a pentium4 CPU, and this is a {found['cpu']}"
-    assert found["other_numba"].startswith("the code was compiled by numba 0.1.0, and this is numba")
+    assert found["on_other_cpu"] == ("the code was compiled for a pentium4 CPU, and this is a "
+                                     f"{found['cpu']}")
+    assert found["other_numba"].startswith("the code was compiled by numba 0.1.0, and this is")
     assert found["other_version"] == "the cached code belongs to another version of the integrator"
     (message, overloads_then), = found["said"]  # one message, said before numba compiled
     assert overloads_then == 0

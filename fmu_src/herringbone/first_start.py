@@ -1,4 +1,4 @@
-"""The first start of the integrator on a machine: compiled code carried in, a word before compiling.
+"""The integrator's first start on a machine: compiled code carried in, a word before compiling.
 
 numba compiles the integrator's loop (compiled/walk.py) once per machine, numba version and
 version of the package, and caches it (compiled/cache.py). An FMU carries the cache of its
@@ -152,7 +152,8 @@ class HostLine:
     debug-logging flag at byte 8, the instance name (a std::string) at 16, the categories at
     48 and the host's fmi2CallbackFunctions pointer at 72 (pythonfmu's src/pythonfmu/fmi2.cpp
     and Logger.hpp). The line is used only if the pythonfmu in use is 0.7 and the name found
-    there is the instance's own."""
+    there is the instance's own, and only while the instance's __init__ runs (inside
+    fmi2Instantiate, when the host's callbacks are certainly alive; compiles happen there)."""
 
     _NAME, _FLAG, _FUNCTIONS = 16, 8, 72
     _LOGGER = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
@@ -160,6 +161,7 @@ class HostLine:
 
     def __init__(self, slave, logger_address=None):
         self._slave = weakref.ref(slave)
+        self._init = type(slave).__init__.__code__
         self._name = str(slave.instance_name).encode()
         self._call = self._find_logger(logger_address)
 
@@ -184,7 +186,7 @@ class HostLine:
 
     def say(self, message: str, status: int = FMI_OK) -> None:
         text = f"{self._name.decode()}: {message}"
-        if self._call is not None:
+        if self._call is not None and self._instantiating():
             # hosts format the message printf-style
             self._call(status, text.replace("%", "%%").encode())
             return
@@ -194,6 +196,14 @@ class HostLine:
             from pythonfmu.enums import Fmi2Status
 
             slave.log(text.replace("%", "%%"), Fmi2Status(status))
+
+    def _instantiating(self) -> bool:
+        frame, slave = sys._getframe(1), self._slave()
+        while frame is not None:
+            if frame.f_code is self._init and frame.f_locals.get("self") is slave:
+                return True
+            frame = frame.f_back
+        return False
 
 
 def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | None:
@@ -233,7 +243,7 @@ def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | Non
 def _progress(done, every, say):
     started = time.perf_counter()
     while not done.wait(every):
-        say(f"  ... {time.perf_counter() - started:.0f} s")
+        say(f"  ... {time.perf_counter() - started:.0f} s of about {estimate_seconds():.0f} s")
 
 
 if __name__ == "__main__":  # python -m herringbone.first_start SCENE: what build_fmu runs

@@ -125,7 +125,8 @@ def why_not_cached(dispatcher, signature) -> str | None:
             stamp, overloads = pickle.loads(index.read()) if version == _numba_version() \
                 else (None, {})
     except FileNotFoundError:
-        return f"there is no compiled code for this version of the integrator in {index_path.parent}"
+        return ("there is no compiled code for this version of the integrator in "
+                f"{index_path.parent}")
     except Exception as error:  # a truncated or foreign file: numba would recompile too
         return f"the cache index {index_path} cannot be read ({error})"
     if version != _numba_version():
