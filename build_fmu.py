@@ -209,19 +209,18 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     load it from the user's cache, herringbone.compiled.cache), saying so first and showing
     progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
     carries in its resources (herringbone.first_start). Returns that folder. Raises
-    RuntimeError if the compile fails."""
+    RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
     from herringbone import first_start
-    from herringbone.compiled import cache
+    from herringbone.compiled import cache, walk
 
-    paths = [str(GEAR_PACKAGE.parent)] + ([os.environ["PYTHONPATH"]]
-                                          if os.environ.get("PYTHONPATH") else [])
-    sys.stdout.flush()
-    run = subprocess.run([sys.executable, "-m", "herringbone.first_start", str(scene)],
-                         env={**os.environ, "PYTHONPATH": os.pathsep.join(paths)})
-    if run.returncode != 0:
-        raise RuntimeError(f"compiling the integrator for {scene} failed (exit status "
-                           f"{run.returncode}; its messages are above)")
-    compiled = cache.kernels_folder()
+    # in this process: a build after the first (the test suite's) finds the code loaded
+    first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
+    compiled = Path(walk.advance._cache._cache_path)  # where numba put it, whatever the env
+    missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
+                                     for signature in walk.advance.signatures) if reason]
+    if missing:
+        raise RuntimeError(f"the compiled integrator is not in {compiled} ({missing[0]}): "
+                           "set HERRINGBONE_CACHE_DIR to a writable folder")
     carried = Path(folder) / first_start.CARRIED_FOLDER / compiled.name
     carried.mkdir(parents=True)
     for path in compiled.iterdir():
