@@ -21,6 +21,7 @@ EXAMPLES = ROOT / "examples"
 GEAR_SLAVE = ROOT / "fmu_src" / "herringbone_gear_fmu.py"
 GEAR_PACKAGE = ROOT / "fmu_src" / "herringbone"
 UNITS_MODULE = ROOT / "fmu_src" / "fmi_units.py"  # shipped with every FMU: see its docstring
+RUNTIME_MODULE = ROOT / "fmu_src" / "fmu_runtime.py"  # the gear FMU's guards in C hosts
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -228,9 +229,36 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
     with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
         scene_copy = Path(tmp) / "scene.toml"
         shutil.copyfile(scene, scene_copy)
-        return build_slave_fmu(slave_script=GEAR_SLAVE, project_files=[GEAR_PACKAGE, scene_copy],
+        carried = carry_compiled_integrator(scene, Path(tmp))
+        return build_slave_fmu(slave_script=GEAR_SLAVE,
+                               project_files=[GEAR_PACKAGE, scene_copy, carried, RUNTIME_MODULE],
                                output=output, handle_state=True, serialize_state=True,
                                no_feedthrough=True)
+
+
+def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
+    """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
+    load it from the user's cache, herringbone.compiled.cache), saying so first and showing
+    progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
+    carries in its resources (herringbone.first_start). Returns that folder. Raises
+    RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
+    from herringbone import first_start
+    from herringbone.compiled import cache, walk
+
+    # in this process: a build after the first (the test suite's) finds the code loaded
+    first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
+    compiled = Path(walk.advance._cache._cache_path)  # where numba put it, whatever the env
+    missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
+                                     for signature in walk.advance.signatures) if reason]
+    if missing:
+        raise RuntimeError(f"the compiled integrator is not in {compiled} ({missing[0]}): "
+                           "set HERRINGBONE_CACHE_DIR to a writable folder")
+    carried = Path(folder) / first_start.CARRIED_FOLDER / compiled.name
+    carried.mkdir(parents=True)
+    for path in compiled.iterdir():
+        if path.suffix in (".nbi", ".nbc") or path.name == first_start.RECORD:
+            shutil.copyfile(path, carried / path.name)
+    return carried.parent
 
 
 def main(argv: list[str] | None = None) -> int:

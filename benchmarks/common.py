@@ -36,8 +36,8 @@ MODELS = ROOT / "models"
 DEFAULT_OUTPUT_DIR = ROOT / "results" / "benchmark"
 # What an FMU is built from: a change to any of these gives a new FMU (and a new file name).
 FMU_SOURCES = [ROOT / "build_fmu.py", ROOT / "fmu_src" / "herringbone_gear_fmu.py",
-               ROOT / "fmu_src" / "fmi_units.py", *sorted((ROOT / "fmu_src" / "herringbone")
-                                                         .rglob("*.py"))]
+               ROOT / "fmu_src" / "fmi_units.py", ROOT / "fmu_src" / "fmu_runtime.py",
+               *sorted((ROOT / "fmu_src" / "herringbone").rglob("*.py"))]
 ACCURACY_GOAL = 1e-6  # error relative to the static mesh force (issue 4)
 SPEED_GOAL = 0.1  # wall seconds per simulated second (issue 4)
 STARTUP_GOAL = 1.0  # seconds for instantiate + initialize, compiled code cached (issue 4)

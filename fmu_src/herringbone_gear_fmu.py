@@ -25,7 +25,10 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
+import fmu_runtime  # first: a missing dependency is named before anything imports it
+
+fmu_runtime.check_dependencies()
+import numpy as np  # noqa: E402
 
 import pythonfmu
 from fmi_units import BoundedInteger, RealWithUnit
@@ -34,6 +37,7 @@ from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variabil
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
+from herringbone import first_start
 from herringbone.model import GearTrainModel, output_names
 from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
 from herringbone.integrator import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
@@ -78,6 +82,8 @@ class HerringboneGear(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.logger_address = kwargs.get("logger")  # pythonfmu's C++ PyLogger (see host_logs)
+        fmu_runtime.finalize_python_first(self.resources)  # C hosts: no crash at exit
+        first_start.prepare(self, kwargs.get("logger"))  # before anything is compiled
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         experiment = self.scene.experiment
         type(self).default_experiment = DefaultExperiment(
@@ -361,11 +367,7 @@ class HerringboneGear(Fmi2Slave):
         try:
             position = dataclasses.replace(
                 start_position(self.stepper.model, self.values["M_motor"]), time=self.start_time)
-            compiled_seconds = warm_up(self.stepper, position)
-            if compiled_seconds is not None:
-                self.log(f"{self.instance_name}: first start: compiled the integrator in "
-                         f"{compiled_seconds:.1f} s; cached for later starts",
-                         Fmi2Status.ok)
+            warm_up(self.stepper, position)  # a compile says so itself (first_start)
             self.run = self.stepper.start(position)
             self.output_values = self.run.outputs  # updated in place by every doStep
         except Exception as error:

@@ -274,32 +274,3 @@ def test_step_from_a_time_the_fmu_is_not_at_is_discarded(built_fmus):
         assert any("FMU is at" in text for status, text in gear.messages if status == 3)
     finally:
         gear.free()
-
-
-def test_first_start_says_it_compiled_and_later_starts_do_not(monkeypatch, tmp_path):
-    """The first start after install compiles the integrator (about a minute) and logs it;
-    a start that finds the compiled code cached logs nothing. The slave class is run
-    in-process here, with the compiler's answer stubbed: compiling for real would cost the
-    suite that minute again."""
-    import shutil
-    import sys
-
-    sys.path.insert(0, str(MODELS.parent / "fmu_src"))
-    import herringbone_gear_fmu
-    from pythonfmu.enums import Fmi2Status
-
-    shutil.copy(MODELS / "reference.toml", tmp_path / "scene.toml")
-    messages = []
-    monkeypatch.setattr(herringbone_gear_fmu.HerringboneGear, "log",
-                        lambda self, message, status=Fmi2Status.ok, *a, **k:
-                        messages.append((status, message)))
-    said = {}
-    for compiled_seconds in (41.5, None):
-        messages.clear()
-        monkeypatch.setattr(herringbone_gear_fmu, "warm_up",
-                            lambda stepper, position, s=compiled_seconds: s)
-        herringbone_gear_fmu.HerringboneGear(instance_name="gear", resources=str(tmp_path))
-        assert all(status == Fmi2Status.ok for status, _ in messages)
-        said[compiled_seconds] = [m for _, m in messages if "compiled the integrator" in m]
-    assert len(said[41.5]) == 1 and "41.5 s" in said[41.5][0]
-    assert said[None] == []

@@ -14,6 +14,9 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import pickle
+import shutil
+import tempfile
 from pathlib import Path
 
 from numba.core import caching
@@ -31,6 +34,7 @@ def package_digest() -> str:
 
 
 def cache_root() -> Path:
+    """The per-user folder that holds a kernels-<digest> folder per version of the package."""
     if os.environ.get("HERRINGBONE_CACHE_DIR"):
         return Path(os.environ["HERRINGBONE_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
@@ -43,7 +47,7 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        self._cache_path = str(cache_root() / f"kernels-{package_digest()}")
+        self._cache_path = str(kernels_folder())
 
     def get_cache_path(self):
         return self._cache_path
@@ -66,3 +70,82 @@ def install() -> None:
     locators = implementation._locator_classes
     if SourceTextCacheLocator not in locators:
         locators.insert(0, SourceTextCacheLocator)
+
+
+def kernels_folder() -> Path:
+    """Where the kernels of this version of the package are cached (index .nbi, code .nbc)."""
+    return cache_root() / f"kernels-{package_digest()}"
+
+
+def seed_from(carried: Path) -> list[str]:
+    """Copy compiled kernels into the cache folder: from `carried` (a folder that holds a
+    kernels-<digest> folder, as build_fmu puts into an FMU), the files of every kernel whose
+    index the cache folder lacks. A kernel already indexed there is left alone (it may hold
+    entries for this machine that the carried one lacks). Returns the index files copied;
+    nothing if `carried` has none for this version. Raises OSError if the cache folder
+    cannot be written (the caller says so; numba then compiles into its own cache)."""
+    source, target = Path(carried) / kernels_folder().name, kernels_folder()
+    copied = []
+    for index in sorted(source.glob("*.nbi")) if source.is_dir() else []:
+        if (target / index.name).exists():
+            continue
+        target.mkdir(parents=True, exist_ok=True)
+        stem = index.name[:-len(".nbi")]
+        # data first, index last, each renamed into place: a process that reads the cache
+        # meanwhile sees either no index or a complete kernel
+        for data in sorted(source.glob(f"{stem}.*.nbc")) + [index]:
+            _copy_into(data, target)
+        copied.append(index.name)
+    return copied
+
+
+def _copy_into(source: Path, folder: Path) -> None:
+    handle, staging = tempfile.mkstemp(dir=folder, prefix=f".{source.name}.")
+    os.close(handle)
+    try:
+        shutil.copyfile(source, staging)
+        os.replace(staging, folder / source.name)
+    except BaseException:
+        Path(staging).unlink(missing_ok=True)
+        raise
+
+
+def why_not_cached(dispatcher, signature) -> str | None:
+    """Why numba must compile `dispatcher` (one of this package's kernels) for `signature`
+    (its argument types) on this machine; None if its on-disk cache holds that entry. numba
+    keys an entry on the signature, the target (triple, CPU name, CPU features) and the
+    function's bytecode, under an index stamped with numba's version and the source digest."""
+    cache = dispatcher._cache
+    codegen = dispatcher.targetctx.codegen()
+    key = cache._index_key(signature, codegen)
+    index_path = Path(cache._cache_path) / cache._cache_file._index_name
+    try:
+        with open(index_path, "rb") as index:
+            version = pickle.load(index)
+            stamp, overloads = pickle.loads(index.read()) if version == _numba_version() \
+                else (None, {})
+    except FileNotFoundError:
+        return ("there is no compiled code for this version of the integrator in "
+                f"{index_path.parent}")
+    except Exception as error:  # a truncated or foreign file: numba would recompile too
+        return f"the cache index {index_path} cannot be read ({error})"
+    if version != _numba_version():
+        return f"the code was compiled by numba {version}, and this is numba {_numba_version()}"
+    if stamp != package_digest():
+        return "the cached code belongs to another version of the integrator"
+    if key in overloads:
+        return None
+    machine = key[1]
+    targets = {k[1] for k in overloads if k[0] == key[0]}
+    if targets and machine not in targets:
+        cpus = ", ".join(sorted({target[1] for target in targets}))
+        same_cpu = any(target[1] == machine[1] for target in targets)
+        return (f"the code was compiled for a {cpus} CPU with other features" if same_cpu
+                else f"the code was compiled for a {cpus} CPU, and this is a {machine[1]}")
+    return "the cached code was compiled for other argument types"
+
+
+def _numba_version() -> str:
+    import numba
+
+    return numba.__version__

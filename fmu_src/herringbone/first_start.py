@@ -1,0 +1,250 @@
+"""The integrator's first start on a machine: compiled code carried in, a word before compiling.
+
+numba compiles the integrator's loop (compiled/walk.py) once per machine, numba version and
+version of the package, and caches it (compiled/cache.py). An FMU carries the cache of its
+build machine in resources/numba_cache (`CARRIED_FOLDER`); `prepare`, called as the slave is
+instantiated, copies it into the user's cache folder when that has none for this version, so an
+FMU started on a machine of the build machine's kind loads its code in a fraction of a second.
+
+Where numba must compile anyway (another CPU, another numba, no carried cache), `announce_compiles`
+says so before it starts, with the reason and the time it will take (`estimate_seconds`), and
+again when done; every compile's time is recorded beside the cache (`RECORD`) for the next
+estimate.
+
+The message reaches the host while it waits: pythonfmu queues a slave's log messages and hands
+them over only when the FMI call returns (those of fmi2Instantiate at the next call), so
+`HostLine` calls the host's logger itself, through the logger object pythonfmu 0.7 passes to
+the slave, after checking that the object is laid out as expected; where it cannot (another
+pythonfmu, logging off) the message goes to stderr at once and to the queue as well.
+"""
+from __future__ import annotations
+
+import ctypes
+import json
+import sys
+import threading
+import time
+import weakref
+from pathlib import Path
+
+from numba.core import event
+
+from .compiled import cache
+
+CARRIED_FOLDER = "numba_cache"  # in an FMU's resources: the build machine's kernels-<digest>
+RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, "cpu": name}}
+# Compile time of the whole integrator when nothing is recorded: 40.5 to 44.3 s measured with
+# every cache empty on this project's 2-core machine (AMD EPYC, numba 0.68), shared with others
+DEFAULT_COMPILE_SECONDS = 40.0
+FMI_OK = 0
+
+
+def prepare(slave, logger_address=None) -> None:
+    """Called once as an FMU's slave is instantiated, before anything is compiled: copies the
+    compiled code the FMU carries into the user's cache folder where that has none for this
+    version, and makes any compile that remains announce itself to the host first.
+    `logger_address`: the `logger` keyword pythonfmu passes to the slave (see HostLine)."""
+    line = HostLine(slave, logger_address)
+    carried = Path(slave.resources) / CARRIED_FOLDER if slave.resources else None
+    if carried is not None and carried.is_dir():
+        try:
+            cache.seed_from(carried)
+        except OSError as error:
+            line.say(f"cannot copy the compiled integrator the FMU carries into "
+                     f"{cache.kernels_folder()} ({error}); it will be compiled instead. Set "
+                     "HERRINGBONE_CACHE_DIR to a writable folder to keep it", status=1)
+    announce_compiles(line.say)
+
+
+def estimate_seconds() -> float:
+    """The compile time to expect for the integrator: the sum of its kernels' times last
+    recorded for this version of the package (here or on the build machine), else the
+    default."""
+    seconds = [record.get("seconds") for record in _records().values()
+               if isinstance(record, dict)]
+    if _Announcer.LOOP not in _records() or not all(isinstance(s, (int, float)) for s in seconds):
+        return DEFAULT_COMPILE_SECONDS
+    return float(sum(seconds))
+
+
+def record_seconds(kernel: str, seconds: float) -> None:
+    """Keep a kernel's compile time beside the cache, for the next estimate (best effort)."""
+    records = _records()
+    records[kernel] = {"seconds": round(seconds, 1), "cpu": _cpu_name()}
+    try:
+        cache.kernels_folder().mkdir(parents=True, exist_ok=True)
+        (cache.kernels_folder() / RECORD).write_text(json.dumps(records, indent=1))
+    except OSError:
+        pass
+
+
+def _records() -> dict:
+    try:
+        records = json.loads((cache.kernels_folder() / RECORD).read_text())
+        return records if isinstance(records, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _cpu_name() -> str:
+    from numba.core.registry import cpu_target
+
+    return cpu_target.target_context.codegen().magic_tuple()[1]
+
+
+class _Announcer(event.Listener):
+    """Says, before numba compiles this package's kernels (those called from Python: the loop
+    `advance`, last, and a few small ones before it), why and for how long, once, and when
+    the loop is done. One per process; `say` is swapped for the newest caller's."""
+
+    LOOP = "advance"
+
+    def __init__(self, say):
+        self.say, self.depth, self.started, self.kernel_started = say, 0, None, None
+
+    def on_start(self, ev):
+        self.depth += 1
+        dispatcher = ev.data["dispatcher"]
+        if self.depth > 1 or not dispatcher.py_func.__module__.startswith(_COMPILED):
+            return
+        self.kernel_started = time.perf_counter()
+        if self.started is None:
+            self.started = self.kernel_started
+            reason = cache.why_not_cached(dispatcher, tuple(ev.data["args"]))
+            self.say(f"compiling the integrator for this machine ({reason}): about "
+                     f"{estimate_seconds():.0f} s, once; later starts load it from "
+                     f"{cache.kernels_folder()}")
+
+    def on_end(self, ev):
+        self.depth -= 1
+        kernel = ev.data["dispatcher"].py_func.__name__
+        if self.depth > 0 or self.kernel_started is None:
+            return
+        record_seconds(kernel, time.perf_counter() - self.kernel_started)
+        self.kernel_started = None
+        if kernel == self.LOOP and self.started is not None:
+            seconds, self.started = time.perf_counter() - self.started, None
+            self.say(f"compiled the integrator in {seconds:.1f} s; cached in "
+                     f"{cache.kernels_folder()}")
+
+
+_COMPILED = cache.__name__.rsplit(".", 1)[0]  # herringbone.compiled
+_announcer = None
+_announcer_lock = threading.Lock()
+
+
+def announce_compiles(say) -> None:
+    """From now on, `say(message)` before and after numba compiles a kernel of this package."""
+    global _announcer
+    with _announcer_lock:
+        if _announcer is None:
+            _announcer = _Announcer(say)
+            event.register("numba:compile", _announcer)
+        _announcer.say = say
+
+
+class HostLine:
+    """A direct line to the host's logger, for messages that cannot wait for the FMI call to
+    return. `say(message, status)` calls the host's fmi2CallbackLogger at once where it can,
+    else writes to stderr and queues the message with the slave's log as well.
+
+    pythonfmu 0.7 hands the slave the address of its Fmi2Logger (C++): a vtable pointer, the
+    debug-logging flag at byte 8, the instance name (a std::string) at 16, the categories at
+    48 and the host's fmi2CallbackFunctions pointer at 72 (pythonfmu's src/pythonfmu/fmi2.cpp
+    and Logger.hpp). The line is used only if the pythonfmu in use is 0.7 and the name found
+    there is the instance's own, and only while the instance's __init__ runs (inside
+    fmi2Instantiate, when the host's callbacks are certainly alive; compiles happen there)."""
+
+    _NAME, _FLAG, _FUNCTIONS = 16, 8, 72
+    _LOGGER = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
+                               ctypes.c_char_p, ctypes.c_char_p)
+
+    def __init__(self, slave, logger_address=None):
+        self._slave = weakref.ref(slave)
+        self._init = type(slave).__init__.__code__
+        self._name = str(slave.instance_name).encode()
+        self._call = self._find_logger(logger_address)
+
+    def _find_logger(self, address):
+        import pythonfmu
+
+        if not address or not pythonfmu.__version__.startswith("0.7."):
+            return None
+        read = lambda offset: ctypes.c_void_p.from_address(address + offset).value  # noqa: E731
+        if ctypes.c_size_t.from_address(address + self._NAME + 8).value != len(self._name) \
+                or ctypes.string_at(read(self._NAME), len(self._name)) != self._name:
+            return None
+        if not ctypes.c_bool.from_address(address + self._FLAG).value:
+            return None  # the host turned logging off
+        functions = read(self._FUNCTIONS)  # fmi2CallbackFunctions: logger first, environment 5th
+        if not functions or not ctypes.c_void_p.from_address(functions).value:
+            return None
+        logger = ctypes.c_void_p.from_address(functions).value
+        environment = ctypes.c_void_p.from_address(functions + 32).value
+        function = self._LOGGER(logger)
+        return lambda status, text: function(environment, self._name, status, None, text)
+
+    def say(self, message: str, status: int = FMI_OK) -> None:
+        text = f"{self._name.decode()}: {message}"
+        if self._call is not None and self._instantiating():
+            # hosts format the message printf-style
+            self._call(status, text.replace("%", "%%").encode())
+            return
+        print(f"herringbone FMU {text}", file=sys.stderr, flush=True)
+        slave = self._slave()
+        if slave is not None:
+            from pythonfmu.enums import Fmi2Status
+
+            slave.log(text.replace("%", "%%"), Fmi2Status(status))
+
+    def _instantiating(self) -> bool:
+        frame, slave = sys._getframe(1), self._slave()
+        while frame is not None:
+            if frame.f_code is self._init and frame.f_locals.get("self") is slave:
+                return True
+            frame = frame.f_back
+        return False
+
+
+def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | None:
+    """Load or compile the integrator as an FMU of the scene will run it at its default
+    settings (the method "auto" picks for the scene), in this process, saying before a compile
+    what it will cost and how far it is every `progress_every` seconds. Returns the seconds
+    spent compiling, None if everything came from the cache."""
+    from .integrator import DEFAULT_TOLERANCE, CompiledStepper, warm_up
+    from .model import GearTrainModel
+    from .scene import load_scene
+    from .stepping import start_position
+
+    scene = load_scene(scene_path)
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, DEFAULT_TOLERANCE)
+    position = start_position(model, scene.inputs.at(0.0)[0])
+    done, compiled = threading.Event(), []
+
+    def tell(message):
+        if message.startswith("compiling"):
+            compiled.append(time.perf_counter())
+            threading.Thread(target=_progress, args=(done, progress_every, say),
+                             daemon=True).start()
+        say(message)
+
+    announce_compiles(tell)
+    try:
+        warm_up(stepper, position)
+        run = stepper.start(position)
+        stepper.run_to(run, position.time + 1e-6, scene.inputs.at(0.0))
+    finally:
+        done.set()
+        announce_compiles(lambda message: print(message, file=sys.stderr))
+    return time.perf_counter() - compiled[0] if compiled else None
+
+
+def _progress(done, every, say):
+    started = time.perf_counter()
+    while not done.wait(every):
+        say(f"  ... {time.perf_counter() - started:.0f} s of about {estimate_seconds():.0f} s")
+
+
+if __name__ == "__main__":  # python -m herringbone.first_start SCENE: what build_fmu runs
+    compile_for_scene(sys.argv[1], say=lambda message: print(message, flush=True))

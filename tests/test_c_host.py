@@ -1,0 +1,95 @@
+"""The gear FMU in a host that is not Python: tests/c_host/c_host.c, compiled with the system's C
+compiler against the FMI headers fmpy ships, run by tests/c_host/run.sh (README's recipe)."""
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+
+HOST_FOLDER = Path(__file__).resolve().parent / "c_host"
+OUTPUTS = ["F_mesh", "F_brg_pinion_left", "F_brg_wheel_right", "dte"]
+STOP, STEP = 0.01, 1e-3
+RUNS = 20
+NO_INSTANCE = 3  # c_host's exit status when fmi2Instantiate returns NULL
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux" or not shutil.which("cc"),
+                                reason="the C host is built for Linux with the system's cc")
+
+
+@pytest.fixture(scope="module")
+def c_host(tmp_path_factory):
+    """The host, compiled as README says."""
+    executable = tmp_path_factory.mktemp("c_host") / "c_host"
+    headers = Path(fmpy.__file__).parent / "c-code"
+    subprocess.run(["cc", "-O2", "-Wall", "-I", str(headers), "-o", str(executable),
+                    str(HOST_FOLDER / "c_host.c"), "-ldl"], check=True)
+    return executable
+
+
+@pytest.fixture(scope="module")
+def unzipped(scene_fmu, tmp_path_factory):
+    """The reference scene's FMU, unzipped, and the value references of OUTPUTS."""
+    fmu = scene_fmu("reference")
+    folder = Path(fmpy.extract(str(fmu), str(tmp_path_factory.mktemp("unzipped"))))
+    description = fmpy.read_model_description(str(fmu))
+    references = {v.name: v.valueReference for v in description.modelVariables}
+    return fmu, folder, description, [references[name] for name in OUTPUTS]
+
+
+def run_host(c_host, unzipped, **environment):
+    fmu, folder, description, references = unzipped
+    command = [str(HOST_FOLDER / "run.sh"), sys.executable, str(c_host), str(folder),
+               description.coSimulation.modelIdentifier, description.guid, str(STOP),
+               str(STEP), *map(str, references)]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, **environment})
+
+
+def fmpy_outputs(fmu):
+    """fmpy's run of the same experiment, in a fresh process (as a host would be)."""
+    program = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]),"
+               " output_interval=float(sys.argv[3]), output=sys.argv[4:]);"
+               " print('\\n'.join(' '.join(float(x).hex() for x in row) for row in r))")
+    run = subprocess.run([sys.executable, "-c", program, str(fmu), str(STOP), str(STEP),
+                          *OUTPUTS], capture_output=True, text=True, check=True, timeout=120)
+    return np.array([[float.fromhex(x) for x in line.split()]
+                     for line in run.stdout.splitlines()])
+
+
+def test_twenty_runs_exit_cleanly_with_fmpys_outputs_bit_for_bit(c_host, unzipped):
+    expected = fmpy_outputs(unzipped[0])
+    assert expected.shape == (round(STOP / STEP) + 1, 1 + len(OUTPUTS))
+    failures = []
+    for run_number in range(RUNS):
+        run = run_host(c_host, unzipped)
+        if run.returncode != 0:
+            failures.append((run_number, run.returncode, run.stderr[-2000:]))
+            continue
+        rows = np.array([[float.fromhex(x) for x in line.split()]
+                         for line in run.stdout.splitlines()])
+        assert rows.shape == expected.shape
+        assert np.array_equal(rows, expected), f"run {run_number}: outputs differ from fmpy's"
+    assert failures == [], f"{len(failures)} of {RUNS} runs failed: {failures[:2]}"
+
+
+def test_a_missing_dependency_is_named_and_the_host_lives(c_host, unzipped, tmp_path):
+    # README's recipe on an environment without numba: a bare venv of the same interpreter
+    # (the embedded interpreter still sees the base installation's own site-packages)
+    if subprocess.run([sys._base_executable, "-c", "import numba"],
+                      capture_output=True).returncode == 0:
+        pytest.skip("the base interpreter has numba: no environment without it to try")
+    bare = tmp_path / "bare"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(bare)], check=True)
+    fmu, folder, description, references = unzipped
+    command = [str(HOST_FOLDER / "run.sh"), str(bare / "bin" / "python"), str(c_host),
+               str(folder), description.coSimulation.modelIdentifier, description.guid,
+               str(STOP), str(STEP), *map(str, references)]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert run.returncode == NO_INSTANCE, run.stderr[-2000:]  # not a crash
+    assert re.search(r"herringbone FMU: [a-z, ]*numba cannot be imported by the Python", run.stderr)
+    assert "set PYTHONPATH to the site-packages folder" in run.stderr
