@@ -45,7 +45,12 @@ def main(argv=None) -> int:
                         "benchmarks/error_vs_runtime.py (the default) or "
                         "benchmarks/extreme_scenes.py of the source checkout; "
                         "`herringbone benchmark --help` lists the options")
+    # sweep, campbell and run --plot: their handlers live in sweep_cli.py
+    from .sweep_cli import register
+    added_commands = register(commands)
     args = parser.parse_args(argv)
+    if args.command in added_commands:
+        return added_commands[args.command](args)
     try:
         if args.command == "info":
             from .report import info_main
@@ -59,17 +64,22 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    from .reference import reference_simulate
+    from .run_progress import reference_simulate_with_progress
 
     scene = load_scene(args.scene)
     started = time.perf_counter()
-    results = reference_simulate(scene, stop_time=args.stop_time,
-                                 output_interval=args.output_interval, tolerance=args.tolerance)
+    results = reference_simulate_with_progress(scene, stop_time=args.stop_time,
+                                               output_interval=args.output_interval,
+                                               tolerance=args.tolerance,
+                                               progress=not args.no_progress)
     wall = time.perf_counter() - started
     output = args.output or Path("results") / f"{scene.name}.csv"
     write_csv(results, output)
     print(summary(scene, results, wall))
     print(f"outputs written to {output}")
+    if args.plot:
+        from .sweep_cli import plot_run
+        print("\n".join(f"written: {path}" for path in plot_run(scene, results, output)))
     return 0
 
 
