@@ -79,10 +79,9 @@ def amplitude_spectrum(signal, interval):
 
 
 def _mark_frequencies(axes, mesh_frequency, natural, top):
-    for k in range(1, HARMONICS_SHOWN + 1):
-        if k * mesh_frequency <= top:
-            axes.axvline(k * mesh_frequency, color="C3", lw=0.8, ls="--",
-                         label="mesh harmonics k·f_mesh" if k == 1 else None)
+    for k in range(1, int(top / mesh_frequency) + 1):  # every harmonic in the plotted range
+        axes.axvline(k * mesh_frequency, color="C3", lw=0.8, ls="--",
+                     label="mesh harmonics k·f_mesh" if k == 1 else None)
     for number, f in enumerate(f for f in natural if 0 < f <= top):
         axes.axvline(f, color="C2", lw=0.8, ls=":",
                      label="natural frequencies" if number == 0 else None)
@@ -105,6 +104,8 @@ def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) 
         panel.grid(True, which="both", alpha=0.3)
         panel.legend(loc="upper right", fontsize=8)
     axes[1].set_xlim(0, top)
+    axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz (record length)",
+                     (0.01, 0.02), xycoords="axes fraction", fontsize=8)
     axes[1].set_xlabel("frequency, Hz")
     axes[0].set_title(title)
     _save(figure, path)
