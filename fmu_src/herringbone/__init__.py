@@ -7,3 +7,6 @@ from .reference import reference_simulate
 from .integrator import simulate
 
 __all__ += ["reference_simulate", "simulate"]
+from .sweep import sweep
+
+__all__ += ["sweep"]

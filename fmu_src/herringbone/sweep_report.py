@@ -1,0 +1,63 @@
+"""What `herringbone sweep` prints and writes: the table as CSV, the resonance curve (speed
+sweeps) or parameter plot, the waterfall of dte spectra (one-axis speed sweeps)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .campbell import elastic_frequencies
+from .sweep import SPEED, resonation_summary
+from .sweep_plots import (plot_parameter_sweep, plot_resonance_curve, plot_waterfall,
+                          resonances_between)
+
+RPM_PER_RAD_S = 30.0 / math.pi
+
+
+def swept_names(table) -> list[str]:
+    """The swept columns: those before speed_rpm."""
+    return list(table.columns[:list(table.columns).index("speed_rpm")])
+
+
+def write_outputs(scene, table, series, folder: Path) -> list[Path]:
+    """CSV, then the plots that fit the sweep's axes; returns the paths written."""
+    folder.mkdir(parents=True, exist_ok=True)
+    names = swept_names(table)
+    stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
+    csv = Path(f"{stem}.csv")
+    table.to_csv(csv, index=False, float_format="%.10g")
+    written = [csv]
+    natural, z = elastic_frequencies(scene), scene.parameters["z_pinion"]
+    if names == [SPEED]:
+        curve, waterfall = Path(f"{stem}_resonance.png"), Path(f"{stem}_waterfall.png")
+        plot_resonance_curve(table, curve, natural, z,
+                             f"{scene.name}: dynamic factor against speed")
+        plot_waterfall(table, series, waterfall, natural, z,
+                       f"{scene.name}: dte spectra over the sweep (waterfall)")
+        written += [curve, waterfall]
+    else:
+        picture = Path(f"{stem}.png")
+        plot_parameter_sweep(table, names, picture, f"{scene.name}: K_v over "
+                             f"{' and '.join(names)}")
+        written.append(picture)
+    return written
+
+
+def describe(scene, table, wall: float, args=None) -> str:
+    """The summary printed after a sweep."""
+    settle, window = table["settle_time_s"], table["window_time_s"]
+    lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
+             f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
+             "the least-damped mode decayed), then a window of "
+             f"{int(table['samples'].iloc[0])} samples, {window.min():.4g}-{window.max():.4g} s",
+             f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}; "
+             f"largest at {resonation_summary(table)}"]
+    if SPEED in swept_names(table) and len(swept_names(table)) == 1:
+        low, high = table[SPEED].min(), table[SPEED].max()
+        marks = resonances_between(elastic_frequencies(scene), scene.parameters["z_pinion"],
+                                   low, high)
+        lines += [f"resonance k·f_mesh = f_n at {s * RPM_PER_RAD_S:.0f} rpm ({s:.1f} rad/s): "
+                  f"k = {k}, f_n = {f:.1f} Hz" for s, k, f in marks]
+    if (table["contact_lost_share"] > 0).any():
+        lines.append(f"a helix half out of contact at {int((table['contact_lost_share'] > 0).sum())}"
+                     " points (contact_lost_share > 0)")
+    return "\n".join(lines)
