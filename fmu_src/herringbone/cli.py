@@ -38,6 +38,58 @@ def main(argv=None) -> int:
         return 2
 
 
+def _parser():
+    """The parser and its command parsers; every value is checked by its `type=` (arguments.py),
+    and every error is one line (OneLineParser)."""
+    parser = OneLineParser(prog="herringbone", description=__doc__)
+    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    run = subparsers.add_parser("run", help="simulate a scene with the reference integration, "
+                                "print a summary and write a CSV of the outputs")
+    run.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    run.add_argument("--stop-time", type=STOP_TIME.option_type,
+                     help="simulated seconds (default: the scene's)")
+    run.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
+                     help="seconds between output samples, at most the stop time "
+                          "(default: the scene's)")
+    tolerance = REFERENCE_TOLERANCE_ARGUMENT.allowed
+    run.add_argument("--tolerance", type=REFERENCE_TOLERANCE_ARGUMENT.option_type, default=1e-10,
+                     help="error per step relative to the static mesh force, "
+                          f"{tolerance.low:g} to {tolerance.high:g} (default 1e-10)")
+    run.add_argument("-o", "--output", type=output_path,
+                     help="CSV file to write (default: results/<scene>.csv)")
+    info = subparsers.add_parser("info", help="geometry, mesh phase and modes of a scene")
+    info.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    stability = subparsers.add_parser("stability", help="Floquet chart: the largest multiplier "
+                                      "of the linear mesh against pinion speed, with its "
+                                      "unstable bands (PNG and a list of the bands)")
+    stability.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    stability.add_argument("--speeds", type=number, nargs=3, default=(50.0, 3000.0, 300),
+                           metavar=("FROM", "TO", "COUNT"),
+                           help="pinion speeds, rad/s: 0 < FROM < TO, COUNT >= 2 speeds "
+                                "(default 50 3000 300)")
+    stability.add_argument("-o", "--output", type=output_path,
+                           help="PNG to write (default: results/<scene>_stability.png)")
+    subparsers.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
+                          "benchmarks/error_vs_runtime.py (the default) or "
+                          "benchmarks/extreme_scenes.py of the source checkout; "
+                          "`herringbone benchmark --help` lists the options")
+    # sweep, campbell and run --plot: their handlers live in sweep_cli.py
+    from .sweep_cli import register
+    added_commands = register(subparsers)
+    return parser, {"run": run, "stability": stability}, added_commands
+
+
+def _output(parser, given, default: Path) -> Path:
+    """The file to write: `given` (checked by its type) or `default`, which is checked here."""
+    if given is not None:
+        return given
+    problem = output_path_problem(default)
+    if problem is not None:
+        parser.error(f"cannot write {default}: {problem}; give -o FILE in a folder you can "
+                     "write in")
+    return default
+
+
 def _run(args, parser) -> int:
     from .run_progress import reference_simulate_with_progress
 
