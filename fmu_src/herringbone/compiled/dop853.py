@@ -62,7 +62,11 @@ def stability_function(z):
     return 1.0 + z * (stages @ B[:N_STAGES])
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
+# No fastmath: with contraction and reassociation allowed, code compiled in the process and the
+# same code loaded from numba's cache gave results that differ in the last bits (a sweep on
+# Dask workers, which load it, against the same sweep in the process that compiled it).
+# Without, every start of every host computes the same bits; the cost was within the noise.
+@njit(cache=True, error_model="numpy")
 def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
          absolute_tolerance, relative_tolerance, stages, trial, new_state):
     size = state.shape[0]
