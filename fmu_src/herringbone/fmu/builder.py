@@ -1,8 +1,13 @@
 """Build pythonfmu co-simulation FMUs that pass `fmpy validate`; CLI for this project's FMUs.
 
 Generic part (importable): `build_slave_fmu`, `fix_model_description`, `validate`,
-`build_example_fmus`.  CLI: `python build_fmu.py [SCENE] [-o OUT.fmu]` builds the gear FMU of a
-scene; `python build_fmu.py --examples DIR` builds the drive-train examples into DIR.
+`build_example_fmus`.  CLI (`main`): `herringbone build-fmu [SCENE] [-o OUT.fmu]` (or `python
+build_fmu.py` in a checkout) builds the gear FMU of a scene, a file or a shipped scene's name;
+`--examples DIR` builds the drive-train examples into DIR.
+
+pythonfmu builds an FMU from a script, whose module name must be unique in a host process (two
+FMUs whose scripts share a name clash in sys.modules): the slave's source is
+herringbone/fmu/slave.py, and the builder hands pythonfmu a copy named `GEAR_SLAVE_MODULE`.
 """
 from __future__ import annotations
 
@@ -16,12 +21,16 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent
-EXAMPLES = ROOT / "examples"
-GEAR_SLAVE = ROOT / "fmu_src" / "herringbone_gear_fmu.py"
-GEAR_PACKAGE = ROOT / "fmu_src" / "herringbone"
-UNITS_MODULE = ROOT / "fmu_src" / "fmi_units.py"  # shipped with every FMU: see its docstring
-RUNTIME_MODULE = ROOT / "fmu_src" / "fmu_runtime.py"  # the gear FMU's guards in C hosts
+from .. import shipped
+
+GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone, carried by the gear FMU
+GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
+GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see above)
+# shipped with every FMU as the module `fmi_units` (the examples import it so): see its docstring
+UNITS_MODULE = GEAR_PACKAGE / "fmu" / "units.py"
+UNITS_MODULE_NAME = "fmi_units"
+DEFAULT_SCENE = "reference"  # a shipped scene's name
+DEFAULT_OUTPUT = Path("dist") / "HerringboneGear.fmu"
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -54,8 +63,11 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
     """
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
-    project_files = [Path(p).resolve() for p in project_files] + [UNITS_MODULE]
     with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
+        units = Path(tmp) / "units" / f"{UNITS_MODULE_NAME}.py"
+        units.parent.mkdir()
+        shutil.copyfile(UNITS_MODULE, units)
+        project_files = [Path(p).resolve() for p in project_files] + [units]
         # A separate interpreter: pythonfmu's builder imports the script and leaves it in
         # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
         # then run that source copy instead of the packaged one.
@@ -207,43 +219,48 @@ def validate(fmu_path: Path) -> list[str]:
 
 
 def build_example_fmus(output_dir: Path) -> list[Path]:
-    """Build examples/induction_motor.py and examples/fan_load.py into `output_dir`.
+    """Build examples/induction_motor.py and examples/fan_load.py (shipped with the package:
+    herringbone.shipped.examples_folder) into `output_dir`.
 
     Returns the FMU paths (InductionMotor.fmu, FanLoad.fmu); existing files of those names in
     `output_dir` are replaced.
     """
     output_dir = Path(output_dir)
-    return [build_slave_fmu(slave_script=EXAMPLES / script, project_files=[],
+    return [build_slave_fmu(slave_script=shipped.examples_folder() / script, project_files=[],
                             output=output_dir / fmu_name, handle_state=True)
             for script, fmu_name in (("induction_motor.py", "InductionMotor.fmu"),
                                      ("fan_load.py", "FanLoad.fmu"))]
 
 
 def build_gear_fmu(scene: Path, output: Path) -> Path:
-    """Build the gear-train FMU of a scene file: the slave, the herringbone package and the
-    scene (as resources/scene.toml) go into it; its variables are exactly the scene's."""
-    sys.path.insert(0, str(GEAR_PACKAGE.parent))
-    from herringbone import load_scene
+    """Build the gear-train FMU of a scene file (or a shipped scene's name): the slave, the
+    herringbone package and the scene (as resources/scene.toml) go into it; its variables are
+    exactly the scene's."""
+    from ..model.scene import load_scene
 
     load_scene(scene)  # a bad scene is reported here, in the scene's own words
+    scene = shipped.resolve_scene(scene)
     with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
         scene_copy = Path(tmp) / "scene.toml"
         shutil.copyfile(scene, scene_copy)
         carried = carry_compiled_integrator(scene, Path(tmp))
-        return build_slave_fmu(slave_script=GEAR_SLAVE,
-                               project_files=[GEAR_PACKAGE, scene_copy, carried, RUNTIME_MODULE],
+        slave = Path(tmp) / "slave" / f"{GEAR_SLAVE_MODULE}.py"
+        slave.parent.mkdir()
+        shutil.copyfile(GEAR_SLAVE, slave)
+        return build_slave_fmu(slave_script=slave,
+                               project_files=[GEAR_PACKAGE, scene_copy, carried],
                                output=output, handle_state=True, serialize_state=True,
                                no_feedthrough=True)
 
 
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
-    load it from the user's cache, herringbone.compiled.cache), saying so first and showing
+    load it from the user's cache, herringbone.integrate.compiled.cache), saying so first and showing
     progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
-    carries in its resources (herringbone.first_start). Returns that folder. Raises
+    carries in its resources (herringbone.integrate.first_start). Returns that folder. Raises
     RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
-    from herringbone import first_start
-    from herringbone.compiled import cache, walk
+    from ..integrate import first_start
+    from ..integrate.compiled import cache, walk
 
     # in this process: a build after the first (the test suite's) finds the code loaded
     first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
@@ -261,27 +278,31 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     return carried.parent
 
 
-def main(argv: list[str] | None = None) -> int:
-    """CLI entry point; returns the process exit code: 2, with one line on stderr naming the
-    culprit and what is allowed, for a bad argument or scene (checked before building)."""
-    sys.path.insert(0, str(GEAR_PACKAGE.parent))
-    from herringbone.arguments import (OneLineParser, output_folder, output_path,
-                                       output_path_problem)
+def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
+    """The build command's arguments, on `parser` (build_fmu.py's own parser, or the `build-fmu`
+    command of `herringbone`)."""
+    from ..arguments import output_folder, output_path
 
-    parser = OneLineParser(prog="build_fmu", description=__doc__.splitlines()[0],
-                           help_command="python build_fmu.py --help")
-    parser.add_argument("scene", nargs="?", type=Path, default=ROOT / "models" / "reference.toml",
-                        metavar="SCENE", help="scene file (default: models/reference.toml)")
+    parser.add_argument("scene", nargs="?", type=Path, default=Path(DEFAULT_SCENE),
+                        metavar="SCENE", help="scene file, or the name of a shipped scene "
+                        f"(`herringbone scenes` lists them; default: {DEFAULT_SCENE})")
     # a string default: argparse passes it through `type`, which checks it like a given one
-    parser.add_argument("-o", "--output", type=output_path,
-                        default=str(ROOT / "dist" / "HerringboneGear.fmu"),
-                        help="FMU to write (default: dist/HerringboneGear.fmu)")
+    parser.add_argument("-o", "--output", type=output_path, default=str(default_output),
+                        help=f"FMU to write (default: {default_output})")
     parser.add_argument("--simulate", action="store_true",
                         help="then simulate the scene through the FMU with fmpy: a summary, "
                              "and the outputs in results/<scene>_fmu.csv")
     parser.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
-    args = parser.parse_args(argv)
+
+
+def build_command(args, parser) -> int:
+    """Run the build command of parsed `args`; returns the process exit code: 2, with one line
+    on stderr naming the culprit and what is allowed, for a bad argument or scene (checked
+    before building)."""
+    from ..arguments import output_path_problem
+    from ..model.scene import SceneError
+
     results_problem = output_path_problem(Path("results") / "scene_fmu.csv")
     if args.simulate and results_problem is not None:
         parser.error(f"--simulate writes results/<scene>_fmu.csv: {results_problem}; run it "
@@ -290,25 +311,35 @@ def main(argv: list[str] | None = None) -> int:
         for path in build_example_fmus(output_dir=args.examples):
             print(path)
         return 0
-    from herringbone import SceneError
-
     try:
         print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
         if args.simulate:
             simulate(fmu=args.output, scene_path=args.scene)
     except (SceneError, RuntimeError) as error:
-        print(f"build_fmu: {error}", file=sys.stderr)
+        print(f"{parser.prog}: {error}", file=sys.stderr)
         return 2
     return 0
+
+
+def main(argv: list[str] | None = None, prog: str = "herringbone build-fmu",
+         help_command: str | None = None, default_output: Path = DEFAULT_OUTPUT) -> int:
+    """CLI entry point (build_fmu.py's, with its own name and default output); returns the
+    process exit code (see build_command)."""
+    from ..arguments import OneLineParser
+
+    parser = OneLineParser(prog=prog, description=__doc__.splitlines()[0],
+                           help_command=help_command)
+    add_arguments(parser, default_output)
+    return build_command(parser.parse_args(argv), parser)
 
 
 def simulate(fmu: Path, scene_path: Path) -> None:
     """The main job's second half: the scene through its FMU, summary and CSV."""
     import time
 
-    from herringbone import load_scene
-    from herringbone.cli import summary, write_csv
-    from herringbone.fmu_run import simulate_scene_fmu
+    from ..cli import summary, write_csv
+    from ..model.scene import load_scene
+    from .run import simulate_scene_fmu
 
     scene = load_scene(scene_path)
     started = time.perf_counter()

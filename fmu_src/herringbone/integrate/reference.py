@@ -9,20 +9,10 @@ follows them by its own rule (segments.py, stepping.py), so that the two check e
 """
 from __future__ import annotations
 
-import numpy as np
-
-from .arguments import check_reference_run, check_run_times
-from .model import GearTrainModel
-from .stepping import ScipyStepper, start_position
-
-
-def output_times(stop_time: float, output_interval: float) -> np.ndarray:
-    """0, h, 2h, … up to stop_time inclusive (stop_time added if h does not divide it)."""
-    count = int(np.floor(stop_time / output_interval * (1 + 1e-12)))
-    times = np.arange(count + 1) * output_interval
-    if stop_time - times[-1] > 1e-9 * output_interval:
-        times = np.append(times, stop_time)
-    return times
+from ..arguments import check_reference_run
+from ..model.assembly import GearTrainModel
+from .contract import simulate_with
+from .stepping import ScipyStepper
 
 
 def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e-10,
@@ -43,32 +33,3 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
     stepper = ScipyStepper(GearTrainModel(scene), tolerance, method, check_tension=check_tension)
     return simulate_with(stepper, scene,
                          stop_time, output_interval, initial_pinion_angle)
-
-
-def simulate_with(stepper, scene, stop_time=None, output_interval=None,
-                  initial_pinion_angle=0.0):
-    """Run a scene with a stepper (stepping.ScipyStepper, integrator.CompiledStepper: anything
-    with `model` and `advance(position, end, torques, sample_times, on_sample)`), sampling the
-    outputs every output_interval; returns {"time": …, output name: …}. A bad span or start
-    raises ValueError before any work (arguments.check_run_times)."""
-    check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
-    stop_time = scene.experiment.stop_time if stop_time is None else stop_time
-    output_interval = scene.experiment.output_interval if output_interval is None \
-        else output_interval
-    model = stepper.model
-    times = output_times(stop_time, output_interval)
-    results = {name: np.empty(len(times)) for name in model.output_names}
-    index = {t: i for i, t in enumerate(times)}
-
-    def store(t, outputs):
-        for name, value in outputs.items():
-            results[name][index[t]] = value
-
-    position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
-    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
-    for start, end in zip([0.0] + changes, changes + [stop_time]):
-        position = stepper.advance(position, end, scene.inputs.at(start), times, store)
-    # the stop time itself, with the segment that holds from there on
-    store(times[-1], model.outputs(position.state, position.segment.contact_set,
-                                   position.segment.loaded))
-    return {"time": times, **results}
