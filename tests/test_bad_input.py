@@ -635,7 +635,7 @@ def test_the_table_covers_every_option_and_run_argument():
     from herringbone import arguments
     from herringbone.cli import _parser
 
-    _, commands = _parser()
+    _, commands, _ = _parser()
     options = {action.option_strings[-1] for parser in commands.values()
                for action in parser._actions if action.option_strings and action.type}
     assert options <= {case.name for case in CASES if "argv" in case.routes}
