@@ -35,9 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 DEFAULT_OUTPUT_DIR = ROOT / "results" / "benchmark"
 # What an FMU is built from: a change to any of these gives a new FMU (and a new file name).
-FMU_SOURCES = [ROOT / "build_fmu.py", ROOT / "fmu_src" / "herringbone_gear_fmu.py",
-               ROOT / "fmu_src" / "fmi_units.py", ROOT / "fmu_src" / "fmu_runtime.py",
-               *sorted((ROOT / "fmu_src" / "herringbone").rglob("*.py"))]
+FMU_SOURCES = sorted((ROOT / "fmu_src" / "herringbone").rglob("*.py"))  # slave, builder included
 ACCURACY_GOAL = 1e-6  # error relative to the static mesh force (issue 4)
 SPEED_GOAL = 0.1  # wall seconds per simulated second (issue 4)
 STARTUP_GOAL = 1.0  # seconds for instantiate + initialize, compiled code cached (issue 4)
@@ -76,13 +74,13 @@ def scene_paths(patterns) -> list[Path]:
 
 def force_outputs(scene) -> list[str]:
     """The forces the error is judged on: F_mesh and each bearing reaction the scene has."""
-    from herringbone.model import output_names
+    from herringbone.model.assembly import output_names
 
     return [name for name in FORCE_OUTPUTS if name in output_names(scene)]
 
 
 def force_scale(scene) -> float:
-    from herringbone.model import GearTrainModel
+    from herringbone.model.assembly import GearTrainModel
 
     return GearTrainModel(scene).force_scale()
 
@@ -109,10 +107,11 @@ _REFERENCE_SOURCES = []
 
 def reference_source_hash() -> str:
     """The files of the herringbone modules the reference runs on (cache key): those a fresh
-    interpreter loads for herringbone.reference, whatever else this process has imported."""
+    interpreter loads for herringbone.integrate.reference, whatever else this process has
+    imported."""
     if not _REFERENCE_SOURCES:
         listing = subprocess.run(
-            [sys.executable, "-c", "import sys, herringbone.reference\n"
+            [sys.executable, "-c", "import sys, herringbone.integrate.reference\n"
              "print('\\n'.join(m.__file__ for n, m in list(sys.modules.items())\n"
              "      if n.startswith('herringbone') and getattr(m, '__file__', None)))"],
             capture_output=True, text=True, check=True)
@@ -173,8 +172,7 @@ def scene_fmu(scene_path, log=print) -> Path:
     is reused by every later run)."""
     import zipfile
 
-    sys.path.insert(0, str(ROOT))
-    import build_fmu
+    from herringbone.fmu import builder
 
     scene_path = Path(scene_path)
     fmu_dir = DEFAULT_OUTPUT_DIR / "fmus"
@@ -187,7 +185,7 @@ def scene_fmu(scene_path, log=print) -> Path:
                 shutil.rmtree(outdated) if outdated.is_dir() else outdated.unlink()
         log(f"  building the FMU of {scene_path.name} ...")
         try:
-            fmu = build_fmu.build_gear_fmu(scene=scene_path, output=fmu_dir / f"{name}.fmu")
+            fmu = builder.build_gear_fmu(scene=scene_path, output=fmu_dir / f"{name}.fmu")
         except RuntimeError as error:  # say why in one line; the caller goes on without it
             raise BuildError(f"{scene_path.name}: FMU build failed: "
                              f"{str(error).strip().splitlines()[-1]}") from None
@@ -353,36 +351,31 @@ class _OverBudget(Exception):
 
 def run_scipy(scene, method, tolerance, stop_time, output_interval, record, budget=math.inf):
     """herringbone's ScipyStepper (a scipy OdeSolver restarted at every contact switch, as the
-    reference) sampling its dense output every output_interval: an offline run, which is
-    scipy's cheapest way through (no restart per communication step). Same result layout as
-    run_fmu; stops at the first sample past `budget` seconds of wall time."""
-    from herringbone.model import GearTrainModel
-    from herringbone.reference import output_times
-    from herringbone.stepping import ScipyStepper, start_position
+    reference) sampling its dense output every output_interval, through the package's one run
+    loop (herringbone.integrate.contract.simulate_with): an offline run, which is scipy's
+    cheapest way through (no restart per communication step). Same result layout as run_fmu;
+    stops at the first sample past `budget` seconds of wall time."""
+    from herringbone.integrate.contract import output_times, simulate_with
+    from herringbone.integrate.stepping import ScipyStepper
+    from herringbone.model.assembly import GearTrainModel
 
     started = time.perf_counter()
-    model = GearTrainModel(scene)
-    stepper = ScipyStepper(model, tolerance, method)
-    position = start_position(model, scene.inputs.at(0.0)[0])
+    stepper = ScipyStepper(GearTrainModel(scene), tolerance, method)
     startup = time.perf_counter() - started
     times = output_times(stop_time, output_interval)
     samples = {name: [] for name in record}
     result = {"status": "ok", "startup": startup, "internal_steps": None, "model_from": ""}
 
-    def store(t, outputs):
+    def watch(t, outputs):
         for name in record:
             samples[name].append(outputs[name])
         if time.perf_counter() - started > budget:
             raise _OverBudget
 
     started = time.perf_counter()
-    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
     try:
         with np.errstate(over="ignore", invalid="ignore"):
-            for start, end in zip([0.0] + changes, changes + [stop_time]):
-                position = stepper.advance(position, end, scene.inputs.at(start), times, store)
-            store(times[-1], model.outputs(position.state, position.segment.contact_set,
-                                           position.segment.loaded))
+            simulate_with(stepper, scene, stop_time, output_interval, on_sample=watch)
     except _OverBudget:
         result["status"] = "over budget"
     except Exception as error:

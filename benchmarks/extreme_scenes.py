@@ -83,8 +83,8 @@ def long_run(scene_path, periods=10_000, step=1e-3, window_periods=25, window_st
     """`periods` mesh periods at `step`, with `window_periods` recorded every `window_step` at
     the start and at the end. Returns the figures of drift (see the module docstring)."""
     import herringbone
-    from herringbone.gear import GearGeometry
-    from herringbone.model import output_names
+    from herringbone.model.geometry import GearGeometry
+    from herringbone.model.assembly import output_names
 
     scene = herringbone.load_scene(scene_path)
     geometry = GearGeometry.from_parameters(scene.parameters)

@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT / "tests"))  # scene_distribution: the one home of t
 import numpy as np  # noqa: E402
 
 import herringbone  # noqa: E402
-from herringbone.model import GearTrainModel  # noqa: E402
+from herringbone.model.assembly import GearTrainModel  # noqa: E402
 from scene_distribution import random_scene  # noqa: E402
 
 FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",

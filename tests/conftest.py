@@ -25,14 +25,12 @@ def torsional_scene():
 @pytest.fixture(scope="session")
 def built_fmus(tmp_path_factory):
     """The gear FMUs of the shipped scenes and the example drive-train FMUs, built once."""
-    import sys
-    sys.path.insert(0, str(MODELS.parent))
-    import build_fmu
+    from herringbone.fmu import builder
 
     folder = tmp_path_factory.mktemp("fmus")
-    fmus = {name: build_fmu.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
+    fmus = {name: builder.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
             for name in ("reference", "torsional", "staggered", "lead_error")}
-    motor, fan = build_fmu.build_example_fmus(folder)
+    motor, fan = builder.build_example_fmus(folder)
     return {**fmus, "motor": motor, "fan": fan}
 
 
@@ -40,16 +38,14 @@ def built_fmus(tmp_path_factory):
 def scene_fmu(tmp_path_factory):
     """Build the gear FMU of a scene in models/ on first use, once per session:
     scene_fmu("undamped") is the path of models/undamped.toml's FMU."""
-    import sys
-    sys.path.insert(0, str(MODELS.parent))
-    import build_fmu
+    from herringbone.fmu import builder
 
     folder = tmp_path_factory.mktemp("scene_fmus")
     built = {}
 
     def build(name):
         if name not in built:
-            built[name] = build_fmu.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
+            built[name] = builder.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
         return built[name]
 
     return build

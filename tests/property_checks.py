@@ -29,11 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
-from herringbone.compiled import equations
-from herringbone.integrator import DEFAULT_TOLERANCE, CompiledStepper
-from herringbone.model import GearTrainModel
-from herringbone.reference import simulate_with
-from herringbone.stepping import IntegrationError, ScipyStepper
+from herringbone.integrate.compiled import equations
+from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+from herringbone.integrate.contract import IntegrationError, simulate_with
+from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model.assembly import GearTrainModel
 
 REGRESSION_DIR = Path(__file__).resolve().parent / "regression"
 REFERENCE_TOLERANCE = 1e-10  # reference_simulate's default

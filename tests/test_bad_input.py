@@ -38,7 +38,7 @@ import herringbone
 from conftest import MODELS
 from fmu_host import Instance
 from herringbone import SceneError
-from herringbone.parameters import INPUTS, PARAMETERS
+from herringbone.model.parameters import INPUTS, PARAMETERS
 
 NAN, INF = float("nan"), float("inf")
 DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
@@ -555,14 +555,14 @@ def no_work(monkeypatch):
     """Building a model is the first work of every run and chart: make it fail the test."""
     import importlib
 
-    for module in ("reference", "integrator", "stability"):
+    for module in ("integrate.reference", "integrate.compiled_stepper", "analysis.stability"):
         monkeypatch.setattr(importlib.import_module(f"herringbone.{module}"), "GearTrainModel",
                             _refuse_work)
 
 
 def _api_function(name):
-    from herringbone.reference import simulate_with
-    from herringbone.stability import monodromy, stability_chart
+    from herringbone.integrate.contract import simulate_with
+    from herringbone.analysis.stability import monodromy, stability_chart
 
     return {"simulate": herringbone.simulate,
             "reference_simulate": herringbone.reference_simulate,

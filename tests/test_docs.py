@@ -3,7 +3,7 @@ repository (a clone has nothing beside it)."""
 import subprocess
 
 from conftest import MODELS
-from herringbone.document import with_generated_tables
+from herringbone.model.document import with_generated_tables
 
 ROOT = MODELS.parent
 
@@ -12,7 +12,7 @@ def test_model_document_lists_every_parameter_as_the_package_has_it():
     text = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
     assert text == with_generated_tables(text), (
         "docs/model.md section 12 is out of date: run "
-        "`python -m herringbone.document docs/model.md`")
+        "`python -m herringbone.model.document docs/model.md`")
 
 
 def test_nothing_points_outside_the_repository():

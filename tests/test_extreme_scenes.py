@@ -1,7 +1,7 @@
 """Issue 5: the stiff and extreme scenes of models/, each through its FMU against the reference.
 
 Every scene (its header says what it tests and why its values were chosen) is built into its own
-FMU, simulated through fmpy at the FMU's default settings (herringbone.fmu_run.simulate_scene_fmu:
+FMU, simulated through fmpy at the FMU's default settings (herringbone.fmu.run.simulate_scene_fmu:
 the scene's experiment and input torques, communication step = output interval; in a process of
 its own, stopped after FMU_WALL_BUDGET, so that a collapsing step size fails the test instead of
 hanging it) and by
@@ -29,8 +29,8 @@ import pytest
 
 import herringbone
 from conftest import MODELS
-from herringbone.model import GearTrainModel
-from herringbone.phasing import contact_count, count_intervals, scene_phasing
+from herringbone.model.assembly import GearTrainModel
+from herringbone.analysis.phasing import contact_count, count_intervals, scene_phasing
 
 FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
           "F_brg_wheel_right"]
@@ -207,7 +207,7 @@ def law_and_momentum(scene, r):
         assert np.abs(L - L[0]).max() <= 1e-9 * abs(L[0])
 
 
-# herringbone.fmu_run.simulate_scene_fmu (fmpy, the scene's input torques held over each
+# herringbone.fmu.run.simulate_scene_fmu (fmpy, the scene's input torques held over each
 # communication step = output interval, default settings), in a process of its own so that a run
 # whose cost explodes is stopped after FMU_WALL_BUDGET (fmpy's own timeout is only checked
 # between doSteps, and one doStep can take minutes). Writes the outputs and the wall time of the
@@ -216,7 +216,7 @@ RUNNER = """
 import sys, time
 import numpy as np
 import herringbone
-from herringbone.fmu_run import simulate_scene_fmu
+from herringbone.fmu.run import simulate_scene_fmu
 fmu, scene_file, stop_time, output_interval, out = sys.argv[1:]
 scene = herringbone.load_scene(scene_file)
 started = time.perf_counter()
@@ -311,7 +311,7 @@ def test_sharp_edges_at_1_rpm_stop_with_a_message_that_names_the_cure(scene_fmu,
 
     scene = herringbone.load_scene(MODELS / "low_speed.toml").with_parameters(edge_ramp=0.0,
                                                                              phase0=0.99)
-    with pytest.raises(herringbone.stepping.IntegrationError, match="edge_ramp > 0"):
+    with pytest.raises(herringbone.integrate.contract.IntegrationError, match="edge_ramp > 0"):
         herringbone.reference_simulate(scene, stop_time=0.1, output_interval=1e-3)
     received = []
     started = time.perf_counter()

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import herringbone
-from herringbone import first_start
+from herringbone.integrate import first_start
 
 COLD_START_BOUND = 5.0  # s of wall time, process start included (issue 14)
 SOURCE = Path(herringbone.__file__).resolve().parent.parent
@@ -52,8 +52,8 @@ PROBE = """
 import json, pickle, sys
 from pathlib import Path
 from numba import typeof
-from herringbone.compiled import cache, walk
-from herringbone import first_start
+from herringbone.integrate.compiled import cache, walk
+from herringbone.integrate import first_start
 
 said = []
 first_start.announce_compiles(lambda m: said.append((m, len(walk.hermite_root.overloads))))

@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-import build_fmu
 from conftest import MODELS
 from fmu_host import Instance
-from herringbone.parameters import INPUTS, PARAMETERS
+from herringbone.fmu import builder
+from herringbone.model.parameters import INPUTS, PARAMETERS
 
 DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
 FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_wheel_right"]
@@ -185,10 +185,10 @@ def test_model_description_ranges_guid_and_dependencies(fmu, tmp_path):
     outputs = root.find("ModelStructure/Outputs")
     assert len(outputs) > 10 and all(u.get("dependencies") == "" for u in outputs)
     # identical content, identical FMU: GUID and bytes
-    again = build_fmu.build_gear_fmu(MODELS / "reference.toml", tmp_path / "again.fmu")
+    again = builder.build_gear_fmu(MODELS / "reference.toml", tmp_path / "again.fmu")
     assert again.read_bytes() == fmu.read_bytes()
     assert root.get("guid") == fmpy.read_model_description(str(again)).guid
-    other = build_fmu.build_gear_fmu(MODELS / "staggered.toml", tmp_path / "other.fmu")
+    other = builder.build_gear_fmu(MODELS / "staggered.toml", tmp_path / "other.fmu")
     assert fmpy.read_model_description(str(other)).guid != root.get("guid")
 
 

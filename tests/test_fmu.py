@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-import build_fmu
 import herringbone
+from herringbone.fmu import builder
 from conftest import MODELS
 from fmu_host import Instance, structured_inputs
 
@@ -21,7 +21,8 @@ DISCARD = 2  # fmi2Discard
 
 
 def static_mesh_force(scene):
-    return scene.inputs.M_motor[0] / herringbone.model.GearTrainModel(scene).geometry.radius_pinion
+    radius = herringbone.model.assembly.GearTrainModel(scene).geometry.radius_pinion
+    return scene.inputs.M_motor[0] / radius
 
 
 def signal(kind, times):
@@ -77,7 +78,7 @@ def test_tightest_settings_agree_with_reference(built_fmus, scene_name, kind):
 
 def test_every_built_fmu_validates_and_declares_only_its_scene(built_fmus):
     for name in ("reference", "torsional", "staggered", "lead_error"):
-        assert build_fmu.validate(built_fmus[name]) == []
+        assert builder.validate(built_fmus[name]) == []
         description = fmpy.read_model_description(str(built_fmus[name]))
         variables = {v.name: v for v in description.modelVariables}
         scene = herringbone.load_scene(MODELS / f"{name}.toml")
@@ -251,7 +252,7 @@ def test_messages_reach_simulate_fmu_logger(built_fmus):
 
 
 def test_scene_input_table_reaches_the_fmu_held_like_the_reference(built_fmus, torsional_scene):
-    from herringbone.fmu_run import simulate_scene_fmu
+    from herringbone.fmu.run import simulate_scene_fmu
 
     scene = torsional_scene.with_inputs(table=[[0.0, 500.0, 1800.0], [0.0035, 900.0, 1800.0],
                                                [0.011, 900.0, 3240.0]])

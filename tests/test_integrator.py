@@ -8,10 +8,10 @@ import pytest
 
 import herringbone
 from conftest import MODELS
-from herringbone.integrator import DEFAULT_TOLERANCE, CompiledStepper
-from herringbone.reference import simulate_with
-from herringbone.model import GearTrainModel
-from herringbone.stepping import ScipyStepper, start_position
+from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+from herringbone.integrate.contract import simulate_with, start_position
+from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model.assembly import GearTrainModel
 
 FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
           "F_brg_wheel_right"]
@@ -163,7 +163,7 @@ def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
     equations into itself, so a change to any kernel file must move the whole cache."""
     import shutil
 
-    from herringbone.compiled import cache
+    from herringbone.integrate.compiled import cache
 
     copy = tmp_path / "compiled"
     shutil.copytree(cache.PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
@@ -182,7 +182,7 @@ def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
 def test_packed_system_unpacks_to_the_same_arrays(scene_name):
     """The compiled loop takes the System packed into two arrays; unpacked it must be the
     System field for field (a field added to one side and not the other fails here)."""
-    from herringbone.compiled.equations import System, pack_system, unpack_system
+    from herringbone.integrate.compiled.equations import System, pack_system, unpack_system
 
     system = GearTrainModel(herringbone.load_scene(MODELS / f"{scene_name}.toml")).system
     unpacked = unpack_system(*pack_system(system))
@@ -200,7 +200,7 @@ def test_phase_event_prediction_is_the_quadratic_root(reference_model, speed, ac
                                                       angle, target):
     """DOP853 aims a step at the predicted phase event, ending 1e-4 of it past: the prediction
     must be far closer than that where φp moves as a quadratic over one step."""
-    from herringbone.compiled.walk import PREDICTION_MARGIN, phase_event_ahead
+    from herringbone.integrate.compiled.walk import PREDICTION_MARGIN, phase_event_ahead
 
     system = reference_model.system
     n = reference_model.size
@@ -271,9 +271,9 @@ def test_step_bound_keeps_every_mode_true_to_its_eigenvalue(damping_ratio, toler
     (EIGENVALUE_ERROR_PER_TOLERANCE·tol of its decay rate plus tol of its frequency), and
     the bound is tight: a tenth longer, the fastest mode is not (unless the cap of 3.5/|λ|max
     holds it first)."""
-    from herringbone.compiled.dop853 import stability_function
-    from herringbone.integrator import (EIGENVALUE_ERROR_PER_TOLERANCE, EXPLICIT_STEP_BOUND,
-                                        explicit_step_bound)
+    from herringbone.integrate.compiled.dop853 import stability_function
+    from herringbone.integrate.compiled_stepper import (EIGENVALUE_ERROR_PER_TOLERANCE,
+                                                        EXPLICIT_STEP_BOUND, explicit_step_bound)
 
     frequency = 6.8e5
     fastest = frequency * complex(-damping_ratio, math.sqrt(1.0 - damping_ratio ** 2))

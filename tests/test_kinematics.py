@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import herringbone
-from herringbone.phasing import alternation_law, scene_phasing
+from herringbone.analysis.phasing import alternation_law, scene_phasing
 from independent_model import contact_points
 
 

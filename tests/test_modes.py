@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-import herringbone.model
+import herringbone.model.assembly
 from independent_model import ORDER, mass_matrix, stiffness_matrix
 
 MODEL_MD_FREQUENCIES_HZ = [113, 688, 1.50e3, 2.10e3, 4.44e3, 12.0e3, 13.8e3]
@@ -27,7 +27,7 @@ def test_independent_assembly_matches_model_md(reference_scene):
 def test_package_modes_match_independent_assembly(reference_scene):
     p = reference_scene.parameters
     expected = frequencies(stiffness_matrix(p, 0.0), mass_matrix(p))
-    f, shapes, names = herringbone.model.natural_modes(reference_scene, pinion_angle=0.0)
+    f, shapes, names = herringbone.model.assembly.natural_modes(reference_scene, pinion_angle=0.0)
     assert names == ORDER
     assert f[1:] == pytest.approx(expected[1:], rel=1e-9)
     # the zero mode is the rigid rotation: angles in the ratio 1 : 1 : 1/u : 1/u
@@ -38,7 +38,7 @@ def test_package_modes_match_independent_assembly(reference_scene):
 
 def test_mean_stiffness_is_period_average(reference_scene):
     """The mean mesh stiffness of MODEL.md (about 1.08e9 N/m) is Σ over streams of c·b/p_x."""
-    model = herringbone.model.GearTrainModel(reference_scene)
+    model = herringbone.model.assembly.GearTrainModel(reference_scene)
     assert model.mesh.mean_stiffness() == pytest.approx(1.082e9, rel=1e-3)
     angles = np.linspace(0, 2 * math.pi / 10, 2001)[:-1]
     sampled = np.mean([stiffness_matrix(reference_scene.parameters, a) for a in angles], axis=0)

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 import herringbone
-from herringbone.gear import GearGeometry
-from herringbone.mesh import Mesh
-from herringbone.phasing import (alternation_law, contact_count, count_intervals,
+from herringbone.model.geometry import GearGeometry
+from herringbone.model.mesh import Mesh
+from herringbone.analysis.phasing import (alternation_law, contact_count, count_intervals,
                                  phase_overlap, scene_phasing, spur_contact_ratio)
-from herringbone.report import info_main, scene_report
+from herringbone.analysis.report import info_main, scene_report
 
 REFERENCE = herringbone.scene_from_dict({})
 P_X = GearGeometry.from_parameters(REFERENCE.parameters).axial_pitch
@@ -186,9 +186,9 @@ def use_stand_in_modes(monkeypatch):
     shapes[:, 1] = [0.9, 0.4, 0.1, 0, 0, 0, 0, 0.1]
     shapes[:, 2] = [0, 0.1, 0.9, 0.2, 0, 0.3, 0, 0]
     shapes[:, 3] = [0, 0, 0, 0.1, 0, 0.1, 1.0, 0]
-    monkeypatch.setattr(herringbone.report, "natural_modes", lambda scene, pinion_angle=None: (
+    monkeypatch.setattr(herringbone.analysis.report, "natural_modes", lambda scene, pinion_angle=None: (
         np.array([1e-5, 113.0, 688.0, 13800.0]), shapes, list(NAMES)))
-    monkeypatch.setattr(herringbone.report, "mass_matrix", lambda scene: np.eye(8))
+    monkeypatch.setattr(herringbone.analysis.report, "mass_matrix", lambda scene: np.eye(8))
 
 
 def test_scene_report_with_a_stand_in_model(monkeypatch):
@@ -209,7 +209,7 @@ def test_scene_report_with_a_stand_in_model(monkeypatch):
 
 
 def test_scene_report_on_the_real_model():
-    from herringbone import model
+    from herringbone.model import assembly as model
     frequencies, shapes, names = model.natural_modes(REFERENCE, pinion_angle=None)
     assert len(names) == 8 and shapes.shape == (8, 8) and abs(frequencies[0]) < 1e-3
     text = scene_report(REFERENCE)

@@ -8,9 +8,9 @@ import pytest
 
 import herringbone
 from conftest import MODELS
-from herringbone import stepping
-from herringbone.compiled import walk
-from herringbone.model import GearTrainModel
+from herringbone.integrate import contract, stepping
+from herringbone.integrate.compiled import walk
+from herringbone.model.assembly import GearTrainModel
 from independent_model import radii
 
 REGRESSION = Path(__file__).resolve().parent / "regression"
@@ -68,7 +68,7 @@ def test_torque_step_changes_the_angular_momentum_at_the_torque_surplus(referenc
 ])
 def test_left_out_components_are_not_carried(components, absent):
     scene = herringbone.scene_from_dict({"components": components})
-    model = herringbone.model.GearTrainModel(scene)
+    model = herringbone.model.assembly.GearTrainModel(scene)
     assert model.size == 8 - sum(1 if c != "bearings" else 4 for c in components)
     results = herringbone.reference_simulate(scene, stop_time=2e-3, output_interval=1e-4)
     for name in absent:
@@ -139,7 +139,7 @@ def test_no_point_pulls_or_penetrates_unloaded_on_a_fine_grid(missed_loss_regain
     model = GearTrainModel(scene)
     torques = scene.inputs.at(0.0)
     stepper = stepping.ScipyStepper(model, 1e-10)
-    position = stepping.start_position(model, torques[0])
+    position = contract.start_position(model, torques[0])
     slack = 1e-9 * model.force_scale()
     losses = regains = 0
     for t in np.arange(1, 885) * 2e-6:
@@ -159,7 +159,7 @@ def test_point_forces_add_up_to_the_mesh_force(missed_loss_regain):
     """The numpy per-point forces that the checks above read sum to the compiled F_mesh."""
     model = GearTrainModel(missed_loss_regain)
     position = stepping.ScipyStepper(model, 1e-10).advance(
-        stepping.start_position(model, missed_loss_regain.inputs.at(0.0)[0]), 1.6e-4,
+        contract.start_position(model, missed_loss_regain.inputs.at(0.0)[0]), 1.6e-4,
         missed_loss_regain.inputs.at(0.0))
     segment = position.segment
     forces = model.point_forces(position.state, segment.contact_set, segment.loaded)
@@ -205,7 +205,7 @@ def test_a_loss_and_landing_between_two_nodes_of_a_step_is_located(reference_sce
     fifth and sixth node: the loss is located at 0.54 to 1e-12 (the bulge's top found on the
     dense output, then the crossing by brentq). With peak 0.98 it stays above: no event."""
     model = GearTrainModel(reference_scene)
-    position = stepping.start_position(model, 500.0)
+    position = contract.start_position(model, 500.0)
     segment = position.segment
     start = position.state.copy()
     start[model.pinion] = 0.5 * segment.contact_set.length  # clear of the phase events

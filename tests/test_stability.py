@@ -10,8 +10,8 @@ import scipy.linalg
 import scipy.optimize
 
 import herringbone
-from herringbone import stability
-from herringbone.model import GearTrainModel, natural_modes
+from herringbone.analysis import stability
+from herringbone.model.assembly import GearTrainModel, natural_modes
 from independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 # One mesh-like degree of freedom: the equivalent mass of the reference pair and a stiffness that

@@ -15,11 +15,12 @@ import pytest
 
 import herringbone
 from herringbone import cli
-from herringbone.integrator import eigenvalues
-from herringbone.model import GearTrainModel, natural_modes
-from herringbone.report import resonance_speeds
-from herringbone.sweep import run_sweep, sweep
-from herringbone.sweep_point import Protocol, timing, window_figures
+from herringbone.integrate.compiled_stepper import eigenvalues
+from herringbone.model.assembly import GearTrainModel, natural_modes
+from herringbone.analysis.report import resonance_speeds
+from herringbone.analysis.stability import largest_multiplier
+from herringbone.analysis.sweep import run_sweep, sweep
+from herringbone.analysis.sweep_point import Protocol, timing, window_figures
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SHORT = Protocol(settle_time=0.02, window_periods=8, samples_per_period=32)
@@ -54,7 +55,7 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
                 else force
             assert abs(row[name] - value) <= SHORT.tolerance * scale, name
         assert row["floquet_max"] == pytest.approx(
-            float(herringbone.stability.largest_multiplier(scene, row["w0_pinion"])), rel=1e-12)
+            float(largest_multiplier(scene, row["w0_pinion"])), rel=1e-12)
 
 
 def test_settle_is_the_decay_of_the_least_damped_mode(reference_scene):
@@ -106,7 +107,7 @@ def test_serial_local_cluster_and_scheduler_give_identical_tables(reference_scen
     started by `dask worker`: the same table to the bit; no worker compiled the integrator."""
     from dask.distributed import Client
 
-    from herringbone.compiled import walk
+    from herringbone.integrate.compiled import walk
 
     speeds = [157.08, 300.0, 650.0, 1200.0]
     serial = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=0, progress=False)
@@ -227,7 +228,7 @@ def test_campbell_crossings_are_the_resonance_speeds_of_info(tmp_path, capsys):
 
 
 def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
-    from herringbone.run_progress import reference_simulate_with_progress
+    from herringbone.analysis.run_progress import reference_simulate_with_progress
 
     scene = herringbone.load_scene(MODELS / "contact_loss.toml")
     plain = herringbone.reference_simulate(scene, stop_time=0.004, output_interval=2e-5)

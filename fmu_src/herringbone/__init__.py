@@ -1,12 +1,66 @@
-"""Dynamics of a herringbone Novikov gear train (see MODEL.md): scenes, model, reference run,
-the fast (compiled) run."""
-from .scene import Scene, SceneError, load_scene, scene_from_dict
+"""Dynamics of a herringbone Novikov gear train: scenes, model, reference run, the fast
+(compiled) run, sweeps, and the FMU.
 
-__all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict"]
-from .reference import reference_simulate
-from .integrator import simulate
+The package by concept:
+- `model/`: parameters, scenes, gear geometry, the mesh, the assembled model (GearTrainModel);
+- `integrate/`: the stepping contract and run loop (`contract`), the scipy reference, the
+  compiled integrator and its numba kernels (`compiled/`);
+- `analysis/`: Floquet stability, mesh phasing and `info`, sweeps, Campbell diagram, plots;
+- `fmu/`: the FMI 2.0 co-simulation slave, its builder, and running a scene through an FMU;
+- `arguments` (the allowed run arguments), `shipped` (the scenes that come with the package),
+  `cli` (the `herringbone` command).
 
-__all__ += ["reference_simulate", "simulate"]
-from .sweep import sweep
+The public API is loaded on first use, so that `import herringbone.fmu.runtime` (which the FMU
+runs before numpy is imported, to name a missing dependency) imports nothing heavy.
+"""
+from __future__ import annotations
 
-__all__ += ["sweep"]
+import importlib
+
+# name -> the module that holds it
+_API = {
+    "Scene": ".model.scene", "SceneError": ".model.scene", "load_scene": ".model.scene",
+    "scene_from_dict": ".model.scene",
+    "reference_simulate": ".integrate.reference",
+    "simulate": ".integrate.compiled_stepper",
+    "sweep": ".analysis.sweep",
+}
+_SUBMODULES = ("model", "integrate", "analysis", "fmu", "arguments", "shipped", "cli")
+__all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "reference_simulate",
+           "simulate", "sweep", "__version__"]
+
+
+def __getattr__(name):
+    if name in _API:
+        value = getattr(importlib.import_module(_API[name], __name__), name)
+    elif name in _SUBMODULES:  # herringbone.model.assembly.GearTrainModel without an import
+        value = importlib.import_module(f".{name}", __name__)
+    elif name == "__version__":
+        value = _version()
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # once: later lookups find it directly
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
+
+def _version() -> str:
+    """The installed distribution's version; in a source tree that is not installed (an FMU's
+    resources, a checkout on PYTHONPATH), the version pyproject.toml declares beside it."""
+    from importlib import metadata
+    from pathlib import Path
+
+    try:
+        return metadata.version("herringbone")
+    except metadata.PackageNotFoundError:
+        pass
+    try:
+        import tomllib
+
+        pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
+        return tomllib.loads(pyproject.read_text(encoding="utf-8"))["project"]["version"]
+    except (OSError, ValueError, KeyError):
+        return "unknown"

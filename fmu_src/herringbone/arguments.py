@@ -8,7 +8,7 @@ returns the value or raises ONE ValueError naming the argument and what is allow
 as an argparse `type=`. `check_reference_run` and `check_compiled_run` check every argument of a
 run at once, before any work; `OneLineParser` is an argparse parser whose errors are one line.
 FMU_SOLVER_TOLERANCE, FMU_MAX_STEP and FMU_SOLVER_METHOD are the FMU's solver settings, for
-the slave (fmu_src/herringbone_gear_fmu.py) to check with.
+the slave (fmu/slave.py) to check with.
 """
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .parameters import FINITE, POSITIVE, Range
-from .scene import Scene, SceneError
+from .model.parameters import FINITE, POSITIVE, Range
+from .model.scene import Scene, SceneError
 
 # Below this the error control works on rounding noise (the FMU's bound; scipy itself raises
 # an rtol below 100 machine epsilons, 2.2e-14, with a warning).
@@ -113,7 +113,7 @@ COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
                            choices=COMPILED_METHODS)
 MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
                     POSITIVE, infinite=True)
-# The FMU's solver settings, for herringbone_gear_fmu.py (which keeps its own copy today): the
+# The FMU's solver settings, for fmu/slave.py (which keeps its own copy today): the
 # same ranges under the FMU's variable names. max_step says "no limit" with 0 there (a start
 # value in the model description cannot be inf).
 FMU_SOLVER_TOLERANCE = Argument("solver_tolerance", None, "error per step relative to the "

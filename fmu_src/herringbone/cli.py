@@ -1,5 +1,7 @@
 """The `herringbone` command: `run` a scene through the reference integration, `info` on a scene,
-`stability` chart of a scene, `benchmark` the FMU against scipy (from a source checkout)."""
+`stability` chart of a scene, `sweep`, `campbell`, `build-fmu` (the FMU of a scene), `scenes`
+(the shipped scenes), `benchmark` the FMU against scipy (from a source checkout). SCENE is a
+scene file or the name of a shipped scene."""
 from __future__ import annotations
 
 import csv
@@ -9,11 +11,12 @@ from pathlib import Path
 
 from .arguments import (OUTPUT_INTERVAL, REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, OneLineParser,
                         number, output_path, output_path_problem, speed_sweep_problem)
-from .scene import SceneError, load_scene
+from .model.scene import SceneError, load_scene
 
 # The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
 BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
 BENCHMARK_SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "extreme_scenes"}
+SCENE_HELP = "scene file (TOML), or the name of a shipped scene (`herringbone scenes`)"
 
 
 def main(argv=None) -> int:
@@ -26,9 +29,16 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.command in added_commands:
         return added_commands[args.command](args)
+    if args.command == "build-fmu":
+        from .fmu.builder import build_command
+        return build_command(args, commands["build-fmu"])
+    if args.command == "scenes":
+        from .shipped import scene_list
+        print("\n".join(scene_list()))
+        return 0
     try:
         if args.command == "info":
-            from .report import info_main
+            from .analysis.report import info_main
             return info_main([str(args.scene)])
         if args.command == "stability":
             return _stability(args, commands["stability"])
@@ -45,7 +55,7 @@ def _parser():
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = subparsers.add_parser("run", help="simulate a scene with the reference integration, "
                                 "print a summary and write a CSV of the outputs")
-    run.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    run.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
     run.add_argument("--stop-time", type=STOP_TIME.option_type,
                      help="simulated seconds (default: the scene's)")
     run.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
@@ -58,25 +68,30 @@ def _parser():
     run.add_argument("-o", "--output", type=output_path,
                      help="CSV file to write (default: results/<scene>.csv)")
     info = subparsers.add_parser("info", help="geometry, mesh phase and modes of a scene")
-    info.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    info.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
     stability = subparsers.add_parser("stability", help="Floquet chart: the largest multiplier "
                                       "of the linear mesh against pinion speed, with its "
                                       "unstable bands (PNG and a list of the bands)")
-    stability.add_argument("scene", type=Path, metavar="SCENE", help="scene file (TOML)")
+    stability.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
     stability.add_argument("--speeds", type=number, nargs=3, default=(50.0, 3000.0, 300),
                            metavar=("FROM", "TO", "COUNT"),
                            help="pinion speeds, rad/s: 0 < FROM < TO, COUNT >= 2 speeds "
                                 "(default 50 3000 300)")
     stability.add_argument("-o", "--output", type=output_path,
                            help="PNG to write (default: results/<scene>_stability.png)")
+    build = subparsers.add_parser("build-fmu", help="build the FMI 2.0 co-simulation FMU of a "
+                                  "scene (or --examples DIR: the motor and fan FMUs)")
+    from .fmu.builder import add_arguments
+    add_arguments(build)
+    subparsers.add_parser("scenes", help="list the shipped scenes: name and what each tests")
     subparsers.add_parser("benchmark", help="[error-vs-runtime | extreme-scenes] [OPTIONS]: run "
                           "benchmarks/error_vs_runtime.py (the default) or "
                           "benchmarks/extreme_scenes.py of the source checkout; "
                           "`herringbone benchmark --help` lists the options")
     # sweep, campbell and run --plot: their handlers live in sweep_cli.py
-    from .sweep_cli import register
+    from .analysis.sweep_cli import register
     added_commands = register(subparsers)
-    return parser, {"run": run, "stability": stability}, added_commands
+    return parser, {"run": run, "stability": stability, "build-fmu": build}, added_commands
 
 
 def _output(parser, given, default: Path) -> Path:
@@ -91,7 +106,7 @@ def _output(parser, given, default: Path) -> Path:
 
 
 def _run(args, parser) -> int:
-    from .run_progress import reference_simulate_with_progress
+    from .analysis.run_progress import reference_simulate_with_progress
 
     scene = load_scene(args.scene)
     stop_time = args.stop_time or scene.experiment.stop_time
@@ -111,7 +126,7 @@ def _run(args, parser) -> int:
     print(summary(scene, results, wall))
     print(f"outputs written to {output}")
     if args.plot:
-        from .sweep_cli import plot_run
+        from .analysis.sweep_cli import plot_run
         print("\n".join(f"written: {path}" for path in plot_run(scene, results, output)))
     return 0
 
@@ -119,7 +134,7 @@ def _run(args, parser) -> int:
 def _stability(args, parser) -> int:
     import numpy as np
 
-    from .stability import plot_stability_chart, stability_chart
+    from .analysis.stability import plot_stability_chart, stability_chart
 
     low, high, count = args.speeds
     problem = speed_sweep_problem(low, high, count)
@@ -177,7 +192,7 @@ def write_csv(results: dict, path: Path) -> None:
 
 
 def summary(scene, results: dict, wall_time: float) -> str:
-    from .model import GearTrainModel
+    from .model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)
     stop = results["time"][-1]

@@ -3,7 +3,7 @@ f = k·z_pinion·n/60 (n in rpm), and their crossings, the speeds where a mesh h
 excites a mode (the resonance speeds of `herringbone info`).
 
 The model has no speed-dependent stiffness or gyroscopic terms, so each natural frequency
-(at the period-mean mesh stiffness, herringbone.model.natural_modes) is a horizontal line.
+(at the period-mean mesh stiffness, herringbone.model.assembly.natural_modes) is a horizontal line.
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import natural_modes
+from ..model.assembly import natural_modes
 from .plots import RPM_PER_RAD_S, _pyplot, _save
 from .report import HARMONICS, resonance_speeds
 

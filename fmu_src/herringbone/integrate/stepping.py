@@ -22,7 +22,8 @@ import scipy.integrate
 from scipy.optimize import brentq, minimize_scalar
 
 from . import segments
-from .model import GearTrainModel
+from ..model.assembly import GearTrainModel
+from .contract import IntegrationError, Position
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)
 MAX_STALLED_SEGMENTS = 100
@@ -48,31 +49,6 @@ STALL_MESSAGE = ("contact switches without progress. If the pinion sits on a swi
 CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
                    "load at once (sharp face edges, edge_ramp = 0) and throw it back; give "
                    "edge_ramp > 0 (e.g. 1e-3 m), which lets the load come on gradually")
-
-
-class IntegrationError(RuntimeError):
-    """The integrator could not advance (it says where and why)."""
-
-
-@dataclass(frozen=True)
-class Position:
-    """Where a run stands: all it takes to go on. Plain data, so it can be copied and pickled."""
-
-    time: float
-    state: np.ndarray
-    segment: segments.Segment
-    step_hint: float | None = None  # the step size to try first (None: let the method choose)
-    outputs: np.ndarray | None = None  # model.output_vector here, if the stepper computed it
-    # per contact interval, the step size the compiled integrator starts it with (None: no
-    # interval entered yet; the scipy stepper goes without)
-    first_steps: np.ndarray | None = None
-
-
-def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: float = 0.0):
-    """Time 0: the rigid rotation at w0_pinion on the static deflection (MODEL.md section 6)."""
-    segment, state = segments.start(model, pinion_angle, motor_torque,
-                                    model.scene.parameters["w0_pinion"])
-    return Position(0.0, state, segment)
 
 
 @dataclass

@@ -39,8 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .arguments import check_scene, check_speeds
-from .model import GearTrainModel
+from ..arguments import check_scene, check_speeds
+from ..model.assembly import GearTrainModel
 
 SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step

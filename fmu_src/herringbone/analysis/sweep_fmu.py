@@ -2,7 +2,7 @@
 swept parameters and the protocol's tolerance as start values, the scene's torques as inputs,
 one communication step per sample from t = 0 (fmpy.simulate_fmu records every step), the
 window cut from the end of the record. The FMU must be built from the sweep's scene
-(`python build_fmu.py SCENE`): its other parameters are the scene's by construction.
+(`herringbone build-fmu SCENE`): its other parameters are the scene's by construction.
 """
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .parameters import INPUTS
+from ..model.parameters import INPUTS
 from .sweep_point import BEARINGS, Protocol, timing
 
 RECORDED = ("F_mesh", "F_mesh_left", "F_mesh_right", "dte", *BEARINGS)
@@ -21,14 +21,14 @@ def check_fmu(fmu) -> None:
     path = Path(fmu)
     if path.suffix != ".fmu" or not path.is_file():
         raise ValueError(f"through-fmu {fmu}: no such FMU file; allowed: the path of a gear "
-                         "FMU (python build_fmu.py SCENE -o FILE.fmu builds one)")
+                         "FMU (herringbone build-fmu SCENE -o FILE.fmu builds one)")
 
 
 def run_window_through_fmu(fmu, scene, point, protocol: Protocol) -> dict[str, np.ndarray]:
     """The window's samples from the FMU (same times as sweep_point.run_window)."""
     import fmpy
 
-    from .fmu_run import scene_inputs
+    from ..fmu.run import scene_inputs
 
     when = timing(scene, protocol)
     first = round(when.settle / when.interval)

@@ -1,6 +1,6 @@
 """`herringbone info SCENE`: geometry, mesh phasing, natural modes and resonance speeds of a scene.
 
-The natural modes come from herringbone.model at the stiffness averaged over one mesh period.
+The natural modes come from herringbone.model.assembly at the stiffness averaged over one mesh period.
 Output is plain ASCII so that any console shows it.
 """
 from __future__ import annotations
@@ -10,12 +10,12 @@ import sys
 
 import numpy as np
 
-from .arguments import OneLineParser
-from .gear import GearGeometry
-from .mesh import Mesh
-from .model import mass_matrix, natural_modes
+from ..arguments import OneLineParser
+from ..model.geometry import GearGeometry
+from ..model.mesh import Mesh
+from ..model.assembly import mass_matrix, natural_modes
 from .phasing import scene_phasing
-from .scene import SceneError, load_scene
+from ..model.scene import SceneError, load_scene
 
 HARMONICS = (1, 2, 3)
 MAX_RPM = 30_000.0  # resonance speeds above this are not listed: beyond any practical pinion speed

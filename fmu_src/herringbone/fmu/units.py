@@ -1,7 +1,8 @@
 """Units and ranges on pythonfmu variables: pythonfmu 0.7.0's Real takes no `unit`, and no
 variable of it takes `min` or `max`.
 
-build_fmu.build_slave_fmu ships this module with every FMU it builds and declares the units the
+builder.build_slave_fmu ships this module, as the module `fmi_units` (which the example slaves
+import), with every FMU it builds and declares the units the
 model description uses (<UnitDefinitions>), which `fmpy validate` requires.
 """
 from pythonfmu import Integer, Real

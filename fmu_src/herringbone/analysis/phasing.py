@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
-from .gear import GearGeometry
-from .mesh import PHASE_TOLERANCE, streams as mesh_streams
+from ..model.geometry import GearGeometry
+from ..model.mesh import PHASE_TOLERANCE, streams as mesh_streams
 
 
 def involute(angle: float) -> float:

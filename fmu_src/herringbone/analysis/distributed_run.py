@@ -23,9 +23,9 @@ THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"
 def load_integrator(scene) -> bool:
     """Make the compiled integrator ready in this process; True if it had to be compiled
     (not in the cache), False if it was loaded."""
-    from .integrator import CompiledStepper, warm_up
-    from .model import GearTrainModel
-    from .stepping import start_position
+    from ..integrate.compiled_stepper import CompiledStepper, warm_up
+    from ..model.assembly import GearTrainModel
+    from ..integrate.contract import start_position
 
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, 1e-7)

@@ -1,6 +1,7 @@
 """Guards for the FMU's Python inside hosts that are not Python (C, C++ simulators).
 
-Imported first by the slave script, before numpy, scipy or numba:
+Imported first by the slave script (fmu/slave.py), before numpy, scipy or numba; this module
+and the packages' __init__.py it runs import none of them:
 
 - `check_dependencies`: an interpreter without numpy, scipy or numba gets one message that names
   what is missing, which Python was asked, and what to do, instead of an import failing half way

@@ -25,26 +25,28 @@ import math
 import sys
 from pathlib import Path
 
-import fmu_runtime  # first: a missing dependency is named before anything imports it
+# first: a missing dependency is named before anything imports it (herringbone/__init__.py
+# and herringbone/fmu/__init__.py import nothing)
+from herringbone.fmu import runtime as fmu_runtime
 
 fmu_runtime.check_dependencies()
 import numpy as np  # noqa: E402
 
 import pythonfmu
-from fmi_units import BoundedInteger, RealWithUnit
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
                        Integer, Real, String)
 from pythonfmu.enums import Fmi2Status
 
 import herringbone
-from herringbone import first_start
-from herringbone.model import GearTrainModel, output_names
-from herringbone.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
-from herringbone.integrator import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
-                                    CompiledStepper, StepBudgetExceeded, warm_up)
-from herringbone.parameters import Range
-from herringbone.segments import Segment
-from herringbone.stepping import Position, start_position
+from herringbone.fmu.units import BoundedInteger, RealWithUnit
+from herringbone.integrate import first_start
+from herringbone.model.assembly import GearTrainModel, output_names
+from herringbone.model.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
+from herringbone.integrate.compiled_stepper import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
+                                                    CompiledStepper, StepBudgetExceeded, warm_up)
+from herringbone.model.parameters import Range
+from herringbone.integrate.segments import Segment
+from herringbone.integrate.contract import Position, start_position
 
 SCENE_FILE = "scene.toml"
 TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .compiled import equations
-from .gear import GearGeometry
+from ..integrate.compiled import equations
+from .geometry import GearGeometry
 from .mesh import ContactSet, Mesh
 
 ALL_COORDINATES = ("phi_motor", "phi_pinion", "psi_pinion", "x_pinion",

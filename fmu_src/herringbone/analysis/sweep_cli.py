@@ -9,9 +9,10 @@ import sys
 import time
 from pathlib import Path
 
-from .scene import load_scene
+from ..model.scene import load_scene
 
 RPM_PER_RAD_S = 30.0 / math.pi
+SCENE_HELP = "scene file (TOML), or the name of a shipped scene (`herringbone scenes`)"
 
 
 def register(commands) -> dict:
@@ -21,7 +22,7 @@ def register(commands) -> dict:
                                 "parameters (one or two), past its start-up transient: "
                                 "K_v, bearing reactions, dte, contact loss, Floquet |λ|max per "
                                 "point (CSV, resonance curve and waterfall PNGs)")
-    sweep.add_argument("scene", type=Path)
+    sweep.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
     sweep.add_argument("--speeds", nargs=3, metavar=("LO", "HI", "N"),
                        help="pinion speeds w0_pinion, N from LO to HI, rad/s (rpm with --rpm)")
     sweep.add_argument("--rpm", action="store_true", help="--speeds are in rpm")
@@ -50,7 +51,7 @@ def register(commands) -> dict:
     sweep.add_argument("-o", "--output-dir", type=Path, default=Path("results"))
     campbell = commands.add_parser("campbell", help="Campbell diagram: natural frequencies "
                                    "against speed with the mesh orders, crossings listed")
-    campbell.add_argument("scene", type=Path)
+    campbell.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
     campbell.add_argument("--speeds", nargs=2, type=float, required=True, metavar=("LO", "HI"),
                           help="pinion speed range, rad/s (rpm with --rpm)")
     campbell.add_argument("--rpm", action="store_true", help="--speeds are in rpm")

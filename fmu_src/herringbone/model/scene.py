@@ -18,7 +18,8 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .gear import solid_cylinder_transverse_inertia
+from ..shipped import is_scene_name, resolve_scene, scene_files
+from .geometry import solid_cylinder_transverse_inertia
 from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_of
 
 
@@ -79,10 +80,13 @@ class Scene:
 
 
 def load_scene(path) -> Scene:
-    """Read and validate a scene file (see the module docstring for its format)."""
-    path = Path(path)
+    """Read and validate a scene file (see the module docstring for its format). A bare name
+    ("reference") that is not a file names a shipped scene (herringbone.shipped)."""
+    given, path = path, resolve_scene(path)
     if not path.is_file():
-        raise SceneError(f"{path}: no such scene file")
+        names = (f"; shipped scenes: {', '.join(scene_files())} (`herringbone scenes`)"
+                 if is_scene_name(given) else "")
+        raise SceneError(f"{path}: no such scene file{names}")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:

@@ -1,7 +1,7 @@
 """docs/model.md section 12: the parameters, inputs and outputs as tables, generated from
 parameters.py so that the document cannot drift from the package.
 
-    python -m herringbone.document docs/model.md     rewrites the generated section
+    python -m herringbone.model.document docs/model.md     rewrites the generated section
 """
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def with_generated_tables(text: str) -> str:
     return f"{head}{GENERATED_BEGIN}\n{markdown_tables()}\n{GENERATED_END}{tail}"
 
 
-if __name__ == "__main__":  # python -m herringbone.document docs/model.md
+if __name__ == "__main__":  # python -m herringbone.model.document docs/model.md
     import sys
     from pathlib import Path
 

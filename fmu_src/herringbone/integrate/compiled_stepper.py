@@ -25,12 +25,12 @@ import time
 
 import numpy as np
 
-from .arguments import COMPILED_METHODS, check_compiled_run
+from ..arguments import COMPILED_METHODS, check_compiled_run
 from .compiled import dop853, walk
 from .compiled.equations import pack_system
-from .model import GearTrainModel
+from ..model.assembly import GearTrainModel
+from .contract import IntegrationError, Position
 from .segments import Segment
-from .stepping import IntegrationError, Position
 
 METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
 # The FMU's default: the error per step relative to the static mesh force that keeps every
@@ -291,7 +291,7 @@ def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLE
     """reference_simulate's twin on the compiled integrator (what the FMU runs): a scene's
     outputs every output_interval, {"time": …, output name: …}. Arguments outside
     arguments.check_compiled_run's ranges raise ValueError before any work."""
-    from .reference import simulate_with
+    from .contract import simulate_with
 
     check_compiled_run(scene, stop_time, output_interval, tolerance, method, max_step)
 

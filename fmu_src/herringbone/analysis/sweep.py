@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .parameters import INPUTS
+from ..model.parameters import INPUTS
 from .sweep_point import Protocol, point_row, run_window
 
 SPEED = "w0_pinion"

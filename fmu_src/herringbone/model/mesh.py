@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compiled import equations
-from .gear import HALVES, GearGeometry
+from ..integrate.compiled import equations
+from .geometry import HALVES, GearGeometry
 
 # Phases closer than this (in pitches; 3e-12 m of axial travel on the reference gear) are one
 # switch: coinciding switches of different streams must not leave a segment of zero length.

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .integrator import DEFAULT_TOLERANCE, CompiledStepper, eigenvalues
-from .model import GearTrainModel
-from .stepping import start_position
+from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, eigenvalues
+from ..model.assembly import GearTrainModel
+from ..integrate.contract import start_position
 
 BEARINGS = tuple(f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
                  for side in ("left", "right"))
@@ -154,7 +154,7 @@ def window_figures(window: dict, static_force: float) -> dict[str, float]:
 
 
 def floquet_largest(scene) -> float:
-    """|λ|max of the linear mesh at w0_pinion (herringbone.stability)."""
+    """|λ|max of the linear mesh at w0_pinion (herringbone.analysis.stability)."""
     from .stability import largest_multiplier
 
     return float(largest_multiplier(scene, abs(scene.parameters["w0_pinion"])))

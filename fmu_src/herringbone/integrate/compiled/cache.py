@@ -26,8 +26,10 @@ PACKAGE_DIR = Path(__file__).resolve().parent
 
 @functools.lru_cache(maxsize=None)
 def package_digest() -> str:
-    """The hash of every source file of this package, in name order."""
-    digest = hashlib.sha256()
+    """The hash of every source file of this package, in name order, and of the package's
+    module name: numba's index pickles objects by their modules' names, so a copy of the same
+    files under another name (the package moved) cannot read it and needs its own."""
+    digest = hashlib.sha256(__name__.rpartition(".")[0].encode() + b"\0")
     for source in sorted(PACKAGE_DIR.glob("*.py")):
         digest.update(source.name.encode() + b"\0" + source.read_bytes())
     return digest.hexdigest()[:20]

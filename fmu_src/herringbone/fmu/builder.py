@@ -1,0 +1,355 @@
+"""Build pythonfmu co-simulation FMUs that pass `fmpy validate`; CLI for this project's FMUs.
+
+Generic part (importable): `build_slave_fmu`, `fix_model_description`, `validate`,
+`build_example_fmus`.  CLI (`main`): `herringbone build-fmu [SCENE] [-o OUT.fmu]` (or `python
+build_fmu.py` in a checkout) builds the gear FMU of a scene, a file or a shipped scene's name;
+`--examples DIR` builds the drive-train examples into DIR.
+
+pythonfmu builds an FMU from a script, whose module name must be unique in a host process (two
+FMUs whose scripts share a name clash in sys.modules): the slave's source is
+herringbone/fmu/slave.py, and the builder hands pythonfmu a copy named `GEAR_SLAVE_MODULE`.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+from .. import shipped
+
+GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone, carried by the gear FMU
+GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
+GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see above)
+# shipped with every FMU as the module `fmi_units` (the examples import it so): see its docstring
+UNITS_MODULE = GEAR_PACKAGE / "fmu" / "units.py"
+UNITS_MODULE_NAME = "fmi_units"
+DEFAULT_SCENE = "reference"  # a shipped scene's name
+DEFAULT_OUTPUT = Path("dist") / "HerringboneGear.fmu"
+
+# FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
+_DEFAULT_INITIAL = {
+    ("parameter", "fixed"): "exact", ("parameter", "tunable"): "exact",
+    ("calculatedParameter", "fixed"): "calculated", ("calculatedParameter", "tunable"): "calculated",
+    ("output", "constant"): "exact", ("output", "discrete"): "calculated",
+    ("output", "continuous"): "calculated",
+    ("local", "constant"): "exact", ("local", "fixed"): "calculated",
+    ("local", "tunable"): "calculated", ("local", "discrete"): "calculated",
+    ("local", "continuous"): "calculated",
+}
+# Schema order of fmiModelDescription's children: UnitDefinitions must precede these.
+_AFTER_UNIT_DEFINITIONS = ("TypeDefinitions", "LogCategories", "DefaultExperiment",
+                           "VendorAnnotations", "ModelVariables", "ModelStructure")
+
+
+def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
+                    handle_state: bool = True, serialize_state: bool = False,
+                    no_feedthrough: bool = False) -> Path:
+    """Build `slave_script` (one pythonfmu Fmi2Slave class) into the FMU file `output`.
+
+    `project_files` (files or package directories, copied recursively) land in the FMU's
+    `resources/`, which the FMU puts on `sys.path` at run time.  `serialize_state` declares
+    canSerializeFMUstate (the slave's state must then be JSON data, or the slave must override
+    pythonfmu's `_fmu_state_to_bytes`); `no_feedthrough`: see `fix_model_description`.  Directories among them are also
+    put on the build's PYTHONPATH, since the builder imports the script to write the model
+    description.  The model description is then fixed by `fix_model_description`.  `output` (its
+    parent directories are created) is replaced only once the FMU is complete and valid.
+    Needs pythonfmu and fmpy importable by `sys.executable`.  Returns `output`.  Raises
+    RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
+    """
+    slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
+    with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
+        units = Path(tmp) / "units" / f"{UNITS_MODULE_NAME}.py"
+        units.parent.mkdir()
+        shutil.copyfile(UNITS_MODULE, units)
+        project_files = [Path(p).resolve() for p in project_files] + [units]
+        # A separate interpreter: pythonfmu's builder imports the script and leaves it in
+        # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
+        # then run that source copy instead of the packaged one.
+        command = [sys.executable, "-m", "pythonfmu", "build", "-f", str(slave_script),
+                   "-d", tmp, *map(str, project_files)]
+        if handle_state:
+            command.append("--handle-state")
+        if serialize_state:
+            command.append("--serialize-state")
+        import_paths = [str(p.parent) for p in project_files if p.is_dir() or p.suffix == ".py"]
+        if os.environ.get("PYTHONPATH"):
+            import_paths.append(os.environ["PYTHONPATH"])
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(import_paths)}
+        run = subprocess.run(command, env=env, capture_output=True, text=True)
+        built = sorted(Path(tmp).glob("*.fmu"))
+        if run.returncode != 0 or len(built) != 1:
+            raise RuntimeError(f"pythonfmu build of {slave_script} failed:\n{run.stderr}")
+        fix_model_description(fmu_path=built[0], no_feedthrough=no_feedthrough)
+        problems = validate(fmu_path=built[0])
+        if problems:
+            raise RuntimeError(f"{slave_script.name}: fmpy validate found\n" + "\n".join(problems))
+        output.parent.mkdir(parents=True, exist_ok=True)
+        _replace_file(target=output, write=lambda staging: shutil.copyfile(built[0], staging))
+    return output
+
+
+def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
+    """Rewrite the modelDescription.xml inside the FMU zip `fmu_path` in place.
+
+    pythonfmu 0.7.0 writes no `<InitialUnknowns>`, cannot declare units, and stamps every
+    build with a new GUID and the time.  This regenerates `<ModelStructure>` (Outputs and
+    InitialUnknowns, 1-based indices into ModelVariables, per FMI 2.0 section 3.4.8; an output
+    depends on no input directly: in co-simulation the outputs at a communication point follow
+    from the state, so `dependencies=""`), adds a `<UnitDefinitions>` entry for every
+    `unit`/`displayUnit` used by a variable (a slave sets them on the `<Real>` element, see
+    examples/), drops generationDateAndTime and sets the GUID to a hash of the FMU's content.
+    The zip is rewritten in name order with fixed timestamps and permissions, so that the same
+    content makes the same bytes.  Idempotent; all other entries' contents are unchanged.
+    """
+    fmu_path = Path(fmu_path)
+    with zipfile.ZipFile(fmu_path) as zf:
+        entries = {info: zf.read(info) for info in zf.infolist()}
+    root = ET.fromstring(entries[next(i for i in entries if i.filename == "modelDescription.xml")])
+    _rebuild_model_structure(root, no_feedthrough)
+    _add_unit_definitions(root)
+    root.attrib.pop("generationDateAndTime", None)
+    root.set("guid", "")
+    ET.indent(root, space="  ")
+    contents = {info.filename: data for info, data in entries.items()}
+    contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    root.set("guid", "{%s}" % _content_guid(contents))
+    contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+    def write(staging: Path) -> None:
+        with zipfile.ZipFile(staging, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            for name in sorted(contents):
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                info.external_attr = (0o40755 << 16 | 0x10) if name.endswith("/") \
+                    else 0o644 << 16
+                zf.writestr(info, contents[name], compress_type=zipfile.ZIP_DEFLATED)
+
+    _replace_file(target=fmu_path, write=write)
+
+
+def _content_guid(contents: dict[str, bytes]) -> str:
+    """A GUID (8-4-4-4-12 hex digits) from the SHA-256 of every entry's name and content (the
+    model description with an empty guid): identical FMUs share it, any change moves it."""
+    digest = hashlib.sha256()
+    for name in sorted(contents):
+        for part in (name.encode(), contents[name]):
+            digest.update(len(part).to_bytes(8, "little") + part)
+    hex_digits = digest.hexdigest()[:32]
+    return "-".join(hex_digits[a:b] for a, b in ((0, 8), (8, 12), (12, 16), (16, 20), (20, 32)))
+
+
+def _replace_file(target: Path, write) -> None:
+    # Stage beside the target so that os.replace is atomic: a reader never sees half a zip.
+    fd, staging = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial")
+    os.close(fd)
+    try:
+        write(Path(staging))
+        os.chmod(staging, 0o644)  # mkstemp makes it private; an FMU is an ordinary file
+        os.replace(staging, target)
+    except BaseException:
+        Path(staging).unlink(missing_ok=True)
+        raise
+
+
+def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    outputs, initial_unknowns = [], []
+    for index, var in enumerate(variables, start=1):
+        causality = var.get("causality", "local")
+        initial = var.get("initial") or _DEFAULT_INITIAL.get(
+            (causality, var.get("variability", "continuous")))
+        if causality == "output":
+            outputs.append(index)
+        if (causality == "output" and initial in ("approx", "calculated")) \
+                or causality == "calculatedParameter":
+            initial_unknowns.append(index)
+    # pythonfmu FMUs are co-simulation only: no Derivatives to carry over.
+    for old in root.findall("ModelStructure"):
+        root.remove(old)
+    structure = ET.SubElement(root, "ModelStructure")
+    # InitialUnknowns keep FMI's default dependencies: on every known (the outputs at the start
+    # follow from the parameters and the inputs' start values)
+    for tag, indices, extra in (("Outputs", outputs,
+                                 {"dependencies": ""} if no_feedthrough else {}),
+                                ("InitialUnknowns", initial_unknowns, {})):
+        if indices:
+            node = ET.SubElement(structure, tag)
+            for index in indices:
+                ET.SubElement(node, "Unknown", index=str(index), **extra)
+
+
+def _add_unit_definitions(root: ET.Element) -> None:
+    used: dict[str, set[str]] = {}
+    for real in root.iter("Real"):
+        if real.get("unit"):
+            used.setdefault(real.get("unit"), set())
+            if real.get("displayUnit"):
+                used[real.get("unit")].add(real.get("displayUnit"))
+    definitions = root.find("UnitDefinitions")
+    if definitions is None:
+        if not used:
+            return
+        position = next((i for i, child in enumerate(root) if child.tag in _AFTER_UNIT_DEFINITIONS),
+                        len(root))
+        definitions = ET.Element("UnitDefinitions")
+        root.insert(position, definitions)
+    declared = {unit.get("name"): unit for unit in definitions.findall("Unit")}
+    for name in sorted(used):
+        unit = declared.get(name)
+        if unit is None:  # not `or`: an Element without children is falsy
+            unit = ET.SubElement(definitions, "Unit", name=name)
+        known = {d.get("name") for d in unit.findall("DisplayUnit")}
+        for display in sorted(used[name] - known):
+            ET.SubElement(unit, "DisplayUnit", name=display)
+
+
+def validate(fmu_path: Path) -> list[str]:
+    """Problems `fmpy validate` reports for `fmu_path` (schema, structure, start values, units).
+
+    An empty list means valid.
+    """
+    from fmpy.validation import validate_fmu
+
+    return list(validate_fmu(str(fmu_path)))
+
+
+def build_example_fmus(output_dir: Path) -> list[Path]:
+    """Build examples/induction_motor.py and examples/fan_load.py (shipped with the package:
+    herringbone.shipped.examples_folder) into `output_dir`.
+
+    Returns the FMU paths (InductionMotor.fmu, FanLoad.fmu); existing files of those names in
+    `output_dir` are replaced.
+    """
+    output_dir = Path(output_dir)
+    return [build_slave_fmu(slave_script=shipped.examples_folder() / script, project_files=[],
+                            output=output_dir / fmu_name, handle_state=True)
+            for script, fmu_name in (("induction_motor.py", "InductionMotor.fmu"),
+                                     ("fan_load.py", "FanLoad.fmu"))]
+
+
+def build_gear_fmu(scene: Path, output: Path) -> Path:
+    """Build the gear-train FMU of a scene file (or a shipped scene's name): the slave, the
+    herringbone package and the scene (as resources/scene.toml) go into it; its variables are
+    exactly the scene's."""
+    from ..model.scene import load_scene
+
+    load_scene(scene)  # a bad scene is reported here, in the scene's own words
+    scene = shipped.resolve_scene(scene)
+    with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
+        scene_copy = Path(tmp) / "scene.toml"
+        shutil.copyfile(scene, scene_copy)
+        carried = carry_compiled_integrator(scene, Path(tmp))
+        slave = Path(tmp) / "slave" / f"{GEAR_SLAVE_MODULE}.py"
+        slave.parent.mkdir()
+        shutil.copyfile(GEAR_SLAVE, slave)
+        return build_slave_fmu(slave_script=slave,
+                               project_files=[GEAR_PACKAGE, scene_copy, carried],
+                               output=output, handle_state=True, serialize_state=True,
+                               no_feedthrough=True)
+
+
+def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
+    """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
+    load it from the user's cache, herringbone.integrate.compiled.cache), saying so first and showing
+    progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
+    carries in its resources (herringbone.integrate.first_start). Returns that folder. Raises
+    RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
+    from ..integrate import first_start
+    from ..integrate.compiled import cache, walk
+
+    # in this process: a build after the first (the test suite's) finds the code loaded
+    first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
+    compiled = Path(walk.advance._cache._cache_path)  # where numba put it, whatever the env
+    missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
+                                     for signature in walk.advance.signatures) if reason]
+    if missing:
+        raise RuntimeError(f"the compiled integrator is not in {compiled} ({missing[0]}): "
+                           "set HERRINGBONE_CACHE_DIR to a writable folder")
+    carried = Path(folder) / first_start.CARRIED_FOLDER / compiled.name
+    carried.mkdir(parents=True)
+    for path in compiled.iterdir():
+        if path.suffix in (".nbi", ".nbc") or path.name == first_start.RECORD:
+            shutil.copyfile(path, carried / path.name)
+    return carried.parent
+
+
+def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
+    """The build command's arguments, on `parser` (build_fmu.py's own parser, or the `build-fmu`
+    command of `herringbone`)."""
+    from ..arguments import output_folder, output_path
+
+    parser.add_argument("scene", nargs="?", type=Path, default=Path(DEFAULT_SCENE),
+                        metavar="SCENE", help="scene file, or the name of a shipped scene "
+                        f"(`herringbone scenes` lists them; default: {DEFAULT_SCENE})")
+    # a string default: argparse passes it through `type`, which checks it like a given one
+    parser.add_argument("-o", "--output", type=output_path, default=str(default_output),
+                        help=f"FMU to write (default: {default_output})")
+    parser.add_argument("--simulate", action="store_true",
+                        help="then simulate the scene through the FMU with fmpy: a summary, "
+                             "and the outputs in results/<scene>_fmu.csv")
+    parser.add_argument("--examples", type=output_folder, metavar="DIR",
+                        help="build the example drive-train FMUs into DIR instead")
+
+
+def build_command(args, parser) -> int:
+    """Run the build command of parsed `args`; returns the process exit code: 2, with one line
+    on stderr naming the culprit and what is allowed, for a bad argument or scene (checked
+    before building)."""
+    from ..arguments import output_path_problem
+    from ..model.scene import SceneError
+
+    results_problem = output_path_problem(Path("results") / "scene_fmu.csv")
+    if args.simulate and results_problem is not None:
+        parser.error(f"--simulate writes results/<scene>_fmu.csv: {results_problem}; run it "
+                     "from a folder you can write in")
+    if args.examples is not None:
+        for path in build_example_fmus(output_dir=args.examples):
+            print(path)
+        return 0
+    try:
+        print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
+        if args.simulate:
+            simulate(fmu=args.output, scene_path=args.scene)
+    except (SceneError, RuntimeError) as error:
+        print(f"{parser.prog}: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def main(argv: list[str] | None = None, prog: str = "herringbone build-fmu",
+         help_command: str | None = None, default_output: Path = DEFAULT_OUTPUT) -> int:
+    """CLI entry point (build_fmu.py's, with its own name and default output); returns the
+    process exit code (see build_command)."""
+    from ..arguments import OneLineParser
+
+    parser = OneLineParser(prog=prog, description=__doc__.splitlines()[0],
+                           help_command=help_command)
+    add_arguments(parser, default_output)
+    return build_command(parser.parse_args(argv), parser)
+
+
+def simulate(fmu: Path, scene_path: Path) -> None:
+    """The main job's second half: the scene through its FMU, summary and CSV."""
+    import time
+
+    from ..cli import summary, write_csv
+    from ..model.scene import load_scene
+    from .run import simulate_scene_fmu
+
+    scene = load_scene(scene_path)
+    started = time.perf_counter()
+    results = simulate_scene_fmu(fmu_path=fmu, scene=scene)
+    wall = time.perf_counter() - started
+    csv_path = Path("results") / f"{scene.name}_fmu.csv"
+    write_csv(results, csv_path)
+    print(summary(scene, results, wall))
+    print(f"outputs written to {csv_path}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""The stepping contract: what every integrator of the gear train takes and gives, and the one
+run loop that drives them.
+
+- `Position`: where a run stands (time, state, segment, step-size hints): all it takes to go on;
+- `Stepper`: what an integrator is to the run loop: its `model`, and `advance(position, end,
+  torques, sample_times, on_sample)`, which integrates with the torques held to exactly `end`,
+  stopping on every contact switch, and depends on nothing but the position passed in. The scipy
+  reference (stepping.ScipyStepper) and the compiled integrator
+  (compiled_stepper.CompiledStepper) both satisfy it;
+- `IntegrationError`: an integrator could not advance (it says where and why);
+- `start_position`: the initial condition every integrator starts from;
+- `output_times`, `simulate_with`: the output grid and the run loop (a scene's input table,
+  sampled every output interval) that herringbone.reference_simulate, herringbone.simulate, the
+  command line and the benchmarks all run.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Protocol, runtime_checkable
+
+import numpy as np
+
+from ..arguments import check_run_times
+from ..model.assembly import GearTrainModel
+from . import segments
+
+
+class IntegrationError(RuntimeError):
+    """The integrator could not advance (it says where and why)."""
+
+
+@dataclass(frozen=True)
+class Position:
+    """Where a run stands: all it takes to go on. Plain data, so it can be copied and pickled."""
+
+    time: float
+    state: np.ndarray
+    segment: segments.Segment
+    step_hint: float | None = None  # the step size to try first (None: let the method choose)
+    outputs: np.ndarray | None = None  # model.output_vector here, if the stepper computed it
+    # per contact interval, the step size the compiled integrator starts it with (None: no
+    # interval entered yet; the scipy stepper goes without)
+    first_steps: np.ndarray | None = None
+
+
+def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: float = 0.0):
+    """Time 0: the rigid rotation at w0_pinion on the static deflection (MODEL.md section 6)."""
+    segment, state = segments.start(model, pinion_angle, motor_torque,
+                                    model.scene.parameters["w0_pinion"])
+    return Position(0.0, state, segment)
+
+
+@runtime_checkable
+class Stepper(Protocol):
+    """An integrator of the gear train, as the run loop (`simulate_with`) and the sweeps use it."""
+
+    model: GearTrainModel
+
+    def advance(self, position: Position, end: float, torques: tuple[float, float],
+                sample_times=(), on_sample: Callable[[float, dict], None] | None = None
+                ) -> Position:
+        """Integrate from `position` to exactly `end` with the torques held; for every t in
+        `sample_times` with position.time <= t < end, call on_sample(t, outputs) with the
+        outputs at t. The result depends only on the position passed in."""
+
+
+def output_times(stop_time: float, output_interval: float) -> np.ndarray:
+    """0, h, 2h, … up to stop_time inclusive (stop_time added if h does not divide it)."""
+    count = int(np.floor(stop_time / output_interval * (1 + 1e-12)))
+    times = np.arange(count + 1) * output_interval
+    if stop_time - times[-1] > 1e-9 * output_interval:
+        times = np.append(times, stop_time)
+    return times
+
+
+def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
+                  initial_pinion_angle=0.0, on_sample=None):
+    """Run a scene with a stepper (stepping.ScipyStepper, compiled_stepper.CompiledStepper:
+    anything that is a `Stepper`), sampling the outputs every output_interval; returns
+    {"time": …, output name: …}. `on_sample(t, outputs)`, if given, is called after each sample
+    is stored (the benchmarks watch their budget through it; an exception it raises ends the
+    run). A bad span or start raises ValueError before any work (arguments.check_run_times)."""
+    check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
+    stop_time = scene.experiment.stop_time if stop_time is None else stop_time
+    output_interval = scene.experiment.output_interval if output_interval is None \
+        else output_interval
+    model = stepper.model
+    times = output_times(stop_time, output_interval)
+    results = {name: np.empty(len(times)) for name in model.output_names}
+    index = {t: i for i, t in enumerate(times)}
+
+    def store(t, outputs):
+        for name, value in outputs.items():
+            results[name][index[t]] = value
+        if on_sample is not None:
+            on_sample(t, outputs)
+
+    position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
+    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
+    for start, end in zip([0.0] + changes, changes + [stop_time]):
+        position = stepper.advance(position, end, scene.inputs.at(start), times, store)
+    # the stop time itself, with the segment that holds from there on
+    store(times[-1], model.outputs(position.state, position.segment.contact_set,
+                                   position.segment.loaded))
+    return {"time": times, **results}

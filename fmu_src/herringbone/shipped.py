@@ -1,0 +1,74 @@
+"""The scenes and example FMU scripts that come with the package, and the one resolver that
+lets every command take a shipped scene's name where it takes a scene file.
+
+Installed from a wheel, they are package data: `scenes/` (the repository's `models/*.toml`) and
+`examples/` (the repository's `examples/`: the motor and fan FMU scripts and the
+parametric-resonance scene), put there by pyproject.toml. In a source checkout (an editable
+install, or `fmu_src` on the path) they are read where the repository keeps them.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+_CHECKOUT = PACKAGE.parents[1]  # fmu_src/herringbone -> the repository, in a source checkout
+
+
+def _folder(packaged: str, in_checkout: str) -> Path:
+    folder = PACKAGE / packaged
+    return folder if folder.is_dir() else _CHECKOUT / in_checkout
+
+
+def scenes_folder() -> Path:
+    """The shipped scenes (`models/` of the repository)."""
+    return _folder("scenes", "models")
+
+
+def examples_folder() -> Path:
+    """The example FMU scripts and scenes (`examples/` of the repository)."""
+    return _folder("examples", "examples")
+
+
+def scene_files() -> dict[str, Path]:
+    """Name -> file of every shipped scene: models/ first, then the examples' scenes."""
+    found = {}
+    for folder in (scenes_folder(), examples_folder()):
+        for path in sorted(folder.glob("*.toml")) if folder.is_dir() else []:
+            found.setdefault(path.stem, path)
+    return found
+
+
+def is_scene_name(scene) -> bool:
+    """Whether `scene` (a str or Path) is written as a bare name: no folder, no suffix."""
+    text = str(scene)
+    return bool(text) and Path(text).name == text and not Path(text).suffix
+
+
+def resolve_scene(scene) -> Path:
+    """The scene file `scene` means: an existing file as it is; else, if written as a bare name
+    ("reference"), the shipped scene of that name; else the path as given (whose loading then
+    says that there is no such file)."""
+    path = Path(scene)
+    if not path.is_file() and is_scene_name(scene):
+        return scene_files().get(str(scene), path)
+    return path
+
+
+def headline(path: Path) -> str:
+    """The first line of a scene file's header comment ('' if it has none)."""
+    try:
+        with open(path, encoding="utf-8") as file:
+            for line in file:
+                line = line.strip()
+                if line:
+                    return line.lstrip("#").strip() if line.startswith("#") else ""
+    except (OSError, UnicodeDecodeError):
+        pass
+    return ""
+
+
+def scene_list() -> list[str]:
+    """`herringbone scenes`: one line per shipped scene, its name and its header's first line."""
+    files = scene_files()
+    width = max(map(len, files), default=0)
+    return [f"{name:<{width}}  {headline(path)}" for name, path in files.items()]

@@ -1,0 +1,158 @@
+"""The package's layout (issue 17) and the installed package as the product (issue 14): the
+stepping contract both integrators keep, no import cycles, an FMU runtime guard that imports
+nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`. The install
+itself (non-editable, commands run from a temporary folder) is .ci/installed_package's."""
+import ast
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import herringbone
+from conftest import MODELS
+from herringbone import cli, shipped
+from herringbone.integrate.compiled_stepper import CompiledStepper
+from herringbone.integrate.contract import Stepper
+from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model.assembly import GearTrainModel
+
+ROOT = MODELS.parent
+PACKAGE = Path(herringbone.__file__).resolve().parent
+
+
+def test_both_steppers_satisfy_the_stepping_contract(reference_scene):
+    model = GearTrainModel(reference_scene)
+    for stepper in (ScipyStepper(model, 1e-10), CompiledStepper(model, 1e-7)):
+        assert isinstance(stepper, Stepper)
+
+
+def module_imports(path: Path, package: str) -> set[str]:
+    """The herringbone modules a module imports at its top level (not inside functions)."""
+    found = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, ast.ImportFrom):
+            base = package.split(".")[:len(package.split(".")) - node.level + 1] \
+                if node.level else []
+            module = ".".join(base + ([node.module] if node.module else []))
+            found |= {module} | {f"{module}.{alias.name}" for alias in node.names}
+        elif isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names}
+    return found
+
+
+def test_no_module_level_import_cycles():
+    modules = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        package = ".".join(parts[:-1])
+        if parts[-1] == "__init__":
+            parts, package = parts[:-1], ".".join(parts[:-1])
+        modules[".".join(parts)] = (path, package)
+    graph = {}
+    for name, (path, package) in modules.items():
+        edges = set()
+        for imported in module_imports(path, package):
+            while imported:  # importing a.b.c runs a and a.b first
+                if imported in modules and imported != name:
+                    edges.add(imported)
+                imported = imported.rpartition(".")[0]
+        graph[name] = edges
+    done, on_path = set(), []
+
+    def visit(name):
+        if name in on_path:
+            raise AssertionError(f"import cycle: {' -> '.join(on_path[on_path.index(name):])}"
+                                 f" -> {name}")
+        if name in done:
+            return
+        on_path.append(name)
+        for imported in sorted(graph[name]):
+            visit(imported)
+        on_path.pop()
+        done.add(name)
+
+    for name in sorted(graph):
+        visit(name)
+
+
+def test_the_fmu_runtime_guard_imports_no_numpy():
+    """The slave imports herringbone.fmu.runtime before numpy, so that a missing dependency is
+    named: importing it (and the packages' __init__.py on the way) must not import numpy."""
+    program = ("import sys, herringbone.fmu.runtime\n"
+               "heavy = sorted(m for m in sys.modules if m.split('.')[0] in "
+               "('numpy', 'scipy', 'numba'))\n"
+               "assert not heavy, heavy")
+    run = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+
+
+def test_version_is_pyprojects():
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    assert herringbone.__version__ == pyproject["project"]["version"]
+
+
+def test_a_shipped_scenes_name_loads_it_from_any_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    scene = herringbone.load_scene("reference")
+    assert Path(scene.source).resolve() == (MODELS / "reference.toml").resolve()
+    assert scene.parameters == herringbone.load_scene(MODELS / "reference.toml").parameters
+    assert herringbone.load_scene("parametric_resonance").name == "parametric_resonance"
+
+
+def test_a_file_wins_over_a_shipped_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "reference").write_text('[parameters]\nstagger = 0.5\n', encoding="utf-8")
+    assert herringbone.load_scene("reference").parameters["stagger"] == 0.5
+
+
+def test_an_unknown_name_says_which_names_there_are(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(herringbone.SceneError) as error:
+        herringbone.load_scene("referense")
+    message = str(error.value)
+    assert "no such scene file" in message and "reference, " in message
+    assert "\n" not in message
+    with pytest.raises(herringbone.SceneError) as error:  # a path is not taken for a name
+        herringbone.load_scene(tmp_path / "absent.toml")
+    assert "shipped" not in str(error.value)
+
+
+def test_scenes_lists_every_shipped_scene_with_its_headers_first_line(capsys):
+    assert cli.main(["scenes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    files = sorted(MODELS.glob("*.toml")) + sorted((ROOT / "examples").glob("*.toml"))
+    assert [line.split()[0] for line in lines] == [path.stem for path in files]
+    for line, path in zip(lines, files):
+        first = path.read_text(encoding="utf-8").splitlines()[0].lstrip("#").strip()
+        assert line.split(None, 1)[1] == first
+
+
+def test_build_fmu_command_refuses_a_bad_scene_in_one_line(tmp_path, capsys):
+    assert cli.main(["build-fmu", "referense", "-o", str(tmp_path / "x.fmu")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("herringbone build-fmu: ") and err.count("\n") == 1
+    assert "no such scene file" in err
+    assert not (tmp_path / "x.fmu").exists()
+
+
+def test_build_fmu_command_builds_a_shipped_scene(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    from herringbone.fmu import builder
+
+    assert cli.main(["build-fmu", "torsional", "-o", "t.fmu"]) == 0
+    assert builder.validate(tmp_path / "t.fmu") == []
+    assert f"built {tmp_path / 't.fmu'}" in capsys.readouterr().out
+
+
+def test_the_wheel_ships_the_scenes_and_examples():
+    """pyproject.toml maps models/ and examples/ into the package as data."""
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    setuptools = pyproject["tool"]["setuptools"]
+    assert setuptools["package-dir"]["herringbone.scenes"] == "models"
+    assert setuptools["package-dir"]["herringbone.examples"] == "examples"
+    packages = {".".join(path.relative_to(PACKAGE.parent).parent.parts)
+                for path in PACKAGE.rglob("__init__.py")}
+    assert packages | {"herringbone.scenes", "herringbone.examples"} == set(setuptools["packages"])
+    assert shipped.scene_files()["reference"].resolve() == (MODELS / "reference.toml").resolve()
