@@ -518,8 +518,6 @@ def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, 
         event_values(system, points, count, length, state, approach, values_before)
         if system.contact_loss:
             approach_rates(system, points, count, state, rate, slopes_before)
-    if system.contact_loss:
-        approach_rates(system, points, count, state, rate, slopes_before)
 
         h = h_next
         if event == 0:
