@@ -281,6 +281,9 @@ def main(argv: list[str] | None = None) -> int:
                              "and the outputs in results/<scene>_fmu.csv")
     parser.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
+    parser.add_argument("--ssp", type=output_path, metavar="OUT.ssp",
+                        help="build the drive train (SCENE's gear, the example motor and fan) "
+                             "as an SSP archive into OUT.ssp instead (herringbone.ssp)")
     args = parser.parse_args(argv)
     results_problem = output_path_problem(Path("results") / "scene_fmu.csv")
     if args.simulate and results_problem is not None:
@@ -293,6 +296,10 @@ def main(argv: list[str] | None = None) -> int:
     from herringbone import SceneError
 
     try:
+        if args.ssp is not None:
+            from herringbone.ssp import build_ssp
+            print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
+            return 0
         print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
         if args.simulate:
             simulate(fmu=args.output, scene_path=args.scene)
