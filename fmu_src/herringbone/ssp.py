@@ -18,6 +18,7 @@ first (build_fmu.py's builders) and packs them.
 from __future__ import annotations
 
 import math
+import os
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -98,7 +99,8 @@ def write_ssp(fmus: dict[str, Path], output: Path, stop_time: float = STOP_TIME,
     to, the default parameter set (DEFAULT_PARAMETERS at the FMUs' start values); every name
     must be a Real parameter of that component's FMU.  The archive's entries are in name order
     with fixed timestamps: the same FMUs and values give the same bytes.  Returns `output`.
-    Raises ValueError naming a missing component, an unknown parameter or a bad experiment."""
+    Raises ValueError naming a missing component, an unknown parameter or a bad experiment;
+    RuntimeError if `output` cannot be written."""
     check_experiment(stop_time, step)
     missing = sorted(set(FMU_FILES) - set(fmus))
     if missing:
@@ -107,19 +109,33 @@ def write_ssp(fmus: dict[str, Path], output: Path, stop_time: float = STOP_TIME,
     variables = {name: _variables(Path(fmus[name])) for name in FMU_FILES}
     values = parameter_values(variables, parameters or {})
     ssd = system_structure(variables, values, stop_time, step)
+    entries = {"SystemStructure.ssd": ssd}
+    entries.update({f"resources/{FMU_FILES[name]}": Path(fmus[name]).read_bytes()
+                    for name in FMU_FILES})
     output = Path(output)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(output, "w") as archive:
-        entries = {"SystemStructure.ssd": ssd}
-        entries.update({f"resources/{FMU_FILES[name]}": Path(fmus[name]).read_bytes()
-                        for name in FMU_FILES})
-        for name in sorted(entries):
-            info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
-            info.external_attr = 0o644 << 16
-            # an FMU is a zip already: deflating it again gains nothing
-            kind = zipfile.ZIP_DEFLATED if name.endswith(".ssd") else zipfile.ZIP_STORED
-            archive.writestr(info, entries[name], compress_type=kind)
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        _write_zip(entries, output)
+    except OSError as error:
+        raise RuntimeError(f"cannot write {output}: {error}; give a file in a folder you can "
+                           "write in") from error
     return output
+
+
+def _write_zip(entries: dict[str, bytes], output: Path) -> None:
+    """Write the zip beside `output`, then rename it: a reader never sees half an archive."""
+    staging = output.with_name(f".{output.name}.partial")
+    try:
+        with zipfile.ZipFile(staging, "w") as archive:
+            for name in sorted(entries):
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                info.external_attr = 0o644 << 16
+                # an FMU is a zip already: deflating it again gains nothing
+                kind = zipfile.ZIP_DEFLATED if name.endswith(".ssd") else zipfile.ZIP_STORED
+                archive.writestr(info, entries[name], compress_type=kind)
+        os.replace(staging, output)
+    finally:
+        staging.unlink(missing_ok=True)
 
 
 def _variables(fmu: Path) -> dict:
