@@ -19,7 +19,6 @@ error) from taking pytest down.  The child imports this file for the host functi
 file itself must therefore never import herringbone.
 """
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -29,10 +28,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import extract, read_model_description
-from scipy.optimize import brentq
 
 TESTS_DIR = Path(__file__).resolve().parent
 SOURCE_PACKAGE = TESTS_DIR.parent / "fmu_src" / "herringbone"
+sys.path.insert(0, str(TESTS_DIR.parent / "examples"))
+from drivetrain_operating_point import operating_point  # noqa: E402  (scipy only)
 
 # Communication step.  The coupling is explicit (the gear integrates with the motor torque held
 # over a step), and near the operating point the Kloss curve acts on the motor inertia like a
@@ -92,39 +92,15 @@ def start_values(fmu_path):
             if v.start is not None and v.type in ("Real", "Integer")}
 
 
-def kloss_torque(w, M_breakdown, s_breakdown, w_sync):
-    """The motor's documented curve: M = 2·M_k·s·s_k/(s² + s_k²), s = (w_sync − w)/w_sync."""
-    s = (w_sync - w) / w_sync
-    return 2.0 * M_breakdown * s * s_breakdown / (s * s + s_breakdown ** 2)
-
-
-def fan_torque(w, k_fan):
-    """The fan's documented curve: M = k_fan·w·|w|."""
-    return k_fan * w * abs(w)
-
-
 def expected_operating_point(fmus):
-    """Where Kloss(w) = M_fan(w/u)/u on the motor's stable branch, with the FMUs' defaults."""
+    """Where Kloss(w) = M_fan(w/u)/u on the motor's stable branch, with the FMUs' defaults
+    (examples/drivetrain_operating_point.py)."""
     motor = start_values(fmus["motor"])
     fan = start_values(fmus["fan"])
     gear = start_values(fmus["reference"])
-    ratio = gear["z_wheel"] / gear["z_pinion"]
-
-    def motor_torque(w):
-        return kloss_torque(w, motor["M_breakdown"], motor["s_breakdown"], motor["w_sync"])
-
-    def load_torque(w_load):
-        return fan_torque(w_load, fan["k_fan"])
-
-    # Between breakdown slip and synchronous speed the motor torque falls from M_k to 0 while
-    # the reflected fan torque rises: one sign change, the stable intersection.
-    w_breakdown = motor["w_sync"] * (1.0 - motor["s_breakdown"])
-    w_motor = brentq(lambda w: motor_torque(w) - load_torque(w / ratio) / ratio,
-                     w_breakdown, motor["w_sync"], xtol=1e-12, rtol=1e-14)
-    return {"w_motor": w_motor, "w_load": w_motor / ratio, "M_motor": motor_torque(w_motor),
-            "M_load": load_torque(w_motor / ratio),
-            "mesh_period": 2.0 * math.pi / (gear["z_pinion"] * w_motor),
-            "w0_pinion": gear["w0_pinion"]}
+    point = operating_point(motor["M_breakdown"], motor["s_breakdown"], motor["w_sync"],
+                            fan["k_fan"], gear["z_pinion"], gear["z_wheel"])
+    return {**point, "w0_pinion": gear["w0_pinion"]}
 
 
 # --- the two hosts (run in a child interpreter, see the module docstring) ---------------------

@@ -294,6 +294,9 @@ def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
                              "and the outputs in results/<scene>_fmu.csv")
     parser.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
+    parser.add_argument("--ssp", type=output_path, metavar="OUT.ssp",
+                        help="build the drive train (SCENE's gear, the example motor and fan) "
+                             "as an SSP archive into OUT.ssp instead (herringbone.fmu.ssp)")
 
 
 def build_command(args, parser) -> int:
@@ -312,6 +315,10 @@ def build_command(args, parser) -> int:
             print(path)
         return 0
     try:
+        if args.ssp is not None:
+            from .ssp import build_ssp
+            print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
+            return 0
         print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
         if args.simulate:
             simulate(fmu=args.output, scene_path=args.scene)

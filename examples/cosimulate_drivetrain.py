@@ -1,0 +1,162 @@
+"""Co-simulate the drive train of `drivetrain.ssp` with libcosim and print its operating point.
+
+    python examples/cosimulate_drivetrain.py [SSP] [--stop-time T] [--step H]
+
+Without SSP it first builds `dist/drivetrain.ssp` from `--scene` (`python build_fmu.py --ssp`).
+libcosim (libcosimpy) loads the whole system, connections and parameter set included, in one
+call (`CosimExecution.from_ssp_file`) and runs it at the SSD's fixed step (or `--step`) to its
+stop time (or `--stop-time`), logging warnings and errors only.  The speeds and torques are
+observed by name (value references from libcosim's variable list), averaged over the last
+whole mesh periods, and printed beside the intersection of the motor's Kloss curve and the
+fan curve through the gear ratio, computed from the parameters the SSP sets (the FMUs' start
+values where it sets none).  Exit code 0; 1 if the co-simulation stopped early; 2 for an SSP
+that cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
+(`pip install -e ".[test]"` in the repository).
+"""
+import argparse
+import io
+import math
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+from drivetrain_operating_point import operating_point
+
+ROOT = Path(__file__).resolve().parent.parent
+SIGNALS = {"w_motor": ("gear", "rad/s"), "w_load": ("gear", "rad/s"),
+           "M_motor": ("motor", "N.m"), "M_load": ("fan", "N.m")}
+WINDOW_MESH_PERIODS = 5  # the mesh ripples the speeds at z_pinion·w/2π: average it out
+NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+      "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+      "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
+
+
+def read_ssp(path):
+    """The SSD's experiment (stop time, base step) and each component's parameters: the FMU's
+    numeric start values, overridden by the SSD's inline parameter set."""
+    with zipfile.ZipFile(path) as archive:
+        root = ET.fromstring(archive.read("SystemStructure.ssd"))
+        parameters = {}
+        for component in root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS):
+            values = start_values(archive.read(component.get("source")))
+            for parameter in component.iterfind(".//ssv:Parameter", NS):
+                values[parameter.get("name")] = float(parameter.find("ssv:Real", NS).get("value"))
+            parameters[component.get("name")] = values
+    experiment = root.find("ssd:DefaultExperiment", NS)
+    step = experiment.find(".//osp:FixedStepAlgorithm", NS)
+    return {"stop_time": float(experiment.get("stopTime")),
+            "step": float(step.get("baseStepSize")) if step is not None else None,
+            "parameters": parameters}
+
+
+def start_values(fmu_bytes):
+    """An FMU's numeric start values by name."""
+    from fmpy import read_model_description
+
+    description = read_model_description(io.BytesIO(fmu_bytes))
+    return {v.name: float(v.start) for v in description.modelVariables
+            if v.start is not None and v.type in ("Real", "Integer")}
+
+
+def cosimulate(ssp, stop_time, step):
+    """Run the SSP in libcosim; every signal after every step, by name, and the wall time."""
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    log_output_level(CosimLogLevel.WARNING)  # libcosim's default prints every FMU message
+    step_ns, steps = round(step * 1e9), round(stop_time / step)  # libcosim counts integer ns
+    started = time.perf_counter()
+    try:
+        execution = CosimExecution.from_ssp_file(str(ssp), step_size=step_ns)
+    except AssertionError:  # libcosimpy's answer to a NULL execution; libcosim logged why
+        print(f"{ssp}: libcosim could not load it (see its message above)", file=sys.stderr)
+        sys.exit(2)
+    index = {info.name.decode(): info.index for info in execution.slave_infos()}
+    refs = {name: {v.name.decode(): v.reference for v in execution.slave_variables(i)}
+            for name, i in index.items()}
+    series = CosimObserver.create_time_series(buffer_size=steps + 10)
+    execution.add_observer(observer=series)
+    for signal, (component, _) in SIGNALS.items():
+        series.start_time_series(index[component], refs[component][signal], CosimVariableType.REAL)
+    completed = execution.simulate_until(target_time=steps * step_ns)
+    samples = {}
+    for signal, (component, _) in SIGNALS.items():
+        # step 0 is the initial sample: from step 1, one sample after every step
+        _, _, values = series.time_series_real_samples(index[component], refs[component][signal],
+                                                       from_step=1, sample_count=steps)
+        samples[signal] = list(values)
+    return completed, execution.status().current_time / 1e9, samples, time.perf_counter() - started
+
+
+def window_means(samples, size):
+    """Means of each signal over the last `size` samples and over the `size` before them."""
+    last = {s: sum(v[-size:]) / size for s, v in samples.items()}
+    before = {s: sum(v[-2 * size:-size]) / size for s, v in samples.items()}
+    return last, before
+
+
+def report(ssp, experiment, expected, completed, end_time, samples, wall, step):
+    """Print the run and the operating point table; returns the exit code."""
+    print(f"{ssp}: libcosim, {end_time:g} s simulated at {step:g} s steps in {wall:.1f} s"
+          + ("" if completed else f" -- STOPPED EARLY (asked for {experiment['stop_time']:g} s)"))
+    mesh_period = 2 * math.pi / (experiment["parameters"]["gear"]["z_pinion"]
+                                 * samples["w_motor"][-1])
+    size = round(WINDOW_MESH_PERIODS * mesh_period / step)
+    if len(samples["w_motor"]) < 2 * size:
+        print(f"too few samples for two windows of {size}: give a longer --stop-time")
+        return 1
+    last, before = window_means(samples, size)
+    print(f"operating point: means over the last {WINDOW_MESH_PERIODS} mesh periods "
+          f"({size} steps) and the {WINDOW_MESH_PERIODS} before them; analytic: Kloss curve "
+          f"= fan curve through the gear ratio {expected['ratio']:g}")
+    print(f"{'signal':8} {'unit':6} {'last window':>14} {'window before':>14} {'analytic':>14} "
+          f"{'rel. diff':>10}")
+    for signal, (_, unit) in SIGNALS.items():
+        print(f"{signal:8} {unit:6} {last[signal]:14.6f} {before[signal]:14.6f} "
+              f"{expected[signal]:14.6f} {last[signal] / expected[signal] - 1:+10.2e}")
+    return 0 if completed else 1
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("ssp", nargs="?", type=Path,
+                        help="the .ssp to run (default: build dist/drivetrain.ssp first)")
+    parser.add_argument("--scene", type=Path, default=ROOT / "models" / "reference.toml",
+                        help="scene of the gear FMU when building (default models/reference.toml)")
+    parser.add_argument("--stop-time", type=float, help="s (default: the SSD's stopTime)")
+    parser.add_argument("--step", type=float, help="s (default: the SSD's baseStepSize)")
+    args = parser.parse_args(argv)
+    for name in ("stop_time", "step"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            parser.error(f"--{name.replace('_', '-')} {value}: allowed: finite and > 0")
+    ssp = args.ssp
+    if ssp is None:
+        ssp = ROOT / "dist" / "drivetrain.ssp"
+        subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--ssp", str(ssp),
+                        str(args.scene)], check=True)
+    try:
+        experiment = read_ssp(ssp)
+    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as error:
+        parser.exit(2, f"{parser.prog}: {ssp} is no readable drive-train SSP: {error}\n")
+    step = args.step or experiment["step"]
+    stop_time = args.stop_time or experiment["stop_time"]
+    if step is None or step > stop_time:
+        parser.error(f"step {step} s, stop time {stop_time} s: allowed: 0 < step <= stop time "
+                     "(give --step where the SSD has no fixed-step annotation)")
+    p = experiment["parameters"]
+    expected = operating_point(p["motor"]["M_breakdown"], p["motor"]["s_breakdown"],
+                               p["motor"]["w_sync"], p["fan"]["k_fan"], p["gear"]["z_pinion"],
+                               p["gear"]["z_wheel"])
+    completed, end_time, samples, wall = cosimulate(ssp, stop_time, step)
+    return report(ssp, {**experiment, "stop_time": stop_time}, expected, completed, end_time,
+                  samples, wall, step)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
