@@ -5,6 +5,7 @@ which `herringbone build-fmu` runs too (the same function, the same arguments).
                                                             shipped scene's name; default
                                                             reference -> dist/HerringboneGear.fmu)
     python build_fmu.py --examples DIR                      the drive-train example FMUs
+    python build_fmu.py [SCENE] --fmi 3                     the FMI 3.0 FMU instead (pythonfmu3)
 
 Importable as before: `build_gear_fmu`, `build_example_fmus`, `build_slave_fmu`,
 `fix_model_description`, `validate`, `carry_compiled_integrator`.

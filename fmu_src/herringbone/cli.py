@@ -79,8 +79,9 @@ def _parser():
                                 "(default 50 3000 300)")
     stability.add_argument("-o", "--output", type=output_path,
                            help="PNG to write (default: results/<scene>_stability.png)")
-    build = subparsers.add_parser("build-fmu", help="build the FMI 2.0 co-simulation FMU of a "
-                                  "scene (or --examples DIR: the motor and fan FMUs)")
+    build = subparsers.add_parser("build-fmu", help="build the FMI 2.0 (--fmi 3: 3.0) "
+                                  "co-simulation FMU of a scene (or --examples DIR: the motor "
+                                  "and fan FMUs)")
     from .fmu.builder import add_arguments
     add_arguments(build)
     subparsers.add_parser("scenes", help="list the shipped scenes: name and what each tests")

@@ -3,11 +3,14 @@
 Generic part (importable): `build_slave_fmu`, `fix_model_description`, `validate`,
 `build_example_fmus`.  CLI (`main`): `herringbone build-fmu [SCENE] [-o OUT.fmu]` (or `python
 build_fmu.py` in a checkout) builds the gear FMU of a scene, a file or a shipped scene's name;
-`--examples DIR` builds the drive-train examples into DIR.
+`--examples DIR` builds the drive-train examples into DIR; `--fmi 3` builds the FMI 3.0 FMU
+of the scene (pythonfmu3) instead of the FMI 2.0 one (pythonfmu).
 
 pythonfmu builds an FMU from a script, whose module name must be unique in a host process (two
 FMUs whose scripts share a name clash in sys.modules): the slave's source is
-herringbone/fmu/slave.py, and the builder hands pythonfmu a copy named `GEAR_SLAVE_MODULE`.
+herringbone/fmu/slave.py (FMI 2.0) or slave3.py (FMI 3.0), both thin adapters over
+herringbone/fmu/core.py, and the builder hands pythonfmu(3) a copy named `GEAR_SLAVE_MODULE`
+(FMI 2.0) or `GEAR_SLAVE3_MODULE` (FMI 3.0).
 """
 from __future__ import annotations
 
@@ -26,6 +29,9 @@ from .. import shipped
 GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone, carried by the gear FMU
 GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
 GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see above)
+GEAR_SLAVE3 = GEAR_PACKAGE / "fmu" / "slave3.py"
+GEAR_SLAVE3_MODULE = "herringbone_gear_fmu3"  # not the FMI 2.0 one's: both may share a process
+FMI_VERSIONS = (2, 3)
 # shipped with every FMU as the module `fmi_units` (the examples import it so): see its docstring
 UNITS_MODULE = GEAR_PACKAGE / "fmu" / "units.py"
 UNITS_MODULE_NAME = "fmi_units"
@@ -49,8 +55,9 @@ _AFTER_UNIT_DEFINITIONS = ("TypeDefinitions", "LogCategories", "DefaultExperimen
 
 def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
                     handle_state: bool = True, serialize_state: bool = False,
-                    no_feedthrough: bool = False) -> Path:
-    """Build `slave_script` (one pythonfmu Fmi2Slave class) into the FMU file `output`.
+                    no_feedthrough: bool = False, fmi_version: int = 2) -> Path:
+    """Build `slave_script` (one pythonfmu Fmi2Slave class, or for `fmi_version` 3 one
+    pythonfmu3 Fmi3Slave class) into the FMU file `output`.
 
     `project_files` (files or package directories, copied recursively) land in the FMU's
     `resources/`, which the FMU puts on `sys.path` at run time.  `serialize_state` declares
@@ -59,19 +66,22 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     put on the build's PYTHONPATH, since the builder imports the script to write the model
     description.  The model description is then fixed by `fix_model_description`.  `output` (its
     parent directories are created) is replaced only once the FMU is complete and valid.
-    Needs pythonfmu and fmpy importable by `sys.executable`.  Returns `output`.  Raises
+    Needs pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns `output`.  Raises
     RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
     """
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
     with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
-        units = Path(tmp) / "units" / f"{UNITS_MODULE_NAME}.py"
-        units.parent.mkdir()
-        shutil.copyfile(UNITS_MODULE, units)
-        project_files = [Path(p).resolve() for p in project_files] + [units]
+        project_files = [Path(p).resolve() for p in project_files]
+        if fmi_version == 2:  # fmi_units declares pythonfmu variables
+            units = Path(tmp) / "units" / f"{UNITS_MODULE_NAME}.py"
+            units.parent.mkdir()
+            shutil.copyfile(UNITS_MODULE, units)
+            project_files.append(units)
         # A separate interpreter: pythonfmu's builder imports the script and leaves it in
         # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
         # then run that source copy instead of the packaged one.
-        command = [sys.executable, "-m", "pythonfmu", "build", "-f", str(slave_script),
+        builder = {2: "pythonfmu", 3: "pythonfmu3"}[fmi_version]
+        command = [sys.executable, "-m", builder, "build", "-f", str(slave_script),
                    "-d", tmp, *map(str, project_files)]
         if handle_state:
             command.append("--handle-state")
@@ -84,7 +94,7 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
         run = subprocess.run(command, env=env, capture_output=True, text=True)
         built = sorted(Path(tmp).glob("*.fmu"))
         if run.returncode != 0 or len(built) != 1:
-            raise RuntimeError(f"pythonfmu build of {slave_script} failed:\n{run.stderr}")
+            raise RuntimeError(f"{builder} build of {slave_script} failed:\n{run.stderr}")
         fix_model_description(fmu_path=built[0], no_feedthrough=no_feedthrough)
         problems = validate(fmu_path=built[0])
         if problems:
@@ -98,7 +108,8 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     """Rewrite the modelDescription.xml inside the FMU zip `fmu_path` in place.
 
     pythonfmu 0.7.0 writes no `<InitialUnknowns>`, cannot declare units, and stamps every
-    build with a new GUID and the time.  This regenerates `<ModelStructure>` (Outputs and
+    build with a new GUID and the time. For an FMI 3.0 FMU (pythonfmu3) see
+    `_fix_fmi3_description`.  This regenerates `<ModelStructure>` (Outputs and
     InitialUnknowns, 1-based indices into ModelVariables, per FMI 2.0 section 3.4.8; an output
     depends on no input directly: in co-simulation the outputs at a communication point follow
     from the state, so `dependencies=""`), adds a `<UnitDefinitions>` entry for every
@@ -111,14 +122,21 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     with zipfile.ZipFile(fmu_path) as zf:
         entries = {info: zf.read(info) for info in zf.infolist()}
     root = ET.fromstring(entries[next(i for i in entries if i.filename == "modelDescription.xml")])
-    _rebuild_model_structure(root, no_feedthrough)
+    token = "guid"
+    if root.get("fmiVersion", "").startswith("3"):
+        _fix_fmi3_description(root, no_feedthrough)
+        token = "instantiationToken"
+    else:
+        _rebuild_model_structure(root, no_feedthrough)
     _add_unit_definitions(root)
     root.attrib.pop("generationDateAndTime", None)
-    root.set("guid", "")
+    root.set(token, "")
+    for element in root.iter():  # pythonfmu3 pretty-prints: start from bare elements
+        element.text = element.tail = None
     ET.indent(root, space="  ")
     contents = {info.filename: data for info, data in entries.items()}
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    root.set("guid", "{%s}" % _content_guid(contents))
+    root.set(token, "{%s}" % _content_guid(contents))
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
     def write(staging: Path) -> None:
@@ -183,9 +201,24 @@ def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:
                 ET.SubElement(node, "Unknown", index=str(index), **extra)
 
 
+def _fix_fmi3_description(root: ET.Element, no_feedthrough: bool) -> None:
+    """What pythonfmu3 0.3.4 leaves out of an FMI 3.0 model description or gets wrong: the
+    outputs' dependencies (`no_feedthrough`: none, `dependencies=""`, as for FMI 2.0), and the
+    co-simulation capabilities it writes from a stray loop variable
+    (canHandleVariableCommunicationStepSize: the slave takes any step). Units: see
+    `_add_unit_definitions`; the instantiation token: `fix_model_description`."""
+    cosimulation = root.find("CoSimulation")
+    if cosimulation is not None:
+        cosimulation.set("canHandleVariableCommunicationStepSize", "true")
+    structure = root.find("ModelStructure")
+    if no_feedthrough and structure is not None:
+        for output in structure.findall("Output"):
+            output.set("dependencies", "")
+
+
 def _add_unit_definitions(root: ET.Element) -> None:
     used: dict[str, set[str]] = {}
-    for real in root.iter("Real"):
+    for real in [*root.iter("Real"), *root.iter("Float64")]:  # FMI 2.0, FMI 3.0
         if real.get("unit"):
             used.setdefault(real.get("unit"), set())
             if real.get("displayUnit"):
@@ -232,10 +265,12 @@ def build_example_fmus(output_dir: Path) -> list[Path]:
                                      ("fan_load.py", "FanLoad.fmu"))]
 
 
-def build_gear_fmu(scene: Path, output: Path) -> Path:
+def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
     """Build the gear-train FMU of a scene file (or a shipped scene's name): the slave, the
     herringbone package and the scene (as resources/scene.toml) go into it; its variables are
-    exactly the scene's."""
+    exactly the scene's. `fmi_version`: 2 (FMI 2.0, pythonfmu) or 3 (FMI 3.0, pythonfmu3)."""
+    if fmi_version not in FMI_VERSIONS:
+        raise ValueError(f"fmi_version {fmi_version!r}; allowed: 2 or 3")
     from ..model.scene import load_scene
 
     load_scene(scene)  # a bad scene is reported here, in the scene's own words
@@ -244,13 +279,15 @@ def build_gear_fmu(scene: Path, output: Path) -> Path:
         scene_copy = Path(tmp) / "scene.toml"
         shutil.copyfile(scene, scene_copy)
         carried = carry_compiled_integrator(scene, Path(tmp))
-        slave = Path(tmp) / "slave" / f"{GEAR_SLAVE_MODULE}.py"
+        source, module = ((GEAR_SLAVE, GEAR_SLAVE_MODULE) if fmi_version == 2
+                          else (GEAR_SLAVE3, GEAR_SLAVE3_MODULE))
+        slave = Path(tmp) / "slave" / f"{module}.py"
         slave.parent.mkdir()
-        shutil.copyfile(GEAR_SLAVE, slave)
+        shutil.copyfile(source, slave)
         return build_slave_fmu(slave_script=slave,
                                project_files=[GEAR_PACKAGE, scene_copy, carried],
                                output=output, handle_state=True, serialize_state=True,
-                               no_feedthrough=True)
+                               no_feedthrough=True, fmi_version=fmi_version)
 
 
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
@@ -292,6 +329,9 @@ def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
     parser.add_argument("--simulate", action="store_true",
                         help="then simulate the scene through the FMU with fmpy: a summary, "
                              "and the outputs in results/<scene>_fmu.csv")
+    parser.add_argument("--fmi", type=int, choices=FMI_VERSIONS, default=2,
+                        help="FMI version of the FMU: 2 (FMI 2.0, pythonfmu; the default) or 3 "
+                             "(FMI 3.0, pythonfmu3)")
     parser.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into DIR instead")
     parser.add_argument("--ssp", type=output_path, metavar="OUT.ssp",
@@ -319,7 +359,8 @@ def build_command(args, parser) -> int:
             from .ssp import build_ssp
             print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
             return 0
-        print(f"built {build_gear_fmu(scene=args.scene, output=args.output)}")
+        built = build_gear_fmu(scene=args.scene, output=args.output, fmi_version=args.fmi)
+        print(f"built {built}")
         if args.simulate:
             simulate(fmu=args.output, scene_path=args.scene)
     except (SceneError, RuntimeError) as error:

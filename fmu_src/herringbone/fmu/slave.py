@@ -1,9 +1,5 @@
-"""The gear train as an FMI 2.0 co-simulation slave: a thin adapter over herringbone's model.
-
-The FMU carries its scene (resources/scene.toml) and declares exactly that scene's variables:
-its parameters (start values from the scene), the two input torques, the outputs of MODEL.md
-section 7, and the solver's settings. doStep advances the same model that reference_simulate
-uses, stopping at every contact switch.
+"""The gear train as an FMI 2.0 co-simulation slave: pythonfmu's Fmi2Slave over the
+version-independent core (fmu/core.py), which holds the slave's logic and its variables' table.
 
 How errors reach the host (README "Errors in each host"): pythonfmu 0.7 can answer a call
 only with fmi2OK, fmi2Discard (do_step returning False) or fmi2Fatal (any Python exception,
@@ -11,454 +7,94 @@ which also destroys the instance), and passes log messages on only when the host
 logging. So a problem is logged once at error status; where the host did not enable logging it
 is also written to the process's stderr and the call that meets it raises (fmi2Fatal: fmpy
 raises FMICallException). Where the host logs (libcosim always does, and a Fatal aborts it)
-nothing raises: doStep answers fmi2Discard while the problem lasts. A problem of the inputs (a
-non-finite torque, a doStep from the wrong time) lasts until they are valid again; one of the
-parameters, a solver failure or a runaway lasts for the instance (or until fmi2SetFMUstate).
-A call that cannot be honoured but harms nothing (setting an output, or a fixed parameter
-after initialization; reading a variable through the wrong type) is refused with a message and
-answered fmi2OK: pythonfmu has no fmi2Error to give.
+nothing raises: doStep answers fmi2Discard while the problem lasts. A call that cannot be
+honoured but harms nothing (setting an output, or a fixed parameter after initialization;
+reading a variable through the wrong type) is refused with a message and answered fmi2OK:
+pythonfmu has no fmi2Error to give.
 """
 import ctypes
-import dataclasses
-import json
-import math
-import sys
-from pathlib import Path
 
-# first: a missing dependency is named before anything imports it (herringbone/__init__.py
-# and herringbone/fmu/__init__.py import nothing)
-from herringbone.fmu import runtime as fmu_runtime
-
-fmu_runtime.check_dependencies()
-import numpy as np  # noqa: E402
+# first: the core checks the dependencies before anything imports numpy
+from herringbone.fmu.core import DESCRIPTION, GearCore
+from herringbone.fmu.core import (SOLVER_SETTINGS, STEP_BUDGET_FLOOR,  # noqa: F401
+                                  STEP_BUDGET_PER_MODE, STATE_FORMAT)
 
 import pythonfmu
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
-                       Integer, Real, String)
+                       String)
 from pythonfmu.enums import Fmi2Status
 
-import herringbone
 from herringbone.fmu.units import BoundedInteger, RealWithUnit
-from herringbone.integrate import first_start
-from herringbone.model.assembly import GearTrainModel, output_names
-from herringbone.model.parameters import INPUTS, OUTPUTS, Parameter, check_value, parameters_of
-from herringbone.integrate.compiled_stepper import (DEFAULT_TOLERANCE, METHODS, STIFFNESS_RATIO,
-                                                    CompiledStepper, StepBudgetExceeded, warm_up)
-from herringbone.model.parameters import Range
-from herringbone.integrate.segments import Segment
-from herringbone.integrate.contract import Position, start_position
-
-SCENE_FILE = "scene.toml"
-TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise
-LOOSEST_TOLERANCE = 1e-2
-# Runaway guard: a doStep of h may take STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max
-# internal steps (|λ|max the fastest eigenvalue). Measured on the shipped scenes at the default
-# tolerance: at most 2·h·|λ|max + 10 (from_rest), so the bound leaves 50 times that, and a
-# tolerance of 1e-12 (about 4.5 times the steps of 1e-7 for an order-8 method) fits. A stalled
-# step stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
-STEP_BUDGET_FLOOR = 10_000
-STEP_BUDGET_PER_MODE = 100
-STATE_FORMAT = "herringbone-fmu-state-1"  # the serialized FMU state's layout (_get_fmu_state)
-
-# The solver's settings, declared next to their meaning like the model's parameters.
-SOLVER_SETTINGS = {
-    "solver_tolerance": Parameter(
-        "solver_tolerance", DEFAULT_TOLERANCE, "1", "error allowed per internal step, "
-        "relative to the static mesh force (tighter: more accurate, slower); left at its start "
-        "value, a tolerance given by fmi2SetupExperiment takes its place",
-        allowed=Range(TIGHTEST_TOLERANCE, LOOSEST_TOLERANCE)),
-    "max_step": Parameter(
-        "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)",
-        allowed=Range(0.0, None)),
-    "solver_method": Parameter(
-        "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
-        "'radau' (implicit, L-stable, order 5, for stiff scenes) or 'auto' (radau when the "
-        f"fastest eigenvalue is over {STIFFNESS_RATIO:g} times the fastest oscillation: "
-        "overdamped stiffness)", kind=str),
-}
 
 
-class HerringboneGear(Fmi2Slave):
-    description = "Herringbone Novikov gear train: motor, pinion, wheel and load (MODEL.md)"
+class HerringboneGear(GearCore, Fmi2Slave):
+    description = DESCRIPTION
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.logger_address = kwargs.get("logger")  # pythonfmu's C++ PyLogger (see host_logs)
-        fmu_runtime.finalize_python_first(self.resources)  # C hosts: no crash at exit
-        first_start.prepare(self, kwargs.get("logger"))  # before anything is compiled
-        self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
+        self._setup(kwargs.get("logger"))
         experiment = self.scene.experiment
         type(self).default_experiment = DefaultExperiment(
             start_time=0.0, stop_time=experiment.stop_time,
             step_size=experiment.output_interval)
-        self.values = dict(self.scene.parameters)
-        self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})
-        motor_torque, load_torque = self.scene.inputs.at(0.0)
-        self.values.update(M_motor=motor_torque, M_load=load_torque)
-        self.start_values = dict(self.values)
-        self.start_time, self.experiment_tolerance = 0.0, None  # from fmi2SetupExperiment
-        self.initialized = False  # exitInitializationMode passed: fixed parameters are fixed
-        # model.output_vector at the current position (zeros until a valid start): the
-        # outputs' getters read it where the scene's layout puts them
-        scene_model = GearTrainModel(self.scene)
-        layout = dict(scene_model.output_layout)
-        self.output_values = np.zeros(scene_model.output_layout_size)
-        self.problem = None  # what stops the run for good (parameters, solver), logged once
-        self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
-        self.run = None  # integrator.Run, advanced in place by every doStep
-        self.stepper = None
-        self.stepper_values = None  # the values self.stepper was built from
-        self.real_output_entries = {}  # value reference -> entry of output_values (get_real)
 
-        for name, parameter in {**parameters_of(self.scene.components),
-                                **SOLVER_SETTINGS}.items():
-            self._declare(name, parameter, Fmi2Causality.parameter, Fmi2Variability.fixed)
-        for name, parameter in INPUTS.items():
-            self._declare(name, parameter, Fmi2Causality.input, Fmi2Variability.continuous)
-        for name in output_names(self.scene):
-            self._declare_output(name, layout[name])
-        self.register_variable(Integer(
-            "internal_steps", description="internal steps the integrator has taken since "
-            "initialization (a diagnostic of its cost)", causality=Fmi2Causality.local,
-            variability=Fmi2Variability.discrete,
-            getter=lambda: self.stepper.accepted_steps if self.stepper else 0))
-        self._start()  # outputs at t = 0 for the scene's own values
-
-    def _declare(self, name, parameter, causality, variability):
-        """A parameter or input: its range as min/max (an open bound as the closed one; the
-        slave checks the open one), its setter through _set."""
-        kind = {bool: Boolean, int: BoundedInteger, str: String}.get(parameter.kind)
-        arguments = dict(description=f"{parameter.description} [{parameter.unit}]"
-                         if kind else parameter.description, causality=causality,
-                         variability=variability, getter=lambda: self.values[name],
-                         setter=lambda value: self._set(name, value))
-        if parameter.kind in (int, float):
-            arguments.update(min=parameter.allowed.low, max=parameter.allowed.high)
-        self.register_variable(kind(name, **arguments) if kind else
-                               RealWithUnit(name, unit=parameter.unit, **arguments))
-
-    def _declare_output(self, name, entry):
-        output = OUTPUTS[name]
-        if output.kind is int:
-            self.register_variable(Integer(
-                name, description=output.description, causality=Fmi2Causality.output,
-                variability=Fmi2Variability.discrete,
-                getter=lambda: self._whole(self.output_values.item(entry))))
+    def _register(self, declaration):
+        arguments = dict(description=declaration.description,
+                         causality=Fmi2Causality[declaration.causality],
+                         variability=Fmi2Variability[declaration.variability],
+                         getter=declaration.getter, setter=declaration.setter)
+        if declaration.kind in ("real", "integer"):
+            arguments.update(min=declaration.low, max=declaration.high)
+        if declaration.kind == "real":
+            variable = RealWithUnit(declaration.name, unit=declaration.unit, **arguments)
         else:
-            variable = RealWithUnit(name, unit=output.unit, description=output.description,
-                                    causality=Fmi2Causality.output,
-                                    variability=Fmi2Variability.continuous,
-                                    getter=lambda: self.output_values.item(entry))
-            self.register_variable(variable)
-            self.real_output_entries[variable.value_reference] = entry
+            kind = {"integer": BoundedInteger, "boolean": Boolean, "string": String}
+            variable = kind[declaration.kind](declaration.name, **arguments)
+        self.register_variable(variable)
+        return variable.value_reference
 
-    @staticmethod
-    def _whole(value):
-        return int(value) if math.isfinite(value) else 0  # NaN: no valid start (see _fail)
+    def _log(self, text, status):
+        self.log(text, Fmi2Status(status))
 
     # --- FMI callbacks -----------------------------------------------------------------------
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        """The run starts at start_time (the model's time origin: the train at t0 is where the
-        scene puts it at 0). A tolerance takes the place of solver_tolerance unless the host
-        set solver_tolerance to something other than its start value."""
-        self.start_time = float(start_time)
-        self.experiment_tolerance = tolerance
-        if self.run is not None and not self.initialized:
-            self.run.clock[0] = self.start_time  # outputs before initialization: same place
+        self._set_experiment(start_time, tolerance)
 
     def exit_initialization_mode(self):
-        self._apply_experiment_tolerance()
-        self.initialized = True
-        self._start()
+        self._exit_initialization()
         self._raise_if_unheard()
 
     def do_step(self, current_time, step_size):
-        if self.problem is None:
-            self.input_problem = self._input_problem(current_time, step_size)
-            if self.input_problem is None:
-                self._advance(current_time, step_size)
-        if self.problem is not None or self.input_problem is not None:
+        if self._step(current_time, step_size) is not None:
             self._raise_if_unheard()
             return False
         return True
 
-    def _input_problem(self, current_time, step_size):
-        """What is wrong with the inputs of this doStep (reported once while it lasts)."""
-        problem = None
-        for name in INPUTS:
-            if not math.isfinite(self.values[name]):
-                problem = f"input {name} is {self.values[name]}; allowed: any finite number"
-        # masters add up their times in their own way: forgive rounding, not a skipped step
-        drift = abs(current_time - self.run.time)
-        if problem is None and drift > 1e-6 * step_size + 1e-12 * abs(current_time):
-            problem = (f"doStep from t = {current_time!r} s, but the FMU is at "
-                       f"t = {self.run.time!r} s (roll back with fmi2SetFMUstate)")
-        if problem is not None and problem != self.input_problem:
-            self._report(problem)
-        return problem
-
-    def _advance(self, current_time, step_size):
-        torques = (self.values["M_motor"], self.values["M_load"])
-        budget = STEP_BUDGET_FLOOR + int(STEP_BUDGET_PER_MODE * step_size
-                                         * self.stepper.fastest_rate)
-        try:
-            self.stepper.run_to(self.run, current_time + step_size, torques, max_steps=budget)
-        except StepBudgetExceeded:
-            self._fail(self._runaway_message(current_time, step_size, budget))
-        except Exception as error:  # never let an exception reach the host unasked
-            self._fail(f"doStep from t = {current_time:g} s by {step_size:g} s "
-                       f"failed: {error}")
-
-    def _runaway_message(self, current_time, step_size, budget):
-        speed = self.stepper.model.named_outputs(self.run.outputs)["w_pinion"]
-        return (f"doStep from t = {current_time:g} s by {step_size:g} s failed: it took over "
-                f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
-                f"{STEP_BUDGET_PER_MODE}·h·|λ|max, |λ|max = {self.stepper.fastest_rate:.3g} "
-                f"1/s) and stopped at t = {self.run.time:.9g} s with the pinion at "
-                f"{speed:.3g} rad/s: the train runs away. Check the torques M_motor = "
-                f"{self.values['M_motor']:g} N.m and M_load = {self.values['M_load']:g} N.m "
-                f"(a runaway is most likely one far beyond the scene's, "
-                f"{self.start_values['M_motor']:g} and {self.start_values['M_load']:g} N.m)")
-
-    # --- get and set: never an exception, which pythonfmu would make fmi2Fatal --------------
-
     def get_real(self, vrs):
-        # A master reads the outputs after every doStep. pythonfmu's get_real calls one getter
-        # per variable, 0.35 µs each; they all sit in output_values, read here in one pass.
-        entries = self.real_output_entries
-        if all(vr in entries for vr in vrs):
-            values = self.output_values
-            return [values.item(entries[vr]) for vr in vrs]
-        return self._get(vrs, Real, float, math.nan)
+        return self._get_reals(vrs)
 
     def get_integer(self, vrs):
-        return self._get(vrs, Integer, int, 0)
+        return self._get(vrs, "integer")
 
     def get_boolean(self, vrs):
-        return self._get(vrs, Boolean, bool, False)
+        return self._get(vrs, "boolean")
 
     def get_string(self, vrs):
-        return self._get(vrs, String, str, "")
+        return self._get(vrs, "string")
 
     def set_real(self, vrs, values):
-        self._set_all(vrs, values, Real)
+        self._set_all(vrs, values, "real")
 
     def set_integer(self, vrs, values):
-        self._set_all(vrs, values, Integer)
+        self._set_all(vrs, values, "integer")
 
     def set_boolean(self, vrs, values):
-        self._set_all(vrs, values, Boolean)
+        self._set_all(vrs, values, "boolean")
 
     def set_string(self, vrs, values):
-        self._set_all(vrs, values, String)
-
-    def _get(self, vrs, kind, convert, refused):
-        """The values of `vrs`; one that is not a `kind` variable reads `refused` (NaN for a
-        Real) and is reported."""
-        values = []
-        for vr in vrs:
-            variable = self._variable(vr, kind, "read")
-            values.append(refused if variable is None else convert(variable.getter()))
-        return values
-
-    def _set_all(self, vrs, values, kind):
-        for vr, value in zip(vrs, values):
-            variable = self._variable(vr, kind, "set")
-            if variable is not None and variable.setter is None:
-                self._report(f"{variable.name} is an {variable.causality.name}: it cannot be "
-                             "set; only parameters (before initialization) and inputs can be")
-            elif variable is not None:
-                variable.setter(value)
-
-    def _variable(self, vr, kind, verb):
-        variable = self.vars.get(vr)
-        if variable is None:
-            self._report(f"no variable has value reference {vr}; cannot {verb} it "
-                         f"(value references: 0 to {len(self.vars) - 1})")
-        elif not isinstance(variable, kind):
-            actual = next(t for t in (Real, Integer, Boolean, String) if isinstance(variable, t))
-            self._report(f"{variable.name} is a {actual.__name__} variable: {verb} it with "
-                         f"fmi2{'Get' if verb == 'read' else 'Set'}{actual.__name__}, not "
-                         f"fmi2{'Get' if verb == 'read' else 'Set'}{kind.__name__}")
-            return None
-        return variable
-
-    def _set(self, name, value):
-        """A parameter's or input's new value; a fixed parameter only before initialization
-        (FMI 2.0: it keeps the value it was initialized with, which getReal then reads)."""
-        if self.initialized and name not in INPUTS:
-            self._report(f"{name} is a fixed parameter: it can be set only before "
-                         f"exitInitializationMode; it keeps {self.values[name]!r} "
-                         f"(refused: {value!r})")
-            return
-        self.values[name] = value
-
-    # --- FMU state: plain data, so that it serializes (canSerializeFMUstate) ----------------
-
-    def _get_fmu_state(self):
-        """Everything the run goes on from, as JSON data: the position (floats exactly, by
-        repr; the contact set by its cycle and interval), the steps taken, the values."""
-        state = {"format": STATE_FORMAT, "values": dict(self.values),
-                 "start_time": self.start_time, "initialized": self.initialized,
-                 "experiment_tolerance": self.experiment_tolerance,
-                 "problem": self.problem, "input_problem": self.input_problem, "run": None}
-        if self.run is not None:
-            position = self.stepper.position(self.run)
-            contact_set = position.segment.contact_set
-            state["run"] = {
-                "time": position.time, "state": position.state.tolist(),
-                "cycle": contact_set.cycle, "interval": contact_set.index,
-                "loaded": position.segment.loaded.tolist(), "step_hint": position.step_hint,
-                "outputs": position.outputs.tolist(),
-                "first_steps": position.first_steps.tolist(),
-                "internal_steps": self.stepper.accepted_steps}
-        return state
-
-    def _set_fmu_state(self, state):
-        if not isinstance(state, dict) or state.get("format") != STATE_FORMAT \
-                or set(state["values"]) != set(self.values):
-            return self._report("fmi2SetFMUstate: the state is not one of this FMU "
-                                f"(expected {STATE_FORMAT} with this scene's variables); "
-                                "the FMU keeps its own")
-        self.values = dict(state["values"])
-        self.start_time, self.initialized = state["start_time"], state["initialized"]
-        self.experiment_tolerance = state["experiment_tolerance"]
-        self.problem, self.input_problem = state["problem"], state["input_problem"]
-        self.run = None
-        self.output_values = np.zeros_like(self.output_values)
-        saved = state["run"]
-        if saved is None:
-            return
-        if self.stepper is None or self.stepper_values != self._model_values():
-            problem = self._build()  # a state of an instance with other parameters
-            if problem is not None:
-                return self._fail(problem)
-        self.run = self.stepper.start(self._position(saved))
-        self.stepper.accepted_steps = saved["internal_steps"]
-        self.output_values = self.run.outputs
-
-    def _position(self, saved):
-        contact_set = self.stepper.model.mesh.contact_set(saved["cycle"], saved["interval"])
-        return Position(saved["time"], np.array(saved["state"]),
-                        Segment(contact_set, np.array(saved["loaded"])), saved["step_hint"],
-                        np.array(saved["outputs"]), np.array(saved["first_steps"]))
-
-    @staticmethod
-    def _fmu_state_to_bytes(state):
-        # sorted keys and floats by repr: the same state is the same bytes, and reads back
-        # bit-identical (NaN and infinities as JSON's extensions NaN, Infinity)
-        return json.dumps(state, sort_keys=True, separators=(",", ":")).encode("utf-8")
-
-    @staticmethod
-    def _fmu_state_from_bytes(data):
-        try:
-            return json.loads(data.decode("utf-8"))
-        except ValueError:
-            return None  # _set_fmu_state reports it
-
-    # --- the model behind it -----------------------------------------------------------------
-
-    def _start(self):
-        """Validate the values and place the train in its initial state (MODEL.md 6) at the
-        start time."""
-        self.problem, self.input_problem, self.run = None, None, None
-        problem = self._check_values() or self._build()
-        if problem is not None:
-            return self._fail(problem)
-        try:
-            position = dataclasses.replace(
-                start_position(self.stepper.model, self.values["M_motor"]), time=self.start_time)
-            warm_up(self.stepper, position)  # a compile says so itself (first_start)
-            self.run = self.stepper.start(position)
-            self.output_values = self.run.outputs  # updated in place by every doStep
-        except Exception as error:
-            self._fail(f"initialization failed: {error}")
-
-    def _check_values(self):
-        """The first problem of the inputs and solver settings (the scene checks the model's
-        parameters), or None."""
-        problems = [(name, check_value(p, self.values[name])) for name, p in INPUTS.items()]
-        problems += [(name, self._check_solver_setting(name, self.values[name]))
-                     for name in SOLVER_SETTINGS]
-        return next((f"{name} {problem}" for name, problem in problems if problem), None)
-
-    def _model_values(self):
-        return {k: v for k, v in self.values.items() if k not in INPUTS}
-
-    def _build(self):
-        """Model and stepper of the current values; returns what is wrong with them, or None."""
-        try:
-            given = {k: v for k, v in self.values.items() if k in self.scene.parameters}
-            scene = self.scene.with_parameters(**given).with_inputs(
-                M_motor=self.values["M_motor"], M_load=self.values["M_load"])
-            self.stepper = CompiledStepper(GearTrainModel(scene), self.values["solver_tolerance"],
-                                           method=self.values["solver_method"],
-                                           max_step=self.values["max_step"] or math.inf)
-            self.stepper_values = self._model_values()
-        except herringbone.SceneError as error:
-            # the scene's own message names the variable; drop its file prefix
-            return str(error).split(": ", 1)[-1].replace("[parameters] ", "parameter ")
-        except Exception as error:
-            return f"initialization failed: {error}"
-        return None
-
-    def _apply_experiment_tolerance(self):
-        """fmi2SetupExperiment's tolerance becomes solver_tolerance (both are relative errors
-        per step), unless the host set solver_tolerance to other than its start value; one
-        outside solver_tolerance's range is clamped into it, with a warning."""
-        tolerance = self.experiment_tolerance
-        if tolerance is None or \
-                self.values["solver_tolerance"] != self.start_values["solver_tolerance"]:
-            return
-        if not (isinstance(tolerance, float) and tolerance > 0.0 and math.isfinite(tolerance)):
-            return self._report(f"fmi2SetupExperiment: tolerance {tolerance!r} is not a "
-                                "positive number; solver_tolerance keeps its value",
-                                Fmi2Status.warning)
-        used = min(max(tolerance, TIGHTEST_TOLERANCE), LOOSEST_TOLERANCE)
-        if used != tolerance:
-            self._report(f"fmi2SetupExperiment: tolerance {tolerance:g} is outside "
-                         f"solver_tolerance's range [{TIGHTEST_TOLERANCE:g}, "
-                         f"{LOOSEST_TOLERANCE:g}]; using {used:g}", Fmi2Status.warning)
-        self.values["solver_tolerance"] = used
-
-    @staticmethod
-    def _check_solver_setting(name, value):
-        if name == "solver_method":
-            return None if value in METHODS else (
-                f"is {value!r}; allowed: {', '.join(repr(m) for m in METHODS)}")
-        allowed = {"solver_tolerance": f"[{TIGHTEST_TOLERANCE:g}, {LOOSEST_TOLERANCE:g}]",
-                   "max_step": ">= 0 (0: no limit)"}[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not SOLVER_SETTINGS[name].allowed.contains(value):
-            return f"is {value!r}; allowed: {allowed}"
-        return None
-
-    # --- how problems reach the user -----------------------------------------------------------
-
-    def _fail(self, message):
-        """A problem that stops the run for good: reported once. Without a run the outputs
-        read NaN, not the values of an earlier start that look plausible."""
-        if self.problem is None:
-            self.problem = message
-            self._report(message)
-        if self.run is None:
-            self.output_values = np.full_like(self.output_values, math.nan)
-
-    def _report(self, message, status=Fmi2Status.error):
-        """Log `message`; also on stderr unless the host is known to show the log."""
-        # hosts format log messages printf-style: a bare '%' crashes them
-        self.log(f"{self.instance_name}: {message}".replace("%", "%%"), status)
-        if self.host_logs() is not True:
-            print(f"{self.instance_name}: {status.name}: {message}", file=sys.stderr,
-                  flush=True)
-
-    def _raise_if_unheard(self):
-        """Where the host does not log, a problem is an exception: pythonfmu makes it fmi2Fatal,
-        which fmpy raises (FMICallException) where a Discard would end its run silently."""
-        problem = self.problem or self.input_problem
-        if problem is not None and self.host_logs() is False:
-            raise RuntimeError(problem)
+        self._set_all(vrs, values, "string")
 
     def host_logs(self):
         """Whether pythonfmu passes this instance's log messages to the host (loggingOn of

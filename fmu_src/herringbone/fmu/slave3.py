@@ -1,0 +1,164 @@
+"""The gear train as an FMI 3.0 co-simulation slave: pythonfmu3's Fmi3Slave over the
+version-independent core (fmu/core.py), the same one as the FMI 2.0 slave (fmu/slave.py): the
+same variables from the same table, the same checks, messages, run and state.
+
+What pythonfmu3 (0.3) lets a slave do, and what differs from the FMI 2.0 slave because of it
+(README, "Errors in each host"):
+- doStep can answer any status: a problem (of the parameters, the inputs, the solver, a
+  runaway) makes it answer fmi3Error, and the instance lives on (a problem of the inputs clears
+  once they are valid; fmi3SetFMUState rolls back). The FMI 2.0 slave answers fmi2Discard, or
+  fmi2Fatal where the host does not log: pythonfmu has no fmi2Error.
+- Every other callback answers fmi3OK, or fmi3Fatal for a Python exception (which destroys the
+  instance): exitInitializationMode with a problem raises only where the host has no log
+  callback, as the FMI 2.0 slave does where the host does not log; otherwise the problem is
+  logged and the first doStep answers fmi3Error.
+- pythonfmu3 passes every message to the host's log callback, whatever loggingOn says (which
+  only gates debug messages), so a message is written to stderr as well only where the host
+  gave no callback (fmpy gives one by default and prints the messages).
+- fmi3EnterInitializationMode's startTime, stopTime and tolerance do not reach the slave. The
+  run starts where the host's first doStep starts it (FMI 3.0 requires that to be the start
+  time), and the experiment's tolerance is not used: set solver_tolerance instead.
+"""
+import ctypes
+
+# first: the core checks the dependencies before anything imports numpy
+from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
+
+import pythonfmu3
+from pythonfmu3 import (Boolean, DefaultExperiment, Fmi3Causality, Fmi3Slave, Fmi3Variability,
+                        Float64, Int32, String)
+from pythonfmu3.enums import Fmi3Status
+from pythonfmu3.fmi3slave import Fmi3StepResult
+
+
+def _with_range(node, low, high, start=None):
+    for attribute, bound in (("min", low), ("max", high)):
+        if bound is not None:
+            node.set(attribute, repr(bound))
+    if start is not None:
+        node.set("start", repr(start))  # every bit (pythonfmu3 writes 16 digits)
+    return node
+
+
+class RangedFloat64(Float64):
+    """A Float64 with `min`/`max` where given, and its start value written exactly."""
+
+    def __init__(self, name, *, low=None, high=None, **kwargs):
+        super().__init__(name, **kwargs)
+        self.low, self.high = low, high
+
+    def to_xml(self):
+        start = None if self.start is None else float(self.start)
+        return _with_range(super().to_xml(), self.low, self.high, start)
+
+
+class RangedInt32(Int32):
+    """An Int32 with `min`/`max` where given."""
+
+    def __init__(self, name, *, low=None, high=None, **kwargs):
+        super().__init__(name, **kwargs)
+        self.low, self.high = low, high
+
+    def to_xml(self):
+        return _with_range(super().to_xml(), self.low, self.high)
+
+
+class HerringboneGear(GearCore, Fmi3Slave):
+    API = {"prefix": "fmi3", "set_state": "fmi3SetFMUState",
+           "setup": "fmi3EnterInitializationMode",
+           "kinds": {"real": "Float64", "integer": "Int32", "boolean": "Boolean",
+                     "string": "String", "int64": "Int64"}}
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.description = DESCRIPTION  # Fmi3SlaveBase.__init__ sets it (to None)
+        self.logger_address = kwargs.get("logger")  # cppfmu's Logger (see host_logs)
+        # pythonfmu3's logger is not pythonfmu's: no direct line to it while compiling
+        self._setup(None)
+        # FMI 3.0 wants the independent variable declared: last, so that every other variable
+        # has the value reference it has in the FMI 2.0 FMU
+        time = Declaration("time", "real", "independent", "continuous", "simulation time",
+                           getter=lambda: self.run.time if self.run else self.start_time,
+                           unit="s")
+        self.declared[self._register(time)] = time
+        experiment = self.scene.experiment
+        self.default_experiment = DefaultExperiment(
+            start_time=0.0, stop_time=experiment.stop_time,
+            step_size=experiment.output_interval)
+
+    def _register(self, declaration):
+        arguments = dict(description=declaration.description,
+                         causality=Fmi3Causality[declaration.causality],
+                         variability=Fmi3Variability[declaration.variability],
+                         getter=declaration.getter, setter=declaration.setter)
+        if declaration.kind == "real":
+            variable = RangedFloat64(declaration.name, unit=declaration.unit or None,
+                                     low=declaration.low, high=declaration.high, **arguments)
+        elif declaration.kind == "integer":
+            variable = RangedInt32(declaration.name, low=declaration.low,
+                                   high=declaration.high, **arguments)
+        else:
+            kind = {"boolean": Boolean, "string": String}[declaration.kind]
+            variable = kind(declaration.name, **arguments)
+        self.register_variable(variable, nested=False)
+        return variable.value_reference
+
+    def _log(self, text, status):
+        self.log(text, Fmi3Status(status))
+
+    # --- FMI callbacks -----------------------------------------------------------------------
+
+    def exit_initialization_mode(self):
+        self._exit_initialization()
+        self._raise_if_unheard()
+
+    def do_step(self, current_time, step_size):
+        if self.run is not None and self.run.time == self.start_time \
+                and self.stepper.accepted_steps == 0:
+            # no step taken yet: the start time pythonfmu3 did not pass on is this one
+            self.start_time = float(current_time)
+            self.run.clock[0] = self.start_time
+        if self._step(current_time, step_size) is not None:
+            return Fmi3StepResult(status=Fmi3Status.error)
+        return Fmi3StepResult()
+
+    def get_float64(self, vrs):
+        return self._get_reals(vrs)
+
+    def get_int32(self, vrs):
+        return self._get(vrs, "integer")
+
+    def get_int64(self, vrs):
+        return self._get(vrs, "int64")  # none: refused with a message, not a Fatal
+
+    def get_boolean(self, vrs):
+        return self._get(vrs, "boolean")
+
+    def get_string(self, vrs):
+        return self._get(vrs, "string")
+
+    def set_float64(self, vrs, values):
+        self._set_all(vrs, values, "real")
+
+    def set_int32(self, vrs, values):
+        self._set_all(vrs, values, "integer")
+
+    def set_int64(self, vrs, values):
+        self._set_all(vrs, values, "int64")
+
+    def set_boolean(self, vrs, values):
+        self._set_all(vrs, values, "boolean")
+
+    def set_string(self, vrs, values):
+        self._set_all(vrs, values, "string")
+
+    def host_logs(self):
+        """Whether the host gave a log callback, which pythonfmu3 calls with every message
+        (not only when loggingOn): read from cppfmu's Logger, whose address pythonfmu3 hands to
+        the slave (the instance environment, then the callback: cppfmu_common.hpp). None (not
+        known) for another pythonfmu3 version or without a logger (outside an FMU)."""
+        if not self.logger_address or pythonfmu3.__version__ != "0.3.4":
+            return None
+        callback = ctypes.c_void_p.from_address(self.logger_address
+                                                + ctypes.sizeof(ctypes.c_void_p))
+        return callback.value is not None
