@@ -147,7 +147,8 @@ def no_tension(run: RecordedRun, label: str) -> None:
         forces = point_forces(run.model, state, contact_set)
         pulling = forces[loaded != 0.0].min(initial=0.0)
         pressed = forces[loaded == 0.0].max(initial=0.0)
-        assert pulling >= -limit, f"{label}: a loaded point pulls by {-pulling:.4g} N at t = {t:.6g} s"
+        assert pulling >= -limit, (f"{label}: a loaded point pulls by {-pulling:.4g} N at "
+                                   f"t = {t:.6g} s")
         assert pressed <= limit, (f"{label}: a free point is pressed by {pressed:.4g} N at "
                                   f"t = {t:.6g} s (a missed regain)")
 
@@ -258,7 +259,7 @@ def scene_toml(scene, header: str) -> str:
     if len(schedule.times) == 1:
         lines += [f"M_motor = {schedule.M_motor[0]!r}", f"M_load = {schedule.M_load[0]!r}"]
     else:
-        rows = ", ".join(f"[{t!r}, {m!r}, {l!r}]" for t, m, l in
+        rows = ", ".join(f"[{t!r}, {m!r}, {ld!r}]" for t, m, ld in
                          zip(schedule.times, schedule.M_motor, schedule.M_load))
         lines.append(f"table = [{rows}]")
     return "\n".join(lines) + "\n"

@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from fmpy.fmi1 import FMICallException
+from fmu_host import Instance
 
 import herringbone
-from conftest import MODELS
-from fmu_host import Instance
 from herringbone import SceneError
 from herringbone.model.parameters import INPUTS, PARAMETERS
 
@@ -561,8 +561,8 @@ def no_work(monkeypatch):
 
 
 def _api_function(name):
-    from herringbone.integrate.contract import simulate_with
     from herringbone.analysis.stability import monodromy, stability_chart
+    from herringbone.integrate.contract import simulate_with
 
     return {"simulate": herringbone.simulate,
             "reference_simulate": herringbone.reference_simulate,

@@ -3,6 +3,7 @@ repository (a clone has nothing beside it)."""
 import subprocess
 
 from conftest import MODELS
+
 from herringbone.model.document import with_generated_tables
 
 ROOT = MODELS.parent

@@ -21,16 +21,16 @@ import math
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import pytest
+from conftest import MODELS
 
 import herringbone
-from conftest import MODELS
-from herringbone.model.assembly import GearTrainModel
 from herringbone.analysis.phasing import contact_count, count_intervals, scene_phasing
+from herringbone.model.assembly import GearTrainModel
 
 FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
           "F_brg_wheel_right"]

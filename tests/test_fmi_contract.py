@@ -13,16 +13,16 @@ import os
 import subprocess
 import sys
 import time
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 
 import fmpy
 import numpy as np
 import pytest
-from fmpy.fmi1 import FMICallException
-
 from conftest import MODELS
+from fmpy.fmi1 import FMICallException
 from fmu_host import Instance
+
 from herringbone.fmu import builder
 from herringbone.model.parameters import INPUTS, PARAMETERS
 

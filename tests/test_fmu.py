@@ -4,12 +4,12 @@ import math
 import fmpy
 import numpy as np
 import pytest
+from conftest import MODELS
 from fmpy.fmi1 import FMICallException
+from fmu_host import Instance, structured_inputs
 
 import herringbone
 from herringbone.fmu import builder
-from conftest import MODELS
-from fmu_host import Instance, structured_inputs
 
 FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
           "F_brg_wheel_right"]
@@ -54,7 +54,7 @@ def fmu_against_reference(fmu_path, scene_name, kind, start_values=None):
                                start_values=start_values or {})
     assert result["time"][-1] == pytest.approx(DURATION)
     reference = herringbone.reference_simulate(
-        scene.with_inputs(table=[[t, m, l] for t, m, l in zip(times, motor, load)]),
+        scene.with_inputs(table=[[t, m, ld] for t, m, ld in zip(times, motor, load)]),
         stop_time=DURATION, output_interval=STEP)
     assert result["time"] == pytest.approx(reference["time"], abs=1e-12)
     return largest_force_difference(result, reference, scene)

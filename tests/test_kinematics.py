@@ -3,10 +3,10 @@ import math
 
 import numpy as np
 import pytest
+from independent_model import contact_points
 
 import herringbone
 from herringbone.analysis.phasing import alternation_law, scene_phasing
-from independent_model import contact_points
 
 
 def test_mean_speed_ratio_is_one_over_u(reference_scene):

@@ -4,9 +4,9 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
+from independent_model import ORDER, mass_matrix, stiffness_matrix
 
 import herringbone.model.assembly
-from independent_model import ORDER, mass_matrix, stiffness_matrix
 
 MODEL_MD_FREQUENCIES_HZ = [113, 688, 1.50e3, 2.10e3, 4.44e3, 12.0e3, 13.8e3]
 

@@ -5,13 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS
+from independent_model import radii
 
 import herringbone
-from conftest import MODELS
 from herringbone.integrate import contract, stepping
 from herringbone.integrate.compiled import walk
 from herringbone.model.assembly import GearTrainModel
-from independent_model import radii
 
 REGRESSION = Path(__file__).resolve().parent / "regression"
 

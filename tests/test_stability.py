@@ -8,11 +8,11 @@ import pytest
 import scipy.integrate
 import scipy.linalg
 import scipy.optimize
+from independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 import herringbone
 from herringbone.analysis import stability
 from herringbone.model.assembly import GearTrainModel, natural_modes
-from independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 # One mesh-like degree of freedom: the equivalent mass of the reference pair and a stiffness that
 # alternates between six and four points for 30 % and 70 % of the period.
@@ -156,7 +156,7 @@ def reference_monodromy(scene, speed):
     for interval in range(len(model.mesh.switch_phases)):
         contact_set = model.mesh.contact_set(0, interval)
 
-        def derivative(t, flat):
+        def derivative(t, flat, contact_set=contact_set):
             y = np.zeros(model.size)
             y[model.pinion] = speed * t
             a = np.zeros((2 * n, 2 * n))

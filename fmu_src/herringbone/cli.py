@@ -9,8 +9,16 @@ import sys
 import time
 from pathlib import Path
 
-from .arguments import (OUTPUT_INTERVAL, REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, OneLineParser,
-                        number, output_path, output_path_problem, speed_sweep_problem)
+from .arguments import (
+    OUTPUT_INTERVAL,
+    REFERENCE_TOLERANCE_ARGUMENT,
+    STOP_TIME,
+    OneLineParser,
+    number,
+    output_path,
+    output_path_problem,
+    speed_sweep_problem,
+)
 from .model.scene import SceneError, load_scene
 
 # The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from scipy.optimize import brentq
 
 from ..model.geometry import GearGeometry
-from ..model.mesh import PHASE_TOLERANCE, streams as mesh_streams
+from ..model.mesh import PHASE_TOLERANCE
+from ..model.mesh import streams as mesh_streams
 
 
 def involute(angle: float) -> float:

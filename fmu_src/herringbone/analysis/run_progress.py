@@ -28,9 +28,9 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
     """reference.reference_simulate (DOP853) with a progress bar on stderr."""
     from tqdm import tqdm
 
-    from ..model.assembly import GearTrainModel
     from ..integrate.contract import simulate_with
     from ..integrate.stepping import ScipyStepper
+    from ..model.assembly import GearTrainModel
 
     stop = scene.experiment.stop_time if stop_time is None else stop_time
     with tqdm(total=stop, unit="s", unit_scale=False, desc=f"run {scene.name}",

@@ -58,11 +58,11 @@ class Stretch:
     damping: np.ndarray
 
     @classmethod
-    def constant(cls, stiffness, damping) -> "Stretch":
+    def constant(cls, stiffness, damping) -> Stretch:
         return cls(np.atleast_2d(stiffness)[None], np.atleast_2d(damping)[None])
 
     @classmethod
-    def interpolating(cls, stiffness_at, damping_at, degree=3) -> "Stretch":
+    def interpolating(cls, stiffness_at, damping_at, degree=3) -> Stretch:
         """The polynomials of `degree` through functions of s sampled at degree + 1 points
         (exact when the functions are such polynomials)."""
         nodes = np.linspace(0.0, 1.0, degree + 1)

@@ -211,9 +211,9 @@ def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | Non
     settings (the method "auto" picks for the scene), in this process, saying before a compile
     what it will cost and how far it is every `progress_every` seconds. Returns the seconds
     spent compiling, None if everything came from the cache."""
-    from .compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..model.assembly import GearTrainModel
     from ..model.scene import load_scene
+    from .compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from .contract import start_position
 
     scene = load_scene(scene_path)
@@ -246,5 +246,6 @@ def _progress(done, every, say):
         say(f"  ... {time.perf_counter() - started:.0f} s of about {estimate_seconds():.0f} s")
 
 
-if __name__ == "__main__":  # python -m herringbone.integrate.first_start SCENE: what the builder runs
+# python -m herringbone.integrate.first_start SCENE: what the builder runs
+if __name__ == "__main__":
     compile_for_scene(sys.argv[1], say=lambda message: print(message, flush=True))

@@ -28,9 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compiled import equations
-from ..model.mesh import ContactSet
 from ..model.assembly import GearTrainModel
+from ..model.mesh import ContactSet
+from .compiled import equations
 
 PHASE_END, PHASE_START = 0, 1  # the phase events' numbers; point i's event is 2 + i
 # An approach within this fraction of the force scale's approach of one point (force scale /

@@ -21,8 +21,8 @@ import numpy as np
 import scipy.integrate
 from scipy.optimize import brentq, minimize_scalar
 
-from . import segments
 from ..model.assembly import GearTrainModel
+from . import segments
 from .contract import IntegrationError, Position
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)

@@ -24,7 +24,7 @@ class GearGeometry:
     a_right: float = 0.0
 
     @classmethod
-    def from_parameters(cls, parameters: dict) -> "GearGeometry":
+    def from_parameters(cls, parameters: dict) -> GearGeometry:
         return cls(**{name: parameters.get(name, 0.0) for name in cls.__dataclass_fields__})
 
     @property

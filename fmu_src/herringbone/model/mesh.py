@@ -39,7 +39,8 @@ class Stream:
 
 
 def streams(parameters: dict) -> list[Stream]:
-    """The four streams of contact points, in the order left pre, left post, right pre, right post."""
+    """The four streams of contact points, in the order left pre-pole, left post-pole, right
+    pre-pole, right post-pole; `parameters` as a scene gives them (eps_q, stagger, phase0)."""
     offsets = {("left", "pre-pole"): 0.0,
                ("left", "post-pole"): parameters["eps_q"],
                ("right", "pre-pole"): parameters["stagger"],

@@ -16,7 +16,6 @@ import bisect
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
 from .geometry import solid_cylinder_transverse_inertia
@@ -67,11 +66,11 @@ class Scene:
     def has(self, component: str) -> bool:
         return self.components[component]
 
-    def with_parameters(self, **changes) -> "Scene":
+    def with_parameters(self, **changes) -> Scene:
         """A copy with some parameters changed, validated like a scene file."""
         return replace(self, given={**self.given, **changes})
 
-    def with_inputs(self, M_motor=None, M_load=None, table=None) -> "Scene":
+    def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
         """A copy with other input torques (constants, or rows of [time, M_motor, M_load])."""
         data = {"table": table} if table is not None else {
             "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,

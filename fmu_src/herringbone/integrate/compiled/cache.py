@@ -24,7 +24,7 @@ from numba.core import caching
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def package_digest() -> str:
     """The hash of every source file of this package, in name order, and of the package's
     module name: numba's index pickles objects by their modules' names, so a copy of the same
