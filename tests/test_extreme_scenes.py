@@ -26,14 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from conftest import MODELS
+from conftest import MODELS, force_errors
 
 import herringbone
 from herringbone.analysis.phasing import contact_count, count_intervals, scene_phasing
 from herringbone.model.assembly import GearTrainModel
 
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right"]
 # Of the force scale, at the FMU's default settings (issue 5), for every scene. contact_loss is
 # non-smooth (each loss and regain a kink located to the tolerance), but it is held to the same
 # bound: the reference converges on it like on the smooth scenes (test_reference.py) and the FMU
@@ -292,7 +290,7 @@ def test_scene_through_its_fmu_agrees_with_the_reference(scene_fmu, name, record
         bad = [k for k, v in outputs.items() if not np.all(np.isfinite(v))]
         assert not bad, f"{run}: outputs not finite: {bad}"
     scale = GearTrainModel(scene).force_scale()
-    errors = {k: np.abs(result[k] - reference[k]).max() / scale for k in FORCES if k in reference}
+    errors = force_errors(result, reference, scene)
     record_property("error", max(errors.values()))
     worst = max(errors, key=errors.get)
     at = reference["time"][np.argmax(np.abs(result[worst] - reference[worst]))]

@@ -5,16 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS
+from conftest import MODELS, force_error
 
 import herringbone
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import simulate_with, start_position
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
-
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right"]
 
 
 def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
@@ -27,11 +24,6 @@ def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
         samples.append(model.outputs(position.state, position.segment.contact_set,
                                      position.segment.loaded))
     return {name: np.array([s[name] for s in samples]) for name in samples[0]}
-
-
-def force_error(a, b, model):
-    names = [n for n in FORCES if n in a]
-    return max(np.abs(a[n] - b[n]).max() for n in names) / model.force_scale()
 
 
 @pytest.fixture(scope="module")
