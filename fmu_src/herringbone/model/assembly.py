@@ -28,6 +28,7 @@ import scipy.linalg
 from ..integrate.compiled import equations
 from .geometry import GearGeometry
 from .mesh import ContactSet, Mesh
+from .parameters import outputs_of
 
 ALL_COORDINATES = ("phi_motor", "phi_pinion", "psi_pinion", "x_pinion",
                    "phi_wheel", "psi_wheel", "x_wheel", "phi_load")
@@ -128,19 +129,21 @@ class GearTrainModel:
                                    + self.size)
 
     def _output_layout(self) -> list[tuple[str, int]]:
-        """Where each output of the scene sits in the vector equations.outputs fills."""
+        """Where each output of the scene sits in the vector equations.outputs fills, as
+        parameters.OUTPUTS declares it: the entry of its equations constant (K_MESH, ...), the
+        rate of its coordinate (after the element forces), or its element's force."""
         first_speed = equations.FIRST_ELEMENT_FORCE + len(self.elements)
-        index = {"k_mesh": equations.K_MESH, "k_mesh_left": equations.K_MESH_LEFT,
-                 "k_mesh_right": equations.K_MESH_RIGHT, "F_mesh": equations.F_MESH,
-                 "F_mesh_left": equations.F_MESH_LEFT, "F_mesh_right": equations.F_MESH_RIGHT,
-                 "n_contacts": equations.N_CONTACTS, "dte": equations.DTE}
-        index.update({e.name: equations.FIRST_ELEMENT_FORCE + k
-                      for k, e in enumerate(self.elements)})
-        for name, coordinate in (("w_motor", "phi_motor"), ("w_pinion", "phi_pinion"),
-                                 ("w_wheel", "phi_wheel"), ("w_load", "phi_load")):
-            if coordinate in self.coordinates:
-                index[name] = first_speed + self.coordinates.index(coordinate)
-        return [(name, index[name]) for name in self.output_names]
+        elements = [e.name for e in self.elements]
+        layout = []
+        for output in outputs_of(self.scene.components).values():
+            if output.slot is not None:
+                entry = getattr(equations, output.slot)
+            elif output.rate_of is not None:
+                entry = first_speed + self.coordinates.index(output.rate_of)
+            else:
+                entry = equations.FIRST_ELEMENT_FORCE + elements.index(output.name)
+            layout.append((output.name, entry))
+        return layout
 
     def unit(self, coordinate: str) -> np.ndarray:
         """The unit row of a coordinate (zero if the scene leaves the coordinate out)."""
@@ -328,16 +331,9 @@ class GearTrainModel:
 
 
 def output_names(scene) -> list[str]:
-    """The outputs of MODEL.md section 7 that a scene has."""
-    names = ["k_mesh", "k_mesh_left", "k_mesh_right", "F_mesh", "F_mesh_left", "F_mesh_right"]
-    if scene.has("bearings"):
-        names += [f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
-                  for side in ("left", "right")]
-    names += (["w_motor"] if scene.has("motor") else []) + ["w_pinion", "w_wheel"]
-    names += ["w_load"] if scene.has("load") else []
-    names += (["T_shaft_in"] if scene.has("motor") else [])
-    names += (["T_shaft_out"] if scene.has("load") else [])
-    return names + ["dte", "n_contacts"]
+    """The names of the outputs (docs/model.md section 7) that a scene has, in the order of
+    parameters.OUTPUTS."""
+    return list(outputs_of(scene.components))
 
 
 def mass_matrix(scene) -> np.ndarray:

@@ -153,29 +153,49 @@ def check_value(parameter: Parameter, value) -> str | None:
 
 @dataclass(frozen=True)
 class Output:
+    """One output of the train: its name, unit, meaning, type, the component a scene needs to
+    have it, and where the compiled equations.outputs puts its value (GearTrainModel.
+    output_layout reads `slot` and `rate_of`; neither: the output is the force of the shaft or
+    bearing of the same name)."""
+
     name: str
     unit: str
     description: str
     kind: type = float
+    component: str | None = None  # None: every scene has it
+    slot: str | None = None  # the constant of integrate/compiled/equations.py naming its entry
+    rate_of: str | None = None  # the coordinate whose rate it is (speeds)
 
 
-# The outputs of MODEL.md section 7 (model.output_names picks those a scene has).
+# The outputs of docs/model.md section 7, in the order a scene lists them; the one list of them:
+# model.assembly.output_names picks those a scene has, GearTrainModel.output_layout places them,
+# the FMU declares them, docs/model.md section 12 tables them.
 OUTPUTS: dict[str, Output] = {o.name: o for o in [
-    Output("k_mesh", "N/m", "mesh stiffness: sum of the stiffnesses of the points in contact"),
-    Output("k_mesh_left", "N/m", "mesh stiffness of the left half"),
-    Output("k_mesh_right", "N/m", "mesh stiffness of the right half"),
-    Output("F_mesh", "N", "mesh force: sum of the contact point forces"),
-    Output("F_mesh_left", "N", "mesh force of the left half"),
-    Output("F_mesh_right", "N", "mesh force of the right half"),
+    Output("k_mesh", "N/m", "mesh stiffness: sum of the stiffnesses of the points in contact",
+           slot="K_MESH"),
+    Output("k_mesh_left", "N/m", "mesh stiffness of the left half", slot="K_MESH_LEFT"),
+    Output("k_mesh_right", "N/m", "mesh stiffness of the right half", slot="K_MESH_RIGHT"),
+    Output("F_mesh", "N", "mesh force: sum of the contact point forces", slot="F_MESH"),
+    Output("F_mesh_left", "N", "mesh force of the left half", slot="F_MESH_LEFT"),
+    Output("F_mesh_right", "N", "mesh force of the right half", slot="F_MESH_RIGHT"),
     *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing "
-             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)")
+             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)",
+             component="bearings")
       for gear in ("pinion", "wheel") for side in ("left", "right")],
-    Output("w_motor", "rad/s", "motor speed"),
-    Output("w_pinion", "rad/s", "pinion speed"),
-    Output("w_wheel", "rad/s", "wheel speed (positive in its running direction)"),
-    Output("w_load", "rad/s", "load speed"),
-    Output("T_shaft_in", "N.m", "input shaft torque"),
-    Output("T_shaft_out", "N.m", "output shaft torque"),
-    Output("dte", "m", "dynamic transmission error Rp*phi_p - Rw*phi_w"),
-    Output("n_contacts", "1", "number of contact points carrying load", int),
+    Output("w_motor", "rad/s", "motor speed", component="motor", rate_of="phi_motor"),
+    Output("w_pinion", "rad/s", "pinion speed", rate_of="phi_pinion"),
+    Output("w_wheel", "rad/s", "wheel speed (positive in its running direction)",
+           rate_of="phi_wheel"),
+    Output("w_load", "rad/s", "load speed", component="load", rate_of="phi_load"),
+    Output("T_shaft_in", "N.m", "input shaft torque", component="motor"),
+    Output("T_shaft_out", "N.m", "output shaft torque", component="load"),
+    Output("dte", "m", "dynamic transmission error Rp*phi_p - Rw*phi_w", slot="DTE"),
+    Output("n_contacts", "1", "number of contact points carrying load", int,
+           slot="N_CONTACTS"),
 ]}
+
+
+def outputs_of(components: dict[str, bool]) -> dict[str, Output]:
+    """The outputs that a train with these components has, in the order of OUTPUTS."""
+    return {name: o for name, o in OUTPUTS.items()
+            if o.component is None or components[o.component]}
