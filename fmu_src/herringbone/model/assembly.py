@@ -196,10 +196,11 @@ class GearTrainModel:
         states = state if state.ndim == 2 else state[:, None]
         base, tilt = self._approach_rows @ states
         travel = self.axial_travel_per_radian * states[self.pinion]
-        approach = (base + contact_set.lead_error0[:, None]
-                    + contact_set.lever_arm0[:, None] * tilt
-                    + travel * (contact_set.lever_arm_slope[:, None] * tilt
-                                + contact_set.lead_error_slope[:, None]))
+        points = contact_set.table[:, :, None]
+        approach = (base + points[equations.LEAD_ERROR0]
+                    + points[equations.LEVER_ARM0] * tilt
+                    + travel * (points[equations.LEVER_ARM_SLOPE] * tilt
+                                + points[equations.LEAD_ERROR_SLOPE]))
         return approach if state.ndim == 2 else approach[:, 0]
 
     def point_forces(self, state, contact_set: ContactSet, loaded) -> np.ndarray:
@@ -208,8 +209,8 @@ class GearTrainModel:
         a correct run never shows a negative one."""
         y = state[:self.size]
         travel = self.axial_travel_per_radian * y[self.pinion]
-        stiffness = contact_set.stiffness0[:, None] + np.multiply.outer(
-            contact_set.stiffness_slope, travel).reshape(len(contact_set), -1)
+        stiffness = contact_set.table[equations.STIFFNESS0][:, None] + np.multiply.outer(
+            contact_set.table[equations.STIFFNESS_SLOPE], travel).reshape(len(contact_set), -1)
         loaded = np.asarray(loaded, dtype=float)
         forces = (loaded[:, None] * stiffness) * self.point_approaches(
             state if state.ndim == 2 else state[:, None], contact_set)
