@@ -132,7 +132,7 @@ def check_scene(scene) -> Scene:
     if not isinstance(scene, Scene):
         raise SceneError(f"scene must be a herringbone.Scene, got {type(scene).__name__} "
                          f"{scene!r}; load one with herringbone.load_scene(path) or build one "
-                         "with herringbone.scene_from_dict(...)")
+                         "with herringbone.scene_from_dict(...)", key="scene")
     return scene
 
 
