@@ -18,16 +18,24 @@ FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left
           "F_brg_wheel_right")
 
 
+def _names(run) -> set[str]:
+    """The outputs a run has: a dict's keys, or a structured array's fields (fmpy's result)."""
+    names = getattr(getattr(run, "dtype", None), "names", None)
+    return set(names if names is not None else run)
+
+
 def force_errors(a, b, scene) -> dict[str, float]:
-    """For each of FORCES that both runs have ({name: samples}, as simulate and the FMU give
-    them): max |a − b| over the samples, as a fraction of GearTrainModel.force_scale() (the
-    static mesh force of the largest input torque). `scene`: a Scene or a GearTrainModel."""
+    """For each of FORCES that both runs have ({name: samples} as simulate gives them, or
+    fmpy's structured array): max |a − b| over the samples, as a fraction of
+    GearTrainModel.force_scale() (the static mesh force of the largest input torque).
+    `scene`: a Scene or a GearTrainModel."""
     from herringbone.model.assembly import GearTrainModel
 
     model = scene if isinstance(scene, GearTrainModel) else GearTrainModel(scene)
     scale = model.force_scale()
+    present = _names(a) & _names(b)
     return {name: float(np.abs(np.asarray(a[name]) - np.asarray(b[name])).max()) / scale
-            for name in FORCES if name in a and name in b}
+            for name in FORCES if name in present}
 
 
 def force_error(a, b, scene) -> float:
