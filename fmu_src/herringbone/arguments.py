@@ -85,6 +85,7 @@ class Argument:
 
     def option_type(self, text: str):
         """argparse `type=`: the value of `text`, or ArgumentTypeError "TEXT: allowed: …"."""
+        value: str | float
         if self.choices is not None:
             value = text
         else:

@@ -184,6 +184,7 @@ def _benchmark(arguments: list[str]) -> int:
               "`pip install -e .` it and run `herringbone benchmark` from there", file=sys.stderr)
         return 2
     spec = importlib.util.spec_from_file_location(f"benchmarks_{script.stem}", script)
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module.main(arguments)

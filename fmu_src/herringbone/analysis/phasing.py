@@ -79,7 +79,7 @@ def alternation_law(streams) -> str:
     """The alternation law: the distinct consecutive counts over one period read from φ = 0,
     e.g. "3-4-3-2"; a constant count is a single number, "3". Equal neighbours merge; the period
     is not wrapped, so a law that ends on its first value shows it again ("1-2-1")."""
-    law = []
+    law: list[int] = []
     for _, _, count in count_intervals(streams):
         if not law or law[-1] != count:
             law.append(count)

@@ -30,11 +30,11 @@ def mode_character(frequency_hz, mode_shape, masses, coordinate_names, rigid_bel
     if frequency_hz < rigid_below_hz:
         return "rigid rotation"
     energy = np.asarray(masses) * np.asarray(mode_shape) ** 2
-    shares = {}
+    shares: dict[str, float] = {}
     for name, e in zip(coordinate_names, energy):
         kind = COORDINATE_KINDS[name.split("_")[0]]
-        shares[kind] = shares.get(kind, 0.0) + e / energy.sum()
-    kind = max(shares, key=shares.get)
+        shares[kind] = shares.get(kind, 0.0) + float(e / energy.sum())
+    kind = max(shares, key=lambda k: shares[k])
     return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
 
 

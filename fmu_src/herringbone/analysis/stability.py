@@ -235,8 +235,13 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
                      label="unstable band" if number == 0 else None)
     axes.set_xlabel("pinion speed, rpm")
     axes.set_ylabel("|λ|max per mesh period")
-    top = axes.secondary_xaxis("top", functions=(lambda n: n * hertz_per_rpm,
-                                                 lambda f: f / hertz_per_rpm))
+    def to_hertz(n):  # rpm on the bottom axis -> mesh frequency on the top one
+        return np.asarray(n) * hertz_per_rpm
+
+    def to_rpm(f):
+        return np.asarray(f) / hertz_per_rpm
+
+    top = axes.secondary_xaxis("top", functions=(to_hertz, to_rpm))
     top.set_xlabel("mesh frequency, Hz")
     axes.set_title(title or "Parametric stability of the linear mesh (Floquet multipliers)")
     axes.legend(loc="best")

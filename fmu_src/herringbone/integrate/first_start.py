@@ -26,6 +26,7 @@ import threading
 import time
 import weakref
 from pathlib import Path
+from types import FrameType
 
 from numba.core import event
 
@@ -64,7 +65,7 @@ def estimate_seconds() -> float:
                if isinstance(record, dict)]
     if _Announcer.LOOP not in _records() or not all(isinstance(s, (int, float)) for s in seconds):
         return DEFAULT_COMPILE_SECONDS
-    return float(sum(seconds))
+    return float(sum(s for s in seconds if isinstance(s, (int, float))))
 
 
 def record_seconds(kernel: str, seconds: float) -> None:
@@ -198,7 +199,8 @@ class HostLine:
             slave.log(text.replace("%", "%%"), Fmi2Status(status))
 
     def _instantiating(self) -> bool:
-        frame, slave = sys._getframe(1), self._slave()
+        frame: FrameType | None = sys._getframe(1)
+        slave = self._slave()
         while frame is not None:
             if frame.f_code is self._init and frame.f_locals.get("self") is slave:
                 return True

@@ -16,6 +16,7 @@ import bisect
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
+from typing import cast
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
 from .geometry import solid_cylinder_transverse_inertia
@@ -54,8 +55,8 @@ class InputSchedule:
     """Input torques as a step function of time: row i holds from times[i] to times[i + 1]."""
 
     times: tuple[float, ...] = (0.0,)
-    M_motor: tuple[float, ...] = (INPUTS["M_motor"].default,)
-    M_load: tuple[float, ...] = (INPUTS["M_load"].default,)
+    M_motor: tuple[float, ...] = (cast(float, INPUTS["M_motor"].default),)
+    M_load: tuple[float, ...] = (cast(float, INPUTS["M_load"].default),)
 
     def at(self, time: float) -> tuple[float, float]:
         row = max(bisect.bisect_right(self.times, time) - 1, 0)

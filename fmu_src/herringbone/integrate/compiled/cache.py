@@ -68,7 +68,7 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
 
 def install() -> None:
     """Put the locator first (once per process); numba falls back to its own if it declines."""
-    implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.62
+    implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # type: ignore[attr-defined]  # numba < 0.62
     locators = implementation._locator_classes
     if SourceTextCacheLocator not in locators:
         locators.insert(0, SourceTextCacheLocator)
