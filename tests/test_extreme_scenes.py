@@ -69,7 +69,7 @@ def mesh_phase(scene, r):
 
 
 def follows_contact_law(scene, r, require_both_sides=True):
-    """n_contacts is the count of the four streams' alternation law (MODEL.md section 8) at
+    """n_contacts is the count of the four streams' alternation law (docs/model.md section 8) at
     every sample whose mesh phase is not within LAW_MARGIN of a switch; the run saw the counts
     on both sides of a switch. With an edge ramp r a point counts while −r < z < b + r: the law
     is that of faces 2r wider whose points enter r/p_x of a period earlier."""

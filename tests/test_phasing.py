@@ -1,4 +1,5 @@
-"""Mesh-phase theory (MODEL.md section 8) against the articles and the mesh; the scene report."""
+"""Mesh-phase theory (docs/model.md section 8) against the articles and the mesh; the scene
+report."""
 import math
 import re
 

@@ -82,7 +82,7 @@ def test_closed_form_transition_covers_every_damping():
 # --- the gear train --------------------------------------------------------------------------
 
 def mesh_damping_factor(p):
-    """η = 2·ζ_mesh/ω_m of MODEL.md section 3, written out again."""
+    """η = 2·ζ_mesh/ω_m of docs/model.md section 3, written out again."""
     rp, rw = radii(p)
     p_x = math.pi * p["m_n"] / math.sin(p["beta"])
     mean_stiffness = p["c_point"] * 2 * (p["b_left"] + p["b_right"]) / p_x
@@ -91,7 +91,7 @@ def mesh_damping_factor(p):
 
 
 def independent_damping_matrix(p, pinion_angle):
-    """C of MODEL.md sections 3-4 at a pinion angle, over the 8 coordinates, by hand."""
+    """C of docs/model.md sections 3-4 at a pinion angle, over the 8 coordinates, by hand."""
     zeta_left, zeta_right = bearing_positions(p)
     rows = [(unit(0) - unit(1), p["h_shaft_in"]), (unit(4) - unit(7), p["h_shaft_out"])]
     for gear, x, psi in (("pinion", 3, 2), ("wheel", 6, 5)):

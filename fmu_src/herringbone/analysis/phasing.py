@@ -1,4 +1,4 @@
-"""Mesh-phase theory (MODEL.md section 8): contact ratios, phase overlap and alternation laws.
+"""Mesh-phase theory (docs/model.md section 8): contact ratios, phase overlap and alternation laws.
 
 A stream is a pair (eps, delay): contact ratio ε and delay k, a fraction of a mesh period (one
 angular pitch of the pinion). The stream has ⌊ε⌋+1 pairs in contact over a fraction frac(ε) of
@@ -25,7 +25,7 @@ def involute(angle: float) -> float:
 def spur_contact_ratio(z1, z2, x1=0.0, x2=0.0, alpha=math.radians(20), ha=1.0) -> float:
     """ε_α of an involute spur pair cut by a rack of pressure angle `alpha` (rad) and addendum
     coefficient `ha`, profile shifts x1, x2, at the zero-backlash centre distance; tips are
-    shortened by Δy (MODEL.md section 8). Independent of the module."""
+    shortened by Δy (docs/model.md section 8). Independent of the module."""
     z_sum = z1 + z2
     inv_working = 2.0 * (x1 + x2) * math.tan(alpha) / z_sum + involute(alpha)
     # inv is increasing on [0, π/2): a single root below the pole of tan
@@ -44,8 +44,9 @@ def spur_contact_ratio(z1, z2, x1=0.0, x2=0.0, alpha=math.radians(20), ha=1.0) -
 def phase_overlap(alpha_k, alpha_l, rho_f, rho_a) -> float:
     """ε_q of a Novikov DLZ generating rack (Petrovsky): profile angle α_k and angle α_l (rad),
     fillet and addendum arc radii ρ_f*, ρ_a* in modules.
-    ε_q = 1 − l_k·cos α_k / π, l_k = ρ_f*·(sin α_k − sin α_l) + ρ_a*·sin α_k (MODEL.md reads the
-    printed π·tan α_k as π, which reproduces the article's 0.8 for the elementary rack)."""
+    ε_q = 1 − l_k·cos α_k / π, l_k = ρ_f*·(sin α_k − sin α_l) + ρ_a*·sin α_k (docs/model.md
+    reads the printed π·tan α_k as π, which reproduces the article's 0.8 for the elementary
+    rack)."""
     l_k = rho_f * (math.sin(alpha_k) - math.sin(alpha_l)) + rho_a * math.sin(alpha_k)
     return 1.0 - l_k * math.cos(alpha_k) / math.pi
 

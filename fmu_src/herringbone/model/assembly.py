@@ -1,10 +1,10 @@
-"""The gear train assembled from its elements (MODEL.md sections 1 and 4-7).
+"""The gear train assembled from its elements (docs/model.md sections 1 and 4-7).
 
 Every elastic element k (shaft, bearing, contact point) has a deformation δ_k = g_k·q + e_k with
 a row g_k over the coordinates q, and a force F_k = c_k·δ_k + h_k·δ̇_k; then
 M·q̈ = f_ext − Σ g_k·F_k. A scene without motor, load or bearings has fewer coordinates.
 
-Relative coordinates (MODEL.md section 10). The state holds, instead of q,
+Relative coordinates (docs/model.md section 10). The state holds, instead of q,
     y_i = q_i − r_i·φp  (i ≠ pinion),   y_pinion = φp − φ_start
 where r is the rigid rotation (1 on the motor and pinion angles, 1/u on the wheel and load
 angles, 0 on tilts and displacements) and φ_start is where the current contact set begins, so
@@ -13,7 +13,7 @@ rotation (g·r = 0), so δ = g̃·y and δ̇ = g̃·ẏ, g̃ being g with its pi
 
 Contact points carry rows g = g_base + ζ·g_tilt whose lever arm ζ moves with φp; as in the
 article the rows are taken as given at each instant (no ∂g/∂φp terms), and the damping acts on
-the rate g·q̇ of the bodies' motion. (MODEL.md does not say whether δ̇ includes the slide of the
+the rate g·q̇ of the bodies' motion. (docs/model.md does not say whether δ̇ includes the slide of the
 point along a lead error, ė = Δβ·ż; taking g·q̇ keeps a steadily running train free of a
 spurious drag force.)
 """
@@ -224,7 +224,7 @@ class GearTrainModel:
         return rate
 
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
-        """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
+        """The outputs of docs/model.md section 7 at a state; `loaded` is 1 for the points that
         carry load (all points of the set where contact cannot be lost)."""
         return self.named_outputs(self.output_vector(state, contact_set, loaded))
 
@@ -262,7 +262,7 @@ class GearTrainModel:
 
     def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
         """Relative coordinates of the static equilibrium under M_motor balanced by
-        M_load = u·M_motor, every point of the set loaded (MODEL.md section 6)."""
+        M_load = u·M_motor, every point of the set loaded (docs/model.md section 6)."""
         stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
         force = motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
         contact_rows = (self._contact_base_relative[None, :]

@@ -1,4 +1,4 @@
-"""Geometry of the herringbone pair (MODEL.md section 2): radii, ratio, axial pitch, positions.
+"""Geometry of the herringbone pair (docs/model.md section 2): radii, ratio, axial pitch, positions.
 
 Axial positions ζ are measured from the centre of a gear body, positive towards the right half.
 Local positions z in a half are measured from that half's outer face towards the groove.

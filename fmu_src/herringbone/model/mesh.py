@@ -1,4 +1,4 @@
-"""The contact points of the mesh (MODEL.md section 3) and the phases at which the set changes.
+"""The contact points of the mesh (docs/model.md section 3) and the phases at which the set changes.
 
 The mesh phase θ = φp / (2π/zp) counts angular pitches of the pinion; over one pitch every point
 travels one axial pitch p_x. Each of the four streams (two halves × two lines of engagement)
@@ -8,8 +8,8 @@ A point's stiffness weight w(z) is piecewise linear in z with kinks at z = −r,
 (r = edge_ramp; entry and exit z = 0, b when r = 0). Between two consecutive kink phases the set
 of points with w > 0 and each point's linear piece are fixed: a `ContactSet` describes them as
 linear functions of the pinion angle inside that phase interval. Integrators hold one contact set
-over a segment and change it only when φp reaches the interval's end (see NOTES.md: a solver
-whose trial steps see the switch loses accuracy or fails).
+over a segment and change it only when φp reaches the interval's end (a solver whose trial
+steps see the switch loses accuracy or fails).
 """
 from __future__ import annotations
 

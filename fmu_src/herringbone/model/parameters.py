@@ -1,6 +1,6 @@
 """The parameters of the gear train: one table, read by the scene loader, the model and the FMU.
 
-Every parameter is named as in MODEL.md (sections 2-6, 11), with its reference value, unit,
+Every parameter is named as in docs/model.md (sections 2-6, 11), with its reference value, unit,
 meaning, allowed range and the component that needs it. A scene that leaves a component out
 carries none of that component's parameters.
 """
@@ -66,7 +66,7 @@ def _p(name, default, unit, description, kind=float, allowed=POSITIVE, component
 
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in [
-    # geometry (MODEL.md section 2)
+    # geometry (docs/model.md section 2)
     _p("z_pinion", 10, "1", "number of pinion teeth", int, AT_LEAST_ONE),
     _p("z_wheel", 36, "1", "number of wheel teeth", int, AT_LEAST_ONE),
     _p("m_n", 0.004, "m", "normal module"),
