@@ -254,6 +254,7 @@ class OneLineParser(argparse.ArgumentParser):
         self.help_command = help_command or f"{self.prog} --help"
 
     def error(self, message):
+        """One line on stderr naming the option and what is allowed, then exit code 2."""
         # argparse says "argument --stop-time: -1: allowed …": drop the word, keep the option
         if message.startswith("argument "):
             option, _, rest = message[len("argument "):].partition(": ")

@@ -191,6 +191,7 @@ def _benchmark(arguments: list[str]) -> int:
 
 
 def write_csv(results: dict, path: Path) -> None:
+    """A run's outputs ({name: samples}) as CSV, one column a name, 12 significant digits."""
     path.parent.mkdir(parents=True, exist_ok=True)
     names = list(results)
     with open(path, "w", newline="") as file:
@@ -201,6 +202,7 @@ def write_csv(results: dict, path: Path) -> None:
 
 
 def summary(scene, results: dict, wall_time: float) -> str:
+    """A few lines on a finished run: its span, the largest forces and the time it took."""
     from .model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)

@@ -33,6 +33,7 @@ def load_integrator(scene) -> bool:
 
 
 def progress_bar(total: int, enabled: bool):
+    """A tqdm bar over `total` sweep points, or a bar that shows nothing when not `enabled`."""
     from tqdm import tqdm
 
     return tqdm(total=total, unit="point", desc="sweep", file=sys.stderr, disable=not enabled,

@@ -16,6 +16,7 @@ class ProgressStepper:
         self._stepper, self._bar = stepper, bar
 
     def advance(self, position, end, torques, sample_times=(), on_sample=None):
+        """The wrapped stepper's advance, the bar moved on at every sample."""
         def watched(t, outputs):
             on_sample(t, outputs)
             self._bar.update(t - self._bar.n)

@@ -59,6 +59,7 @@ class Stretch:
 
     @classmethod
     def constant(cls, stiffness, damping) -> Stretch:
+        """A stretch whose stiffness and damping matrices do not change along it."""
         return cls(np.atleast_2d(stiffness)[None], np.atleast_2d(damping)[None])
 
     @classmethod
@@ -184,6 +185,8 @@ def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_P
 
 @dataclass(frozen=True)
 class StabilityChart:
+    """The largest Floquet multiplier |λ|max per mesh period over a range of pinion speeds, and
+    the bands where it exceeds 1."""
     speeds: np.ndarray  # pinion speeds, rad/s, ascending
     largest_modulus: np.ndarray  # |λ|max at each speed
     unstable_bands: tuple[tuple[float, float], ...]  # (from, to) rad/s where |λ|max > 1

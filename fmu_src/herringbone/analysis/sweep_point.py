@@ -68,9 +68,11 @@ class Timing:
 
     @property
     def window(self) -> float:
+        """The span of the recorded samples, s."""
         return self.samples * self.interval
 
     def sample_times(self) -> np.ndarray:
+        """The times (s) of the recorded samples, after the settling time."""
         return self.settle + np.arange(self.samples) * self.interval
 
 

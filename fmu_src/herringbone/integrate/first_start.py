@@ -186,6 +186,8 @@ class HostLine:
         return lambda status, text: function(environment, self._name, status, None, text)
 
     def say(self, message: str, status: int = FMI_OK) -> None:
+        """Show `message` to the host: through its logger callback while it instantiates the
+        FMU, else on stderr (and in the slave's log, where there is a slave)."""
         text = f"{self._name.decode()}: {message}"
         if self._call is not None and self._instantiating():
             # hosts format the message printf-style

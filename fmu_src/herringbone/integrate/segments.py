@@ -58,6 +58,8 @@ PHASE_BAND = 1e-12
 
 @dataclass(frozen=True)
 class Segment:
+    """What holds between two events: a contact set and which of its points carry load."""
+
     contact_set: ContactSet
     loaded: np.ndarray  # 1.0 for the points that carry load, 0.0 for the separated ones
 

@@ -28,6 +28,8 @@ PHASE_TOLERANCE = 1e-10
 
 @dataclass(frozen=True)
 class Stream:
+    """One of the four streams of contact points: a helix half's line of engagement."""
+
     half: str  # "left" or "right"
     line: str  # "pre-pole" or "post-pole"
     lead: float  # phase by which the stream runs ahead of phase 0, fraction of p_x in [0, 1)

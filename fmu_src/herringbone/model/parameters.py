@@ -22,6 +22,7 @@ class Range:
     high_open: bool = False
 
     def contains(self, value: float) -> bool:
+        """Whether `value` is finite and inside the interval (open bounds excluded)."""
         if not math.isfinite(value):
             return False
         if self.low is not None and (value < self.low or (self.low_open and value == self.low)):
@@ -31,6 +32,7 @@ class Range:
         return True
 
     def describe(self) -> str:
+        """The interval in words, as messages show it: "> 0", "[1e-12, 0.01]", "(0, 1.5708)"."""
         if self.low is None and self.high is None:
             return "any finite number"
         if self.high is None:
@@ -52,6 +54,9 @@ HELIX_ANGLE = Range(0.0, math.pi / 2, low_open=True, high_open=True)
 
 @dataclass(frozen=True)
 class Parameter:
+    """One parameter (or input) of the train: its name, default (SI units), unit, meaning,
+    type, allowed range and the component that carries it."""
+
     name: str
     default: float | int | bool | None  # None: derived from other parameters (see gear.py)
     unit: str

@@ -46,6 +46,8 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class Experiment:
+    """A scene's run: simulated time and the interval between output samples, seconds."""
+
     stop_time: float = 0.1
     output_interval: float = 1e-4
 
@@ -59,15 +61,21 @@ class InputSchedule:
     M_load: tuple[float, ...] = (cast(float, INPUTS["M_load"].default),)
 
     def at(self, time: float) -> tuple[float, float]:
+        """(M_motor, M_load), N·m, held at `time` (s): the last row at or before it."""
         row = max(bisect.bisect_right(self.times, time) - 1, 0)
         return self.M_motor[row], self.M_load[row]
 
     def change_times(self) -> tuple[float, ...]:
+        """The times (s) after 0 at which the torques change."""
         return self.times[1:]
 
 
 @dataclass(frozen=True)
 class Scene:
+    """A validated gear train: its components, the parameters it sets (and all it carries,
+    completed with reference values and derived inertias), its experiment and input torques,
+    and the file it came from."""
+
     name: str
     components: dict[str, bool]
     given: dict[str, float | int | bool]  # the parameters the scene sets itself
@@ -82,6 +90,7 @@ class Scene:
                            _complete_parameters(self.given, self.components, self.source))
 
     def has(self, component: str) -> bool:
+        """Whether the train has a component ("motor", "load" or "bearings")."""
         return self.components[component]
 
     def with_parameters(self, **changes) -> Scene:

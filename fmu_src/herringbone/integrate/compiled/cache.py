@@ -52,15 +52,18 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
         self._cache_path = str(kernels_folder())
 
     def get_cache_path(self):
+        """The folder of the package's compiled kernels."""
         return self._cache_path
 
     def get_source_stamp(self):
+        """The hash of the whole package, not of the one file: see below."""
         # numba checks only the function's own file; a kernel compiled into another (walk.py
         # holds dop853.step and the equations) must be compiled anew when any of them changes
         return package_digest()
 
     @classmethod
     def from_function(cls, py_func, py_file):
+        """The locator for a kernel of this package; None for anyone else's."""
         if Path(py_file).resolve().parent != PACKAGE_DIR:
             return None  # not ours: numba's own locators decide
         return super().from_function(py_func, py_file)  # None if the folder is not writable
