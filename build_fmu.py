@@ -18,9 +18,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent
 sys.path.insert(0, str(ROOT / "fmu_src"))  # this checkout's package, whatever is installed
 
-from herringbone.fmu.builder import (build_example_fmus, build_gear_fmu,  # noqa: E402, F401
-                                     build_slave_fmu, carry_compiled_integrator,
-                                     fix_model_description, main as _main, validate)
+from herringbone.fmu.builder import (  # noqa: E402, F401
+    build_example_fmus,
+    build_gear_fmu,
+    build_slave_fmu,
+    carry_compiled_integrator,
+    fix_model_description,
+    validate,
+)
+from herringbone.fmu.builder import main as _main  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

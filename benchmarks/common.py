@@ -245,8 +245,16 @@ def _worker(spec_path) -> None:
     import ctypes
 
     from fmpy import read_model_description
-    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, calloc, free, fmi2True)
+    from fmpy.fmi2 import (
+        FMU2Slave,
+        calloc,
+        fmi2CallbackAllocateMemoryTYPE,
+        fmi2CallbackFreeMemoryTYPE,
+        fmi2CallbackFunctions,
+        fmi2CallbackLoggerTYPE,
+        fmi2True,
+        free,
+    )
     from fmpy.logging import addLoggerProxy
 
     spec = json.loads(Path(spec_path).read_text())

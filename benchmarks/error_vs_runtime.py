@@ -303,9 +303,16 @@ def plot(rows, path) -> None:
 
 def main(argv=None) -> int:
     """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
-    from herringbone.arguments import (COMPILED_TOLERANCE_ARGUMENT, POSITIVE,
-                                       REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, Argument,
-                                       OneLineParser, Range, output_folder)
+    from herringbone.arguments import (
+        COMPILED_TOLERANCE_ARGUMENT,
+        POSITIVE,
+        REFERENCE_TOLERANCE_ARGUMENT,
+        STOP_TIME,
+        Argument,
+        OneLineParser,
+        Range,
+        output_folder,
+    )
 
     step = Argument("step", None, "seconds", POSITIVE).option_type
     budget = Argument("budget", None, "wall seconds", POSITIVE).option_type

@@ -83,8 +83,8 @@ def long_run(scene_path, periods=10_000, step=1e-3, window_periods=25, window_st
     """`periods` mesh periods at `step`, with `window_periods` recorded every `window_step` at
     the start and at the end. Returns the figures of drift (see the module docstring)."""
     import herringbone
-    from herringbone.model.geometry import GearGeometry
     from herringbone.model.assembly import output_names
+    from herringbone.model.geometry import GearGeometry
 
     scene = herringbone.load_scene(scene_path)
     geometry = GearGeometry.from_parameters(scene.parameters)
@@ -213,8 +213,14 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
 
 def main(argv=None) -> int:
     """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
-    from herringbone.arguments import (POSITIVE, REFERENCE_TOLERANCE_ARGUMENT, Argument,
-                                       OneLineParser, Range, output_folder)
+    from herringbone.arguments import (
+        POSITIVE,
+        REFERENCE_TOLERANCE_ARGUMENT,
+        Argument,
+        OneLineParser,
+        Range,
+        output_folder,
+    )
 
     def positive(meaning, infinite=False):
         return Argument(meaning, None, meaning, POSITIVE, infinite=infinite).option_type

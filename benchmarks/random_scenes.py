@@ -34,10 +34,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # scene_distribution: the one home of the distribution
 
 import numpy as np  # noqa: E402
+from scene_distribution import random_scene  # noqa: E402
 
 import herringbone  # noqa: E402
 from herringbone.model.assembly import GearTrainModel  # noqa: E402
-from scene_distribution import random_scene  # noqa: E402
 
 FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
           "F_brg_wheel_right")
@@ -87,7 +87,8 @@ def measure(seed: int, time_limit: float) -> dict:
     """One scene: every run of RUNS (within `time_limit` s in all), its wall time, and its force
     error against the first; failures as 'ExceptionType: message'."""
     scene = random_scene(seed)
-    row = {"seed": seed, **describe(scene), "force_scale": f"{GearTrainModel(scene).force_scale():.4g}"}
+    row = {"seed": seed, **describe(scene),
+           "force_scale": f"{GearTrainModel(scene).force_scale():.4g}"}
     results = {}
     signal.signal(signal.SIGALRM, _on_alarm)
     signal.setitimer(signal.ITIMER_REAL, time_limit)
@@ -99,7 +100,7 @@ def measure(seed: int, time_limit: float) -> dict:
             except SceneTimeout:
                 row[f"failure_{label}"] = f"time limit: scene stopped after {time_limit:g} s"
                 break
-            except Exception as error:  # noqa: BLE001: every failure is a result here
+            except Exception as error:  # noqa: BLE001 (every failure is a result here)
                 row[f"failure_{label}"] = f"{type(error).__name__}: {error}"
             row[f"seconds_{label}"] = round(time.perf_counter() - started, 3)
     finally:

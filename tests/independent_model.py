@@ -1,5 +1,6 @@
-"""MODEL.md written out again by hand, for tests: the 8-coordinate mass and stiffness matrices and
-the contact points at a pinion angle, without any code of the package's own assembly."""
+"""docs/model.md written out again by hand, for tests: the 8-coordinate mass and stiffness
+matrices and the contact points at a pinion angle, without any code of the package's own
+assembly."""
 import math
 
 import numpy as np
@@ -20,7 +21,8 @@ def radii(p):
 
 
 def contact_points(p, pinion_angle=0.0):
-    """[(half, z, lever arm)] of the points with 0 <= z < b (edge_ramp 0), MODEL.md section 3."""
+    """[(half, z, lever arm)] of the points with 0 <= z < b (edge_ramp 0), docs/model.md
+    section 3."""
     rp, _ = radii(p)
     p_x = math.pi * p["m_n"] / math.sin(p["beta"])
     offsets = [("left", 0.0), ("left", p["eps_q"]), ("right", p["stagger"]),

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from conftest import force_errors
 
 from herringbone.integrate.compiled import equations
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
@@ -50,8 +51,6 @@ MOMENTUM_BOUND = 1e-9
 # (e) a sample is on a phase switch if φp is this close to its contact set's ends (in mesh
 # pitches): a pitch of 1e-6 is where the two runs' pinion angles may differ at 1e-4 force error.
 PHASE_HAIR = 1e-6
-FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right")
 CHATTER_CURE = "edge_ramp > 0"
 
 
@@ -118,8 +117,7 @@ def point_forces(model: GearTrainModel, state, contact_set) -> np.ndarray:
 def forces_agree(run: RecordedRun, reference: RecordedRun, bound: float) -> None:
     """(a): max |F(run) − F(reference)| over F_mesh and the bearing forces <= bound·scale."""
     scale = reference.model.force_scale()
-    errors = {name: np.abs(run.outputs[name] - reference.outputs[name]).max() / scale
-              for name in FORCES if name in reference.outputs}
+    errors = force_errors(run.outputs, reference.outputs, reference.model)
     worst = max(errors, key=errors.get)
     at = reference.outputs["time"][np.argmax(np.abs(run.outputs[worst]
                                                     - reference.outputs[worst]))]
@@ -147,7 +145,8 @@ def no_tension(run: RecordedRun, label: str) -> None:
         forces = point_forces(run.model, state, contact_set)
         pulling = forces[loaded != 0.0].min(initial=0.0)
         pressed = forces[loaded == 0.0].max(initial=0.0)
-        assert pulling >= -limit, f"{label}: a loaded point pulls by {-pulling:.4g} N at t = {t:.6g} s"
+        assert pulling >= -limit, (f"{label}: a loaded point pulls by {-pulling:.4g} N at "
+                                   f"t = {t:.6g} s")
         assert pressed <= limit, (f"{label}: a free point is pressed by {pressed:.4g} N at "
                                   f"t = {t:.6g} s (a missed regain)")
 
@@ -258,7 +257,7 @@ def scene_toml(scene, header: str) -> str:
     if len(schedule.times) == 1:
         lines += [f"M_motor = {schedule.M_motor[0]!r}", f"M_load = {schedule.M_load[0]!r}"]
     else:
-        rows = ", ".join(f"[{t!r}, {m!r}, {l!r}]" for t, m, l in
+        rows = ", ".join(f"[{t!r}, {m!r}, {ld!r}]" for t, m, ld in
                          zip(schedule.times, schedule.M_motor, schedule.M_load))
         lines.append(f"table = [{rows}]")
     return "\n".join(lines) + "\n"

@@ -32,22 +32,31 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from fmpy.fmi1 import FMICallException
+from fmu_host import Instance
 
 import herringbone
-from conftest import MODELS
-from fmu_host import Instance
-from herringbone import SceneError
+from herringbone import SceneError, arguments
 from herringbone.model.parameters import INPUTS, PARAMETERS
 
 NAN, INF = float("nan"), float("inf")
 DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
 ROOT = MODELS.parent
 REFERENCE_TEXT = (MODELS / "reference.toml").read_text()
-# The FMU's own settings (herringbone_gear_fmu.SOLVER_SETTINGS; the slave script imports pythonfmu's
-# runtime, so written out): name -> what its message must say is allowed.
-SOLVER_SETTINGS = {"solver_tolerance": ("[1e-12, 0.01]",), "max_step": (">= 0",),
-                   "solver_method": ("'dop853'", "'radau'", "'auto'")}
+
+
+def allowed_words(argument: arguments.Argument) -> tuple[str, ...]:
+    """What a message about `argument` must say is allowed, read from herringbone.arguments
+    (the one home of the ranges): each choice quoted, or the range in words ("[1e-12, 0.01]")."""
+    if argument.choices is not None:
+        return tuple(repr(choice) for choice in argument.choices)
+    return (argument.allowed.describe() + (" or inf" if argument.infinite else ""),)
+
+
+# The FMU's own settings: name -> what its message must say is allowed.
+SOLVER_SETTINGS = {argument.name: allowed_words(argument) for argument in (
+    arguments.FMU_SOLVER_TOLERANCE, arguments.FMU_MAX_STEP, arguments.FMU_SOLVER_METHOD)}
 
 
 @dataclass(frozen=True)
@@ -205,8 +214,8 @@ FILE_CASES = [
 # `commands`, which must raise ValueError (SceneError for the scene) before any work; "argv"
 # rows run a command line, `value` its arguments ({scene}: models/reference.toml, {file}: a
 # plain file, so "{file}/x" lies in no folder), `commands` the program: herringbone or build_fmu.
-COMPILED_TOL = ("tolerance", "[1e-12, 0.01]")
-REFERENCE_TOL = ("tolerance", "[1e-12, 1e-05]")
+COMPILED_TOL = ("tolerance", *allowed_words(arguments.COMPILED_TOLERANCE_ARGUMENT))
+REFERENCE_TOL = ("tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT))
 RUNS = ("simulate", "reference_simulate")
 SPANS = RUNS + ("simulate_with",)
 
@@ -239,7 +248,7 @@ def _call_cases():
                      ("method", "'DOP853'", "'Radau'"), ("reference_simulate",)))
     for label, value in (("zero", 0.0), ("negative", -1e-3), ("nan", NAN)):
         rows.append((f"max_step-{label}", "max_step", {"max_step": value},
-                     ("max_step", "> 0 or inf"), ("simulate",)))
+                     ("max_step", *allowed_words(arguments.MAX_STEP)), ("simulate",)))
     for label, value in (("nan", NAN), ("plus-inf", INF), ("string", "0")):
         rows.append((f"initial_pinion_angle-{label}", "initial_pinion_angle",
                      {"initial_pinion_angle": value}, ("initial_pinion_angle", "finite"),
@@ -263,7 +272,7 @@ def _call_cases():
 
 RUN = ("run", "{scene}")
 STABILITY = ("stability", "{scene}")
-RUN_TOL = ("--tolerance", "[1e-12, 1e-05]")
+RUN_TOL = ("--tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT))
 SWEEP = ("--speeds", "0 < FROM < TO")
 OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("run-stop-time-negative", "--stop-time", RUN + ("--stop-time", "-1"),
@@ -318,7 +327,7 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("benchmark-unknown", "bogus", ("benchmark", "bogus"),
      ("'bogus'", "error-vs-runtime, extreme-scenes"), "herringbone"),
     ("benchmark-tolerance-one", "--tolerances", ("benchmark", "--tolerances", "1e-6", "1"),
-     ("--tolerances 1", "[1e-12, 0.01]"), "herringbone"),
+     ("--tolerances 1", *allowed_words(arguments.COMPILED_TOLERANCE_ARGUMENT)), "herringbone"),
     ("benchmark-repeat-zero", "--repeat", ("benchmark", "--repeat", "0"),
      ("--repeat 0", "whole number >= 1"), "herringbone"),
     ("benchmark-periods-negative", "--periods",
@@ -561,8 +570,8 @@ def no_work(monkeypatch):
 
 
 def _api_function(name):
-    from herringbone.integrate.contract import simulate_with
     from herringbone.analysis.stability import monodromy, stability_chart
+    from herringbone.integrate.contract import simulate_with
 
     return {"simulate": herringbone.simulate,
             "reference_simulate": herringbone.reference_simulate,

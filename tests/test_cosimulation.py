@@ -1,10 +1,11 @@
-"""Co-simulation of the gear FMU with the example drive-train FMUs (MODEL.md sections 1, 5, 7, 11).
+"""Co-simulation of the gear FMU with the example drive-train FMUs (docs/model.md sections 1,
+5, 7, 11).
 
 The induction motor (examples/induction_motor.py, Kloss curve) drives the reference gear train
 and the fan (examples/fan_load.py, M = k_fan·w·|w|) loads it: `w_motor` → motor → `M_motor`,
 `w_load` → fan → `M_load`.  In steady running the gear is a lossless ratio u = z_wheel/z_pinion
-(MODEL.md 5: M_load = u·M_motor, w_load = w_motor/u), so the train settles where the motor curve
-meets the fan curve seen through the gear:
+(docs/model.md section 5: M_load = u·M_motor, w_load = w_motor/u), so the train settles where
+the motor curve meets the fan curve seen through the gear:
 
     Kloss(w) = k_fan·(w/u)²/u.
 
@@ -73,7 +74,8 @@ DRIFT_FRACTION = 0.1
 SIGNALS = ("w_motor", "w_load", "M_motor", "M_load")
 TOLERANCES = {"w_motor": SPEED_TOLERANCE, "w_load": SPEED_TOLERANCE,
               "M_motor": MOTOR_TORQUE_TOLERANCE, "M_load": LOAD_TORQUE_TOLERANCE}
-# Which FMU produces each signal; the gear's outputs are read by the name in MODEL.md 7.
+# Which FMU produces each signal; the gear's outputs are read by the name in docs/model.md
+# section 7.
 SOURCE_OF_SIGNAL = {"w_motor": "gear", "w_load": "gear", "M_motor": "motor", "M_load": "fan"}
 # The connections: (from FMU, output) → (to FMU, input).
 CONNECTIONS = (

@@ -3,9 +3,13 @@ repository (a clone has nothing beside it)."""
 import subprocess
 
 from conftest import MODELS
+
 from herringbone.model.document import with_generated_tables
 
 ROOT = MODELS.parent
+# What pointed outside the repository once (the notes beside the checkout); spelt in pieces so
+# that this file does not name them itself. docs/model.md is their home now.
+OUTSIDE = ("../" + "shared", "MODEL" + ".md", "NOTES" + ".md")
 
 
 def test_model_document_lists_every_parameter_as_the_package_has_it():
@@ -24,6 +28,6 @@ def test_nothing_points_outside_the_repository():
         path = ROOT / name
         if path.suffix in (".py", ".md", ".toml", ".txt", ".c", ".h", ".sh") and path.is_file():
             text = path.read_text(encoding="utf-8", errors="replace")
-            if "../shared" in text or "MODEL.md" in text or "NOTES.md" in text:
+            if any(mark in text for mark in OUTSIDE):
                 offenders.append(name)
     assert not offenders, f"these files point outside the repository: {offenders}"

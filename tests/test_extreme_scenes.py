@@ -21,19 +21,17 @@ import math
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import pytest
+from conftest import MODELS, force_errors
 
 import herringbone
-from conftest import MODELS
-from herringbone.model.assembly import GearTrainModel
 from herringbone.analysis.phasing import contact_count, count_intervals, scene_phasing
+from herringbone.model.assembly import GearTrainModel
 
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right"]
 # Of the force scale, at the FMU's default settings (issue 5), for every scene. contact_loss is
 # non-smooth (each loss and regain a kink located to the tolerance), but it is held to the same
 # bound: the reference converges on it like on the smooth scenes (test_reference.py) and the FMU
@@ -71,7 +69,7 @@ def mesh_phase(scene, r):
 
 
 def follows_contact_law(scene, r, require_both_sides=True):
-    """n_contacts is the count of the four streams' alternation law (MODEL.md section 8) at
+    """n_contacts is the count of the four streams' alternation law (docs/model.md section 8) at
     every sample whose mesh phase is not within LAW_MARGIN of a switch; the run saw the counts
     on both sides of a switch. With an edge ramp r a point counts while −r < z < b + r: the law
     is that of faces 2r wider whose points enter r/p_x of a period earlier."""
@@ -292,7 +290,7 @@ def test_scene_through_its_fmu_agrees_with_the_reference(scene_fmu, name, record
         bad = [k for k, v in outputs.items() if not np.all(np.isfinite(v))]
         assert not bad, f"{run}: outputs not finite: {bad}"
     scale = GearTrainModel(scene).force_scale()
-    errors = {k: np.abs(result[k] - reference[k]).max() / scale for k in FORCES if k in reference}
+    errors = force_errors(result, reference, scene)
     record_property("error", max(errors.values()))
     worst = max(errors, key=errors.get)
     at = reference["time"][np.argmax(np.abs(result[worst] - reference[worst]))]

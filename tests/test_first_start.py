@@ -101,7 +101,7 @@ def test_numba_is_asked_why_it_must_compile_and_the_compile_is_announced_first(t
     (message, overloads_then), = found["said"]  # one message, said before numba compiled
     assert overloads_then == 0
     assert message.startswith("compiling the integrator for this machine (there is no compiled "
-                              f"code for this version of the integrator in ")
+                              "code for this version of the integrator in ")
     assert f"about {first_start.DEFAULT_COMPILE_SECONDS:.0f} s, once" in message
     assert found["records"]["hermite_root"]["seconds"] > 0.0
 

@@ -13,21 +13,20 @@ import os
 import subprocess
 import sys
 import time
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 
 import fmpy
 import numpy as np
 import pytest
+from conftest import FORCES, MODELS
 from fmpy.fmi1 import FMICallException
-
-from conftest import MODELS
 from fmu_host import Instance
+
 from herringbone.fmu import builder
 from herringbone.model.parameters import INPUTS, PARAMETERS
 
 DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_wheel_right"]
 STEP = 1e-4
 BIN = f"{sys.executable.rsplit('/', 1)[0]}"
 
@@ -59,7 +58,7 @@ def run_steps(instance, count, size=STEP):
     rows = []
     for _ in range(count):
         instance.step(size)
-        rows.append(list(instance.get(FORCES).values()))
+        rows.append(list(instance.get(list(FORCES)).values()))
     return np.array(rows)
 
 

@@ -5,16 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS, force_error
 
 import herringbone
-from conftest import MODELS
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import simulate_with, start_position
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
-
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right"]
 
 
 def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
@@ -27,11 +24,6 @@ def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
         samples.append(model.outputs(position.state, position.segment.contact_set,
                                      position.segment.loaded))
     return {name: np.array([s[name] for s in samples]) for name in samples[0]}
-
-
-def force_error(a, b, model):
-    names = [n for n in FORCES if n in a]
-    return max(np.abs(a[n] - b[n]).max() for n in names) / model.force_scale()
 
 
 @pytest.fixture(scope="module")
@@ -272,8 +264,11 @@ def test_step_bound_keeps_every_mode_true_to_its_eigenvalue(damping_ratio, toler
     the bound is tight: a tenth longer, the fastest mode is not (unless the cap of 3.5/|λ|max
     holds it first)."""
     from herringbone.integrate.compiled.dop853 import stability_function
-    from herringbone.integrate.compiled_stepper import (EIGENVALUE_ERROR_PER_TOLERANCE,
-                                                        EXPLICIT_STEP_BOUND, explicit_step_bound)
+    from herringbone.integrate.compiled_stepper import (
+        EIGENVALUE_ERROR_PER_TOLERANCE,
+        EXPLICIT_STEP_BOUND,
+        explicit_step_bound,
+    )
 
     frequency = 6.8e5
     fastest = frequency * complex(-damping_ratio, math.sqrt(1.0 - damping_ratio ** 2))
@@ -287,6 +282,7 @@ def test_step_bound_keeps_every_mode_true_to_its_eigenvalue(damping_ratio, toler
                         + tolerance * abs(mode))
 
     assert error_over_allowance(h) <= 1.0 + 1e-6  # the bisection ends on the allowed side
-    assert h * frequency == pytest.approx(EXPLICIT_STEP_BOUND) or error_over_allowance(1.1 * h) > 1.0
+    assert (h * frequency == pytest.approx(EXPLICIT_STEP_BOUND)
+            or error_over_allowance(1.1 * h) > 1.0)
     if damping_ratio == 0.0:  # an undamped mode is held by the tolerance alone
         assert h * frequency < (1.2 if tolerance == 1e-7 else 0.8)

@@ -1,12 +1,13 @@
-"""Rigid kinematics: speed ratio and the contact count of the four streams (MODEL.md 3, 8)."""
+"""Rigid kinematics: speed ratio and the contact count of the four streams (docs/model.md
+sections 3, 8)."""
 import math
 
 import numpy as np
 import pytest
+from independent_model import contact_points
 
 import herringbone
 from herringbone.analysis.phasing import alternation_law, scene_phasing
-from independent_model import contact_points
 
 
 def test_mean_speed_ratio_is_one_over_u(reference_scene):
@@ -28,7 +29,7 @@ def test_mean_speed_ratio_is_one_over_u(reference_scene):
 ])
 def test_contact_count_follows_the_streams(reference_scene, changes, law):
     """Without torque the train turns rigidly at w0, so φp(t) = w0·t exactly and n_contacts must
-    equal the number of points on the faces, counted from MODEL.md section 3 by hand."""
+    equal the number of points on the faces, counted from docs/model.md section 3 by hand."""
     scene = reference_scene.with_parameters(contact_loss=False, **changes).with_inputs(
         M_motor=0.0, M_load=0.0)
     w0 = scene.parameters["w0_pinion"]
@@ -41,7 +42,7 @@ def test_contact_count_follows_the_streams(reference_scene, changes, law):
     assert results["n_contacts"][inside] == pytest.approx(expected)
     runs = "-".join(str(int(n)) for i, n in enumerate(results["n_contacts"][inside])
                     if i == 0 or n != results["n_contacts"][i - 1])
-    # the alternation law of the four streams (Kryukov & Savelieva, MODEL.md section 8)
+    # the alternation law of the four streams (Kryukov & Savelieva, docs/model.md section 8)
     assert runs == alternation_law(scene_phasing(scene).streams)
     if law is not None:
         assert runs == "-".join(map(str, law))

@@ -9,9 +9,9 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from conftest import MODELS
 
 import herringbone
-from conftest import MODELS
 from herringbone import cli, shipped
 from herringbone.integrate.compiled_stepper import CompiledStepper
 from herringbone.integrate.contract import Stepper

@@ -1,12 +1,12 @@
-"""Natural frequencies of the reference scene at φp = 0 (MODEL.md section 10)."""
+"""Natural frequencies of the reference scene at φp = 0 (docs/model.md section 10)."""
 import math
 
 import numpy as np
 import pytest
 import scipy.linalg
+from independent_model import ORDER, mass_matrix, stiffness_matrix
 
 import herringbone.model.assembly
-from independent_model import ORDER, mass_matrix, stiffness_matrix
 
 MODEL_MD_FREQUENCIES_HZ = [113, 688, 1.50e3, 2.10e3, 4.44e3, 12.0e3, 13.8e3]
 
@@ -20,7 +20,7 @@ def test_independent_assembly_matches_model_md(reference_scene):
     p = reference_scene.parameters
     f = frequencies(stiffness_matrix(p, 0.0), mass_matrix(p))
     assert f[0] < 1e-3  # the rigid rotation
-    # MODEL.md gives three significant figures: 0.5 % covers their rounding
+    # docs/model.md gives three significant figures: 0.5 % covers their rounding
     assert f[1:] == pytest.approx(MODEL_MD_FREQUENCIES_HZ, rel=5e-3)
 
 
@@ -37,7 +37,7 @@ def test_package_modes_match_independent_assembly(reference_scene):
 
 
 def test_mean_stiffness_is_period_average(reference_scene):
-    """The mean mesh stiffness of MODEL.md (about 1.08e9 N/m) is Σ over streams of c·b/p_x."""
+    """The mean mesh stiffness of docs/model.md (about 1.08e9 N/m) is Σ over streams of c·b/p_x."""
     model = herringbone.model.assembly.GearTrainModel(reference_scene)
     assert model.mesh.mean_stiffness() == pytest.approx(1.082e9, rel=1e-3)
     angles = np.linspace(0, 2 * math.pi / 10, 2001)[:-1]

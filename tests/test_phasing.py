@@ -1,4 +1,5 @@
-"""Mesh-phase theory (MODEL.md section 8) against the articles and the mesh; the scene report."""
+"""Mesh-phase theory (docs/model.md section 8) against the articles and the mesh; the scene
+report."""
 import math
 import re
 
@@ -6,11 +7,17 @@ import numpy as np
 import pytest
 
 import herringbone
+from herringbone.analysis.phasing import (
+    alternation_law,
+    contact_count,
+    count_intervals,
+    phase_overlap,
+    scene_phasing,
+    spur_contact_ratio,
+)
+from herringbone.analysis.report import info_main, scene_report
 from herringbone.model.geometry import GearGeometry
 from herringbone.model.mesh import Mesh
-from herringbone.analysis.phasing import (alternation_law, contact_count, count_intervals,
-                                 phase_overlap, scene_phasing, spur_contact_ratio)
-from herringbone.analysis.report import info_main, scene_report
 
 REFERENCE = herringbone.scene_from_dict({})
 P_X = GearGeometry.from_parameters(REFERENCE.parameters).axial_pitch
@@ -186,8 +193,9 @@ def use_stand_in_modes(monkeypatch):
     shapes[:, 1] = [0.9, 0.4, 0.1, 0, 0, 0, 0, 0.1]
     shapes[:, 2] = [0, 0.1, 0.9, 0.2, 0, 0.3, 0, 0]
     shapes[:, 3] = [0, 0, 0, 0.1, 0, 0.1, 1.0, 0]
-    monkeypatch.setattr(herringbone.analysis.report, "natural_modes", lambda scene, pinion_angle=None: (
-        np.array([1e-5, 113.0, 688.0, 13800.0]), shapes, list(NAMES)))
+    monkeypatch.setattr(herringbone.analysis.report, "natural_modes",
+                        lambda scene, pinion_angle=None: (
+                            np.array([1e-5, 113.0, 688.0, 13800.0]), shapes, list(NAMES)))
     monkeypatch.setattr(herringbone.analysis.report, "mass_matrix", lambda scene: np.eye(8))
 
 

@@ -22,13 +22,13 @@ import dataclasses
 import os
 
 import numpy as np
+import property_checks as checks
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
-
-import herringbone
-import property_checks as checks
 from random_scenes import random_scene, scenes
 from scene_distribution import LOW_SPEED
+
+import herringbone
 
 CI = settings(derandomize=True, database=None, deadline=None, print_blob=True,
               phases=(Phase.explicit, Phase.generate),

@@ -5,23 +5,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS, force_error
+from independent_model import radii
 
 import herringbone
-from conftest import MODELS
 from herringbone.integrate import contract, stepping
 from herringbone.integrate.compiled import walk
 from herringbone.model.assembly import GearTrainModel
-from independent_model import radii
 
 REGRESSION = Path(__file__).resolve().parent / "regression"
 
-FORCES = ["F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
-          "F_brg_wheel_right"]
-
-
-def largest_force_difference(a, b, scene):
-    static_mesh_force = scene.inputs.M_motor[0] / radii(scene.parameters)[0]
-    return max(np.abs(a[k] - b[k]).max() for k in FORCES) / static_mesh_force
 
 
 def test_converges_to_a_hundred_times_tighter_tolerance(reference_scene):
@@ -29,7 +22,7 @@ def test_converges_to_a_hundred_times_tighter_tolerance(reference_scene):
                                              output_interval=1e-4)
     tighter = herringbone.reference_simulate(reference_scene, stop_time=0.03,
                                              output_interval=1e-4, tolerance=1e-12)
-    assert largest_force_difference(default, tighter, reference_scene) < 1e-8
+    assert force_error(default, tighter, reference_scene) < 1e-8
 
 
 def test_a_train_turned_by_whole_pitches_runs_the_same(reference_scene):
@@ -89,17 +82,11 @@ def test_contact_loss_and_regain_converge(reference_scene):
     kwargs = dict(stop_time=0.02, output_interval=2e-5)
     default = herringbone.reference_simulate(scene, **kwargs)
     tighter = herringbone.reference_simulate(scene, **kwargs, tolerance=1e-12)
-    assert largest_force_difference(default, tighter, scene) < 1e-6
+    assert force_error(default, tighter, scene) < 1e-6
     assert default["n_contacts"].min() <= 2  # of the 4 to 6 points on the faces
     assert default["F_mesh_right"].min() == 0.0  # the right half lifts off entirely at times
     for half in ("left", "right"):
         assert default[f"F_mesh_{half}"].min() >= 0.0
-
-
-def force_difference(a, b, scene):
-    """The largest difference of the forces, relative to the scene's force scale."""
-    return (max(np.abs(a[k] - b[k]).max() for k in FORCES if k in a)
-            / GearTrainModel(scene).force_scale())
 
 
 @pytest.mark.parametrize("path, stop_time, bound", [
@@ -120,7 +107,7 @@ def test_agrees_with_itself_at_a_hundred_times_tighter_tolerance(path, stop_time
     default = herringbone.reference_simulate(scene, stop_time=stop_time, check_tension=True)
     tighter = herringbone.reference_simulate(scene, stop_time=stop_time, tolerance=1e-12,
                                              check_tension=True)
-    assert force_difference(default, tighter, scene) < bound
+    assert force_error(default, tighter, scene) < bound
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,6 @@
 """Scene files: defaults, and one clear message for each kind of bad input."""
+import pickle
+
 import pytest
 
 import herringbone
@@ -78,3 +80,15 @@ def test_shipped_scenes_load():
         assert name in names
     for name in names:
         herringbone.load_scene(MODELS / f"{name}.toml")
+
+
+def test_scene_error_carries_its_fields():
+    """SceneError names the file, table and key apart, and its text joins them (issue 17)."""
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"z_pinion": 0}}, source="x.toml")
+    error = raised.value
+    assert (error.source, error.table, error.key) == ("x.toml", "parameters", "z_pinion")
+    assert error.problem == "z_pinion is 0; allowed: >= 1"
+    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: >= 1"
+    again = pickle.loads(pickle.dumps(error))
+    assert (str(again), again.key) == (str(error), "z_pinion")

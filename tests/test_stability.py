@@ -8,11 +8,11 @@ import pytest
 import scipy.integrate
 import scipy.linalg
 import scipy.optimize
+from independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 import herringbone
 from herringbone.analysis import stability
 from herringbone.model.assembly import GearTrainModel, natural_modes
-from independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 # One mesh-like degree of freedom: the equivalent mass of the reference pair and a stiffness that
 # alternates between six and four points for 30 % and 70 % of the period.
@@ -82,7 +82,7 @@ def test_closed_form_transition_covers_every_damping():
 # --- the gear train --------------------------------------------------------------------------
 
 def mesh_damping_factor(p):
-    """η = 2·ζ_mesh/ω_m of MODEL.md section 3, written out again."""
+    """η = 2·ζ_mesh/ω_m of docs/model.md section 3, written out again."""
     rp, rw = radii(p)
     p_x = math.pi * p["m_n"] / math.sin(p["beta"])
     mean_stiffness = p["c_point"] * 2 * (p["b_left"] + p["b_right"]) / p_x
@@ -91,7 +91,7 @@ def mesh_damping_factor(p):
 
 
 def independent_damping_matrix(p, pinion_angle):
-    """C of MODEL.md sections 3-4 at a pinion angle, over the 8 coordinates, by hand."""
+    """C of docs/model.md sections 3-4 at a pinion angle, over the 8 coordinates, by hand."""
     zeta_left, zeta_right = bearing_positions(p)
     rows = [(unit(0) - unit(1), p["h_shaft_in"]), (unit(4) - unit(7), p["h_shaft_out"])]
     for gear, x, psi in (("pinion", 3, 2), ("wheel", 6, 5)):
@@ -156,7 +156,7 @@ def reference_monodromy(scene, speed):
     for interval in range(len(model.mesh.switch_phases)):
         contact_set = model.mesh.contact_set(0, interval)
 
-        def derivative(t, flat):
+        def derivative(t, flat, contact_set=contact_set):
             y = np.zeros(model.size)
             y[model.pinion] = speed * t
             a = np.zeros((2 * n, 2 * n))

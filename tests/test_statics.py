@@ -1,8 +1,8 @@
-"""Static equilibrium at t = 0 (MODEL.md sections 6-7): every output of the first sample."""
+"""Static equilibrium at t = 0 (docs/model.md sections 6-7): every output of the first sample."""
 import pytest
+from independent_model import bearing_positions, radii, static_state
 
 import herringbone
-from independent_model import bearing_positions, radii, static_state
 
 STATIC_TOLERANCE = 1e-9  # relative: the start is an exact linear solve
 

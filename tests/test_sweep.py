@@ -6,7 +6,6 @@ import os
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -15,12 +14,12 @@ import pytest
 
 import herringbone
 from herringbone import cli
-from herringbone.integrate.compiled_stepper import eigenvalues
-from herringbone.model.assembly import GearTrainModel, natural_modes
 from herringbone.analysis.report import resonance_speeds
 from herringbone.analysis.stability import largest_multiplier
 from herringbone.analysis.sweep import run_sweep, sweep
 from herringbone.analysis.sweep_point import Protocol, timing, window_figures
+from herringbone.integrate.compiled_stepper import eigenvalues
+from herringbone.model.assembly import GearTrainModel, natural_modes
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 SHORT = Protocol(settle_time=0.02, window_periods=8, samples_per_period=32)
@@ -132,7 +131,8 @@ def test_dynamic_factor_peaks_at_a_resonance_of_info(reference_scene):
     frequencies = natural_modes(reference_scene)[0]
     lateral = resonance_speeds(frequencies[3], 10)[2]
     torsional = resonance_speeds(frequencies[2], 10)[1]
-    assert frequencies[3] == pytest.approx(1497.3, abs=0.1) and lateral == pytest.approx(470.4, abs=0.1)
+    assert frequencies[3] == pytest.approx(1497.3, abs=0.1)
+    assert lateral == pytest.approx(470.4, abs=0.1)
     assert frequencies[2] == pytest.approx(683.7, abs=0.1)
     peak = table.loc[table["K_v"].idxmax()]
     assert abs(peak["w0_pinion"] - lateral) <= step
@@ -218,9 +218,9 @@ def test_campbell_crossings_are_the_resonance_speeds_of_info(tmp_path, capsys):
     output = tmp_path / "campbell.png"
     assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "400", "500",
                      "-o", str(output)]) == 0
-    lines = [l for l in capsys.readouterr().out.splitlines() if "k = " in l]
+    lines = [line for line in capsys.readouterr().out.splitlines() if "k = " in line]
     # info: 683.71 Hz at k = 1 429.6 rad/s, 2059.40 Hz k = 3 431.3, 1497.33 Hz k = 2 470.4
-    assert [l.split("(")[1].split("rad/s")[0].strip() for l in lines] == ["429.6", "431.3",
+    assert [line.split("(")[1].split("rad/s")[0].strip() for line in lines] == ["429.6", "431.3",
                                                                           "470.4"]
     assert output.stat().st_size > 10_000
     assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "500", "400"]) == 2

@@ -85,6 +85,7 @@ class Argument:
 
     def option_type(self, text: str):
         """argparse `type=`: the value of `text`, or ArgumentTypeError "TEXT: allowed: …"."""
+        value: str | float
         if self.choices is not None:
             value = text
         else:
@@ -132,7 +133,7 @@ def check_scene(scene) -> Scene:
     if not isinstance(scene, Scene):
         raise SceneError(f"scene must be a herringbone.Scene, got {type(scene).__name__} "
                          f"{scene!r}; load one with herringbone.load_scene(path) or build one "
-                         "with herringbone.scene_from_dict(...)")
+                         "with herringbone.scene_from_dict(...)", key="scene")
     return scene
 
 
@@ -253,6 +254,7 @@ class OneLineParser(argparse.ArgumentParser):
         self.help_command = help_command or f"{self.prog} --help"
 
     def error(self, message):
+        """One line on stderr naming the option and what is allowed, then exit code 2."""
         # argparse says "argument --stop-time: -1: allowed …": drop the word, keep the option
         if message.startswith("argument "):
             option, _, rest = message[len("argument "):].partition(": ")

@@ -9,8 +9,16 @@ import sys
 import time
 from pathlib import Path
 
-from .arguments import (OUTPUT_INTERVAL, REFERENCE_TOLERANCE_ARGUMENT, STOP_TIME, OneLineParser,
-                        number, output_path, output_path_problem, speed_sweep_problem)
+from .arguments import (
+    OUTPUT_INTERVAL,
+    REFERENCE_TOLERANCE_ARGUMENT,
+    STOP_TIME,
+    OneLineParser,
+    number,
+    output_path,
+    output_path_problem,
+    speed_sweep_problem,
+)
 from .model.scene import SceneError, load_scene
 
 # The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
@@ -177,12 +185,14 @@ def _benchmark(arguments: list[str]) -> int:
               "`pip install -e .` it and run `herringbone benchmark` from there", file=sys.stderr)
         return 2
     spec = importlib.util.spec_from_file_location(f"benchmarks_{script.stem}", script)
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module.main(arguments)
 
 
 def write_csv(results: dict, path: Path) -> None:
+    """A run's outputs ({name: samples}) as CSV, one column a name, 12 significant digits."""
     path.parent.mkdir(parents=True, exist_ok=True)
     names = list(results)
     with open(path, "w", newline="") as file:
@@ -193,6 +203,7 @@ def write_csv(results: dict, path: Path) -> None:
 
 
 def summary(scene, results: dict, wall_time: float) -> str:
+    """A few lines on a finished run: its span, the largest forces and the time it took."""
     from .model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)

@@ -31,7 +31,7 @@ def examples_folder() -> Path:
 
 def scene_files() -> dict[str, Path]:
     """Name -> file of every shipped scene: models/ first, then the examples' scenes."""
-    found = {}
+    found: dict[str, Path] = {}
     for folder in (scenes_folder(), examples_folder()):
         for path in sorted(folder.glob("*.toml")) if folder.is_dir() else []:
             found.setdefault(path.stem, path)

@@ -19,6 +19,8 @@ from .report import HARMONICS, resonance_speeds
 
 @dataclass(frozen=True)
 class Crossing:
+    """A resonance of the Campbell diagram: where the k-th mesh harmonic meets a natural
+    frequency."""
     speed: float  # pinion speed, rad/s
     order: int  # k: the mesh harmonic
     frequency: float  # natural frequency, Hz
@@ -39,6 +41,7 @@ def crossings(scene, low: float, high: float) -> list[Crossing]:
 
 
 def check_speed_range(low: float, high: float) -> None:
+    """ValueError unless 0 < low < high are finite pinion speeds (rad/s)."""
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
         raise ValueError(f"--speeds {low:g} {high:g}; allowed: 0 < LO < HI, finite")
 

@@ -24,8 +24,8 @@ def load_integrator(scene) -> bool:
     """Make the compiled integrator ready in this process; True if it had to be compiled
     (not in the cache), False if it was loaded."""
     from ..integrate.compiled_stepper import CompiledStepper, warm_up
-    from ..model.assembly import GearTrainModel
     from ..integrate.contract import start_position
+    from ..model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, 1e-7)
@@ -33,6 +33,7 @@ def load_integrator(scene) -> bool:
 
 
 def progress_bar(total: int, enabled: bool):
+    """A tqdm bar over `total` sweep points, or a bar that shows nothing when not `enabled`."""
     from tqdm import tqdm
 
     return tqdm(total=total, unit="point", desc="sweep", file=sys.stderr, disable=not enabled,

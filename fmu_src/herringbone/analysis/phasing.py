@@ -1,4 +1,4 @@
-"""Mesh-phase theory (MODEL.md section 8): contact ratios, phase overlap and alternation laws.
+"""Mesh-phase theory (docs/model.md section 8): contact ratios, phase overlap and alternation laws.
 
 A stream is a pair (eps, delay): contact ratio ε and delay k, a fraction of a mesh period (one
 angular pitch of the pinion). The stream has ⌊ε⌋+1 pairs in contact over a fraction frac(ε) of
@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from scipy.optimize import brentq
 
 from ..model.geometry import GearGeometry
-from ..model.mesh import PHASE_TOLERANCE, streams as mesh_streams
+from ..model.mesh import PHASE_TOLERANCE
+from ..model.mesh import streams as mesh_streams
 
 
 def involute(angle: float) -> float:
@@ -24,7 +25,7 @@ def involute(angle: float) -> float:
 def spur_contact_ratio(z1, z2, x1=0.0, x2=0.0, alpha=math.radians(20), ha=1.0) -> float:
     """ε_α of an involute spur pair cut by a rack of pressure angle `alpha` (rad) and addendum
     coefficient `ha`, profile shifts x1, x2, at the zero-backlash centre distance; tips are
-    shortened by Δy (MODEL.md section 8). Independent of the module."""
+    shortened by Δy (docs/model.md section 8). Independent of the module."""
     z_sum = z1 + z2
     inv_working = 2.0 * (x1 + x2) * math.tan(alpha) / z_sum + involute(alpha)
     # inv is increasing on [0, π/2): a single root below the pole of tan
@@ -43,8 +44,9 @@ def spur_contact_ratio(z1, z2, x1=0.0, x2=0.0, alpha=math.radians(20), ha=1.0) -
 def phase_overlap(alpha_k, alpha_l, rho_f, rho_a) -> float:
     """ε_q of a Novikov DLZ generating rack (Petrovsky): profile angle α_k and angle α_l (rad),
     fillet and addendum arc radii ρ_f*, ρ_a* in modules.
-    ε_q = 1 − l_k·cos α_k / π, l_k = ρ_f*·(sin α_k − sin α_l) + ρ_a*·sin α_k (MODEL.md reads the
-    printed π·tan α_k as π, which reproduces the article's 0.8 for the elementary rack)."""
+    ε_q = 1 − l_k·cos α_k / π, l_k = ρ_f*·(sin α_k − sin α_l) + ρ_a*·sin α_k (docs/model.md
+    reads the printed π·tan α_k as π, which reproduces the article's 0.8 for the elementary
+    rack)."""
     l_k = rho_f * (math.sin(alpha_k) - math.sin(alpha_l)) + rho_a * math.sin(alpha_k)
     return 1.0 - l_k * math.cos(alpha_k) / math.pi
 
@@ -78,7 +80,7 @@ def alternation_law(streams) -> str:
     """The alternation law: the distinct consecutive counts over one period read from φ = 0,
     e.g. "3-4-3-2"; a constant count is a single number, "3". Equal neighbours merge; the period
     is not wrapped, so a law that ends on its first value shows it again ("1-2-1")."""
-    law = []
+    law: list[int] = []
     for _, _, count in count_intervals(streams):
         if not law or law[-1] != count:
             law.append(count)

@@ -1,6 +1,7 @@
 """`herringbone info SCENE`: geometry, mesh phasing, natural modes and resonance speeds of a scene.
 
-The natural modes come from herringbone.model.assembly at the stiffness averaged over one mesh period.
+The natural modes come from herringbone.model.assembly at the stiffness averaged over one mesh
+period.
 Output is plain ASCII so that any console shows it.
 """
 from __future__ import annotations
@@ -11,11 +12,11 @@ import sys
 import numpy as np
 
 from ..arguments import OneLineParser
+from ..model.assembly import mass_matrix, natural_modes
 from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
-from ..model.assembly import mass_matrix, natural_modes
-from .phasing import scene_phasing
 from ..model.scene import SceneError, load_scene
+from .phasing import scene_phasing
 
 HARMONICS = (1, 2, 3)
 MAX_RPM = 30_000.0  # resonance speeds above this are not listed: beyond any practical pinion speed
@@ -29,11 +30,11 @@ def mode_character(frequency_hz, mode_shape, masses, coordinate_names, rigid_bel
     if frequency_hz < rigid_below_hz:
         return "rigid rotation"
     energy = np.asarray(masses) * np.asarray(mode_shape) ** 2
-    shares = {}
+    shares: dict[str, float] = {}
     for name, e in zip(coordinate_names, energy):
         kind = COORDINATE_KINDS[name.split("_")[0]]
-        shares[kind] = shares.get(kind, 0.0) + e / energy.sum()
-    kind = max(shares, key=shares.get)
+        shares[kind] = shares.get(kind, 0.0) + float(e / energy.sum())
+    kind = max(shares, key=lambda k: shares[k])
     return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
 
 

@@ -16,6 +16,7 @@ class ProgressStepper:
         self._stepper, self._bar = stepper, bar
 
     def advance(self, position, end, torques, sample_times=(), on_sample=None):
+        """The wrapped stepper's advance, the bar moved on at every sample."""
         def watched(t, outputs):
             on_sample(t, outputs)
             self._bar.update(t - self._bar.n)
@@ -28,9 +29,9 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
     """reference.reference_simulate (DOP853) with a progress bar on stderr."""
     from tqdm import tqdm
 
-    from ..model.assembly import GearTrainModel
     from ..integrate.contract import simulate_with
     from ..integrate.stepping import ScipyStepper
+    from ..model.assembly import GearTrainModel
 
     stop = scene.experiment.stop_time if stop_time is None else stop_time
     with tqdm(total=stop, unit="s", unit_scale=False, desc=f"run {scene.name}",

@@ -58,11 +58,12 @@ class Stretch:
     damping: np.ndarray
 
     @classmethod
-    def constant(cls, stiffness, damping) -> "Stretch":
+    def constant(cls, stiffness, damping) -> Stretch:
+        """A stretch whose stiffness and damping matrices do not change along it."""
         return cls(np.atleast_2d(stiffness)[None], np.atleast_2d(damping)[None])
 
     @classmethod
-    def interpolating(cls, stiffness_at, damping_at, degree=3) -> "Stretch":
+    def interpolating(cls, stiffness_at, damping_at, degree=3) -> Stretch:
         """The polynomials of `degree` through functions of s sampled at degree + 1 points
         (exact when the functions are such polynomials)."""
         nodes = np.linspace(0.0, 1.0, degree + 1)
@@ -184,6 +185,8 @@ def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_P
 
 @dataclass(frozen=True)
 class StabilityChart:
+    """The largest Floquet multiplier |λ|max per mesh period over a range of pinion speeds, and
+    the bands where it exceeds 1."""
     speeds: np.ndarray  # pinion speeds, rad/s, ascending
     largest_modulus: np.ndarray  # |λ|max at each speed
     unstable_bands: tuple[tuple[float, float], ...]  # (from, to) rad/s where |λ|max > 1
@@ -235,8 +238,13 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
                      label="unstable band" if number == 0 else None)
     axes.set_xlabel("pinion speed, rpm")
     axes.set_ylabel("|λ|max per mesh period")
-    top = axes.secondary_xaxis("top", functions=(lambda n: n * hertz_per_rpm,
-                                                 lambda f: f / hertz_per_rpm))
+    def to_hertz(n):  # rpm on the bottom axis -> mesh frequency on the top one
+        return np.asarray(n) * hertz_per_rpm
+
+    def to_rpm(f):
+        return np.asarray(f) / hertz_per_rpm
+
+    top = axes.secondary_xaxis("top", functions=(to_hertz, to_rpm))
     top.set_xlabel("mesh frequency, Hz")
     axes.set_title(title or "Parametric stability of the linear mesh (Floquet multipliers)")
     axes.legend(loc="best")

@@ -118,6 +118,8 @@ def sweep_axes_from(args) -> tuple:
 
 
 def sweep_main(args) -> int:
+    """`herringbone sweep`: run the speed sweep of a scene and write its table and pictures;
+    the exit code."""
     from .sweep import run_sweep
     from .sweep_point import Protocol
     from .sweep_report import describe, write_outputs
@@ -141,6 +143,7 @@ def sweep_main(args) -> int:
 
 
 def campbell_main(args) -> int:
+    """`herringbone campbell`: draw the Campbell diagram of a scene; the exit code."""
     from .campbell import check_speed_range, plot_campbell
 
     scale = 1.0 / RPM_PER_RAD_S if args.rpm else 1.0

@@ -3,8 +3,6 @@ speeds of `herringbone info` marked), a parameter curve or grid map, and a water
 points' dte spectra with the mesh orders and natural frequencies."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .plots import RPM_PER_RAD_S, _pyplot, _save, amplitude_spectrum
@@ -24,7 +22,8 @@ def plot_resonance_curve(table, path, natural, z_pinion, title) -> None:
     table = table.sort_values("w0_pinion")
     rpm = table["speed_rpm"].to_numpy()
     figure, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0, label="K_v = max F_mesh / F_static")
+    axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0,
+                 label="K_v = max F_mesh / F_static")
     axes[0].set_ylabel("dynamic factor K_v")
     axes[1].plot(rpm, table["dte_p2p_um"], "o-", color="C2", ms=3, lw=1.0, label="dte peak-to-peak")
     axes[1].plot(rpm, table["dte_rms_um"], "s-", color="C0", ms=3, lw=1.0, label="dte rms")

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, eigenvalues
-from ..model.assembly import GearTrainModel
 from ..integrate.contract import start_position
+from ..model.assembly import GearTrainModel
 
 BEARINGS = tuple(f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
                  for side in ("left", "right"))
@@ -68,9 +68,11 @@ class Timing:
 
     @property
     def window(self) -> float:
+        """The span of the recorded samples, s."""
         return self.samples * self.interval
 
     def sample_times(self) -> np.ndarray:
+        """The times (s) of the recorded samples, after the settling time."""
         return self.settle + np.arange(self.samples) * self.interval
 
 

@@ -7,8 +7,12 @@ from pathlib import Path
 
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
-from .sweep_plots import (plot_parameter_sweep, plot_resonance_curve, plot_waterfall,
-                          resonances_between)
+from .sweep_plots import (
+    plot_parameter_sweep,
+    plot_resonance_curve,
+    plot_waterfall,
+    resonances_between,
+)
 
 RPM_PER_RAD_S = 30.0 / math.pi
 
@@ -58,6 +62,6 @@ def describe(scene, table, wall: float, args=None) -> str:
         lines += [f"resonance k·f_mesh = f_n at {s * RPM_PER_RAD_S:.0f} rpm ({s:.1f} rad/s): "
                   f"k = {k}, f_n = {f:.1f} Hz" for s, k, f in marks]
     if (table["contact_lost_share"] > 0).any():
-        lines.append(f"a helix half out of contact at {int((table['contact_lost_share'] > 0).sum())}"
-                     " points (contact_lost_share > 0)")
+        lost = int((table["contact_lost_share"] > 0).sum())
+        lines.append(f"a helix half out of contact at {lost} points (contact_lost_share > 0)")
     return "\n".join(lines)

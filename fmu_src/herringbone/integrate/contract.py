@@ -15,8 +15,9 @@ run loop that drives them.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -44,7 +45,8 @@ class Position:
 
 
 def start_position(model: GearTrainModel, motor_torque: float, pinion_angle: float = 0.0):
-    """Time 0: the rigid rotation at w0_pinion on the static deflection (MODEL.md section 6)."""
+    """Time 0: the rigid rotation at w0_pinion on the static deflection (docs/model.md
+    section 6)."""
     segment, state = segments.start(model, pinion_angle, motor_torque,
                                     model.scene.parameters["w0_pinion"])
     return Position(0.0, state, segment)

@@ -26,6 +26,7 @@ import threading
 import time
 import weakref
 from pathlib import Path
+from types import FrameType
 
 from numba.core import event
 
@@ -64,7 +65,7 @@ def estimate_seconds() -> float:
                if isinstance(record, dict)]
     if _Announcer.LOOP not in _records() or not all(isinstance(s, (int, float)) for s in seconds):
         return DEFAULT_COMPILE_SECONDS
-    return float(sum(seconds))
+    return float(sum(s for s in seconds if isinstance(s, (int, float))))
 
 
 def record_seconds(kernel: str, seconds: float) -> None:
@@ -185,6 +186,8 @@ class HostLine:
         return lambda status, text: function(environment, self._name, status, None, text)
 
     def say(self, message: str, status: int = FMI_OK) -> None:
+        """Show `message` to the host: through its logger callback while it instantiates the
+        FMU, else on stderr (and in the slave's log, where there is a slave)."""
         text = f"{self._name.decode()}: {message}"
         if self._call is not None and self._instantiating():
             # hosts format the message printf-style
@@ -198,7 +201,8 @@ class HostLine:
             slave.log(text.replace("%", "%%"), Fmi2Status(status))
 
     def _instantiating(self) -> bool:
-        frame, slave = sys._getframe(1), self._slave()
+        frame: FrameType | None = sys._getframe(1)
+        slave = self._slave()
         while frame is not None:
             if frame.f_code is self._init and frame.f_locals.get("self") is slave:
                 return True
@@ -211,9 +215,9 @@ def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | Non
     settings (the method "auto" picks for the scene), in this process, saying before a compile
     what it will cost and how far it is every `progress_every` seconds. Returns the seconds
     spent compiling, None if everything came from the cache."""
-    from .compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..model.assembly import GearTrainModel
     from ..model.scene import load_scene
+    from .compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from .contract import start_position
 
     scene = load_scene(scene_path)
@@ -246,5 +250,6 @@ def _progress(done, every, say):
         say(f"  ... {time.perf_counter() - started:.0f} s of about {estimate_seconds():.0f} s")
 
 
-if __name__ == "__main__":  # python -m herringbone.integrate.first_start SCENE: what the builder runs
+# python -m herringbone.integrate.first_start SCENE: what the builder runs
+if __name__ == "__main__":
     compile_for_scene(sys.argv[1], say=lambda message: print(message, flush=True))

@@ -21,7 +21,7 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
 
     tolerance: the error allowed per step, relative to the force scale (the static mesh force),
     applied to every state entry through GearTrainModel.state_scales.
-    initial_pinion_angle: φp at t = 0 (MODEL.md starts at 0; any other angle must give the same
+    initial_pinion_angle: φp at t = 0 (docs/model.md starts at 0; any other angle must give the same
     run shifted in mesh phase).
     check_tension: raise IntegrationError wherever a loaded point pulls or a free one penetrates
     (stepping.ScipyStepper's debug check; it costs a third more time).

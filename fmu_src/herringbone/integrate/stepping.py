@@ -21,8 +21,8 @@ import numpy as np
 import scipy.integrate
 from scipy.optimize import brentq, minimize_scalar
 
-from . import segments
 from ..model.assembly import GearTrainModel
+from . import segments
 from .contract import IntegrationError, Position
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)
@@ -61,6 +61,8 @@ class _Step:
 
 
 class ScipyStepper:
+    """Steps the scipy reference (the `Stepper` contract of integrate/contract.py) segment by
+    segment, every segment ended exactly at its first event."""
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "DOP853",
                  max_step: float = np.inf, check_tension: bool = False):
         """method: a scipy.integrate OdeSolver ("DOP853", "RK45", "Radau", "BDF", "LSODA").

@@ -1,10 +1,10 @@
-"""The gear train assembled from its elements (MODEL.md sections 1 and 4-7).
+"""The gear train assembled from its elements (docs/model.md sections 1 and 4-7).
 
 Every elastic element k (shaft, bearing, contact point) has a deformation δ_k = g_k·q + e_k with
 a row g_k over the coordinates q, and a force F_k = c_k·δ_k + h_k·δ̇_k; then
 M·q̈ = f_ext − Σ g_k·F_k. A scene without motor, load or bearings has fewer coordinates.
 
-Relative coordinates (MODEL.md section 10). The state holds, instead of q,
+Relative coordinates (docs/model.md section 10). The state holds, instead of q,
     y_i = q_i − r_i·φp  (i ≠ pinion),   y_pinion = φp − φ_start
 where r is the rigid rotation (1 on the motor and pinion angles, 1/u on the wheel and load
 angles, 0 on tilts and displacements) and φ_start is where the current contact set begins, so
@@ -13,7 +13,7 @@ rotation (g·r = 0), so δ = g̃·y and δ̇ = g̃·ẏ, g̃ being g with its pi
 
 Contact points carry rows g = g_base + ζ·g_tilt whose lever arm ζ moves with φp; as in the
 article the rows are taken as given at each instant (no ∂g/∂φp terms), and the damping acts on
-the rate g·q̇ of the bodies' motion. (MODEL.md does not say whether δ̇ includes the slide of the
+the rate g·q̇ of the bodies' motion. (docs/model.md does not say whether δ̇ includes the slide of the
 point along a lead error, ė = Δβ·ż; taking g·q̇ keeps a steadily running train free of a
 spurious drag force.)
 """
@@ -28,6 +28,7 @@ import scipy.linalg
 from ..integrate.compiled import equations
 from .geometry import GearGeometry
 from .mesh import ContactSet, Mesh
+from .parameters import outputs_of
 
 ALL_COORDINATES = ("phi_motor", "phi_pinion", "psi_pinion", "x_pinion",
                    "phi_wheel", "psi_wheel", "x_wheel", "phi_load")
@@ -128,19 +129,21 @@ class GearTrainModel:
                                    + self.size)
 
     def _output_layout(self) -> list[tuple[str, int]]:
-        """Where each output of the scene sits in the vector equations.outputs fills."""
+        """Where each output of the scene sits in the vector equations.outputs fills, as
+        parameters.OUTPUTS declares it: the entry of its equations constant (K_MESH, ...), the
+        rate of its coordinate (after the element forces), or its element's force."""
         first_speed = equations.FIRST_ELEMENT_FORCE + len(self.elements)
-        index = {"k_mesh": equations.K_MESH, "k_mesh_left": equations.K_MESH_LEFT,
-                 "k_mesh_right": equations.K_MESH_RIGHT, "F_mesh": equations.F_MESH,
-                 "F_mesh_left": equations.F_MESH_LEFT, "F_mesh_right": equations.F_MESH_RIGHT,
-                 "n_contacts": equations.N_CONTACTS, "dte": equations.DTE}
-        index.update({e.name: equations.FIRST_ELEMENT_FORCE + k
-                      for k, e in enumerate(self.elements)})
-        for name, coordinate in (("w_motor", "phi_motor"), ("w_pinion", "phi_pinion"),
-                                 ("w_wheel", "phi_wheel"), ("w_load", "phi_load")):
-            if coordinate in self.coordinates:
-                index[name] = first_speed + self.coordinates.index(coordinate)
-        return [(name, index[name]) for name in self.output_names]
+        elements = [e.name for e in self.elements]
+        layout = []
+        for output in outputs_of(self.scene.components).values():
+            if output.slot is not None:
+                entry = getattr(equations, output.slot)
+            elif output.rate_of is not None:
+                entry = first_speed + self.coordinates.index(output.rate_of)
+            else:
+                entry = equations.FIRST_ELEMENT_FORCE + elements.index(output.name)
+            layout.append((output.name, entry))
+        return layout
 
     def unit(self, coordinate: str) -> np.ndarray:
         """The unit row of a coordinate (zero if the scene leaves the coordinate out)."""
@@ -193,10 +196,11 @@ class GearTrainModel:
         states = state if state.ndim == 2 else state[:, None]
         base, tilt = self._approach_rows @ states
         travel = self.axial_travel_per_radian * states[self.pinion]
-        approach = (base + contact_set.lead_error0[:, None]
-                    + contact_set.lever_arm0[:, None] * tilt
-                    + travel * (contact_set.lever_arm_slope[:, None] * tilt
-                                + contact_set.lead_error_slope[:, None]))
+        points = contact_set.table[:, :, None]
+        approach = (base + points[equations.LEAD_ERROR0]
+                    + points[equations.LEVER_ARM0] * tilt
+                    + travel * (points[equations.LEVER_ARM_SLOPE] * tilt
+                                + points[equations.LEAD_ERROR_SLOPE]))
         return approach if state.ndim == 2 else approach[:, 0]
 
     def point_forces(self, state, contact_set: ContactSet, loaded) -> np.ndarray:
@@ -205,8 +209,8 @@ class GearTrainModel:
         a correct run never shows a negative one."""
         y = state[:self.size]
         travel = self.axial_travel_per_radian * y[self.pinion]
-        stiffness = contact_set.stiffness0[:, None] + np.multiply.outer(
-            contact_set.stiffness_slope, travel).reshape(len(contact_set), -1)
+        stiffness = contact_set.table[equations.STIFFNESS0][:, None] + np.multiply.outer(
+            contact_set.table[equations.STIFFNESS_SLOPE], travel).reshape(len(contact_set), -1)
         loaded = np.asarray(loaded, dtype=float)
         forces = (loaded[:, None] * stiffness) * self.point_approaches(
             state if state.ndim == 2 else state[:, None], contact_set)
@@ -220,7 +224,7 @@ class GearTrainModel:
         return rate
 
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
-        """The outputs of MODEL.md section 7 at a state; `loaded` is 1 for the points that
+        """The outputs of docs/model.md section 7 at a state; `loaded` is 1 for the points that
         carry load (all points of the set where contact cannot be lost)."""
         return self.named_outputs(self.output_vector(state, contact_set, loaded))
 
@@ -258,7 +262,7 @@ class GearTrainModel:
 
     def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
         """Relative coordinates of the static equilibrium under M_motor balanced by
-        M_load = u·M_motor, every point of the set loaded (MODEL.md section 6)."""
+        M_load = u·M_motor, every point of the set loaded (docs/model.md section 6)."""
         stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
         force = motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
         contact_rows = (self._contact_base_relative[None, :]
@@ -328,16 +332,9 @@ class GearTrainModel:
 
 
 def output_names(scene) -> list[str]:
-    """The outputs of MODEL.md section 7 that a scene has."""
-    names = ["k_mesh", "k_mesh_left", "k_mesh_right", "F_mesh", "F_mesh_left", "F_mesh_right"]
-    if scene.has("bearings"):
-        names += [f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
-                  for side in ("left", "right")]
-    names += (["w_motor"] if scene.has("motor") else []) + ["w_pinion", "w_wheel"]
-    names += ["w_load"] if scene.has("load") else []
-    names += (["T_shaft_in"] if scene.has("motor") else [])
-    names += (["T_shaft_out"] if scene.has("load") else [])
-    return names + ["dte", "n_contacts"]
+    """The names of the outputs (docs/model.md section 7) that a scene has, in the order of
+    parameters.OUTPUTS."""
+    return list(outputs_of(scene.components))
 
 
 def mass_matrix(scene) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Geometry of the herringbone pair (MODEL.md section 2): radii, ratio, axial pitch, positions.
+"""Geometry of the herringbone pair (docs/model.md section 2): radii, ratio, axial pitch, positions.
 
 Axial positions ζ are measured from the centre of a gear body, positive towards the right half.
 Local positions z in a half are measured from that half's outer face towards the groove.
@@ -13,6 +13,9 @@ HALVES = ("left", "right")
 
 @dataclass(frozen=True)
 class GearGeometry:
+    """The herringbone pair's dimensions (teeth, normal module m, helix angle rad, face widths,
+    groove and bearing distances m) and what follows from them, all in SI units."""
+
     z_pinion: int
     z_wheel: int
     m_n: float
@@ -24,7 +27,8 @@ class GearGeometry:
     a_right: float = 0.0
 
     @classmethod
-    def from_parameters(cls, parameters: dict) -> "GearGeometry":
+    def from_parameters(cls, parameters: dict) -> GearGeometry:
+        """The geometry of a scene's parameters (bearing distances 0 without bearings)."""
         return cls(**{name: parameters.get(name, 0.0) for name in cls.__dataclass_fields__})
 
     @property
@@ -34,6 +38,7 @@ class GearGeometry:
 
     @property
     def radius_wheel(self) -> float:
+        """Rw = zw·m_n / (2 cos β), m."""
         return self.z_wheel * self.m_n / (2.0 * math.cos(self.beta))
 
     @property
@@ -48,6 +53,7 @@ class GearGeometry:
 
     @property
     def angular_pitch(self) -> float:
+        """2π/zp, rad: the pinion turn over which the mesh repeats (one mesh period)."""
         return 2.0 * math.pi / self.z_pinion
 
     @property
@@ -61,6 +67,7 @@ class GearGeometry:
         return self.b_left + self.b_right + self.groove
 
     def face_width(self, half: str) -> float:
+        """b of a helix half ("left" or "right"), m."""
         return self.b_left if half == "left" else self.b_right
 
     def axial_overlap(self, half: str) -> float:

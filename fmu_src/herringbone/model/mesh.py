@@ -1,4 +1,4 @@
-"""The contact points of the mesh (MODEL.md section 3) and the phases at which the set changes.
+"""The contact points of the mesh (docs/model.md section 3) and the phases at which the set changes.
 
 The mesh phase θ = φp / (2π/zp) counts angular pitches of the pinion; over one pitch every point
 travels one axial pitch p_x. Each of the four streams (two halves × two lines of engagement)
@@ -8,8 +8,8 @@ A point's stiffness weight w(z) is piecewise linear in z with kinks at z = −r,
 (r = edge_ramp; entry and exit z = 0, b when r = 0). Between two consecutive kink phases the set
 of points with w > 0 and each point's linear piece are fixed: a `ContactSet` describes them as
 linear functions of the pinion angle inside that phase interval. Integrators hold one contact set
-over a segment and change it only when φp reaches the interval's end (see NOTES.md: a solver
-whose trial steps see the switch loses accuracy or fails).
+over a segment and change it only when φp reaches the interval's end (a solver whose trial
+steps see the switch loses accuracy or fails).
 """
 from __future__ import annotations
 
@@ -28,6 +28,8 @@ PHASE_TOLERANCE = 1e-10
 
 @dataclass(frozen=True)
 class Stream:
+    """One of the four streams of contact points: a helix half's line of engagement."""
+
     half: str  # "left" or "right"
     line: str  # "pre-pole" or "post-pole"
     lead: float  # phase by which the stream runs ahead of phase 0, fraction of p_x in [0, 1)
@@ -39,7 +41,8 @@ class Stream:
 
 
 def streams(parameters: dict) -> list[Stream]:
-    """The four streams of contact points, in the order left pre, left post, right pre, right post."""
+    """The four streams of contact points, in the order left pre-pole, left post-pole, right
+    pre-pole, right post-pole; `parameters` as a scene gives them (eps_q, stagger, phase0)."""
     offsets = {("left", "pre-pole"): 0.0,
                ("left", "post-pole"): parameters["eps_q"],
                ("right", "pre-pole"): parameters["stagger"],
@@ -76,28 +79,23 @@ def kink_positions(face_width: float, edge_ramp: float) -> tuple[float, ...]:
 class ContactSet:
     """The contact points of one phase interval, as linear functions of the pinion angle.
 
-    For a pinion angle φp inside the interval, with Δ = φp − `pinion_angle` (the angle at which
-    the interval starts) and the axial travel v·Δ (v = Rp cot β):
-        z = z0 + v·Δ,  c = stiffness0 + stiffness_slope·v·Δ,
-        ζ = lever_arm0 + lever_arm_slope·v·Δ,  e = lead_error0 + lead_error_slope·v·Δ.
+    `table` holds one column a point, its rows named by the constants of
+    integrate/compiled/equations.py (HALF: 0 left, 1 right; the others in N/m, m, rad). For a
+    pinion angle φp inside the interval, with Δ = φp − `pinion_angle` (the angle at which the
+    interval starts) and the axial travel s = v·Δ (v = Rp cot β, m/rad):
+        c = STIFFNESS0 + STIFFNESS_SLOPE·s  (N/m),  ζ = LEVER_ARM0 + LEVER_ARM_SLOPE·s  (m),
+        e = LEAD_ERROR0 + LEAD_ERROR_SLOPE·s  (m, the lead error's share of the approach).
     """
 
     cycle: int  # number of the mesh period the interval belongs to
     index: int  # number of the interval within a mesh period
     pinion_angle: float  # φp where the interval starts (the cycle it belongs to included)
     length: float  # angular extent of the interval, rad
-    half: np.ndarray  # 0 = left, 1 = right
-    z0: np.ndarray
-    stiffness0: np.ndarray
-    stiffness_slope: np.ndarray
-    lever_arm0: np.ndarray
-    lever_arm_slope: np.ndarray
-    lead_error0: np.ndarray
-    lead_error_slope: np.ndarray
-    table: np.ndarray  # the same, one column a point, as the compiled equations take it
+    table: np.ndarray  # the points, one column each, as the compiled equations take them
 
     def __len__(self) -> int:
-        return len(self.z0)
+        """The number of points of the set."""
+        return self.table.shape[1]
 
 
 class Mesh:
@@ -173,8 +171,7 @@ class Mesh:
         middle = 0.5 * (start + end)
         g = self.geometry
         p_x, travel_to_middle = g.axial_pitch, (middle - start) * g.axial_pitch
-        columns = {k: [] for k in ("half", "z0", "stiffness0", "stiffness_slope", "lever_arm0",
-                                   "lever_arm_slope", "lead_error0", "lead_error_slope")}
+        columns: dict[int, list[float]] = {row: [] for row in range(equations.POINT_FIELDS)}
         for stream in self.streams:
             b = g.face_width(stream.half)
             s = ((stream.lead + middle) % 1.0) * p_x
@@ -187,26 +184,19 @@ class Mesh:
                     continue
                 slope = weight_slope(z_middle, b, self.edge_ramp)
                 z0 = z_middle - travel_to_middle
-                columns["half"].append(HALVES.index(stream.half))
-                columns["z0"].append(z0)
-                columns["stiffness0"].append(self.c_point * (w - slope * travel_to_middle))
-                columns["stiffness_slope"].append(self.c_point * slope)
-                columns["lever_arm0"].append(g.lever_arm(stream.half, z0))
-                columns["lever_arm_slope"].append(g.lever_arm_direction(stream.half))
-                columns["lead_error0"].append(self.lead_error[stream.half] * z0)
-                columns["lead_error_slope"].append(self.lead_error[stream.half])
-        arrays = {k: np.array(v, dtype=int if k == "half" else float) for k, v in columns.items()}
-        table = np.zeros((equations.POINT_FIELDS, len(arrays["z0"])))
-        for row, name in ((equations.HALF, "half"), (equations.STIFFNESS0, "stiffness0"),
-                          (equations.STIFFNESS_SLOPE, "stiffness_slope"),
-                          (equations.LEVER_ARM0, "lever_arm0"),
-                          (equations.LEVER_ARM_SLOPE, "lever_arm_slope"),
-                          (equations.LEAD_ERROR0, "lead_error0"),
-                          (equations.LEAD_ERROR_SLOPE, "lead_error_slope")):
-            table[row] = arrays[name]
+                columns[equations.HALF].append(HALVES.index(stream.half))
+                columns[equations.STIFFNESS0].append(self.c_point
+                                                     * (w - slope * travel_to_middle))
+                columns[equations.STIFFNESS_SLOPE].append(self.c_point * slope)
+                columns[equations.LEVER_ARM0].append(g.lever_arm(stream.half, z0))
+                columns[equations.LEVER_ARM_SLOPE].append(g.lever_arm_direction(stream.half))
+                columns[equations.LEAD_ERROR0].append(self.lead_error[stream.half] * z0)
+                columns[equations.LEAD_ERROR_SLOPE].append(self.lead_error[stream.half])
+        table = np.array([columns[row] for row in range(equations.POINT_FIELDS)],
+                         dtype=float).reshape(equations.POINT_FIELDS, -1)
         return ContactSet(cycle=cycle, index=interval,
                           pinion_angle=(cycle + start) * g.angular_pitch,
-                          length=(end - start) * g.angular_pitch, table=table, **arrays)
+                          length=(end - start) * g.angular_pitch, table=table)
 
     def period_table(self):
         """Every contact set of one mesh period, for the compiled kernels (the sets of other

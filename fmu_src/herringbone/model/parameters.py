@@ -1,6 +1,6 @@
 """The parameters of the gear train: one table, read by the scene loader, the model and the FMU.
 
-Every parameter is named as in MODEL.md (sections 2-6, 11), with its reference value, unit,
+Every parameter is named as in docs/model.md (sections 2-6, 11), with its reference value, unit,
 meaning, allowed range and the component that needs it. A scene that leaves a component out
 carries none of that component's parameters.
 """
@@ -22,6 +22,7 @@ class Range:
     high_open: bool = False
 
     def contains(self, value: float) -> bool:
+        """Whether `value` is finite and inside the interval (open bounds excluded)."""
         if not math.isfinite(value):
             return False
         if self.low is not None and (value < self.low or (self.low_open and value == self.low)):
@@ -31,6 +32,7 @@ class Range:
         return True
 
     def describe(self) -> str:
+        """The interval in words, as messages show it: "> 0", "[1e-12, 0.01]", "(0, 1.5708)"."""
         if self.low is None and self.high is None:
             return "any finite number"
         if self.high is None:
@@ -52,6 +54,9 @@ HELIX_ANGLE = Range(0.0, math.pi / 2, low_open=True, high_open=True)
 
 @dataclass(frozen=True)
 class Parameter:
+    """One parameter (or input) of the train: its name, default (SI units), unit, meaning,
+    type, allowed range and the component that carries it."""
+
     name: str
     default: float | int | bool | None  # None: derived from other parameters (see gear.py)
     unit: str
@@ -66,7 +71,7 @@ def _p(name, default, unit, description, kind=float, allowed=POSITIVE, component
 
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in [
-    # geometry (MODEL.md section 2)
+    # geometry (docs/model.md section 2)
     _p("z_pinion", 10, "1", "number of pinion teeth", int, AT_LEAST_ONE),
     _p("z_wheel", 36, "1", "number of wheel teeth", int, AT_LEAST_ONE),
     _p("m_n", 0.004, "m", "normal module"),
@@ -153,29 +158,49 @@ def check_value(parameter: Parameter, value) -> str | None:
 
 @dataclass(frozen=True)
 class Output:
+    """One output of the train: its name, unit, meaning, type, the component a scene needs to
+    have it, and where the compiled equations.outputs puts its value (GearTrainModel.
+    output_layout reads `slot` and `rate_of`; neither: the output is the force of the shaft or
+    bearing of the same name)."""
+
     name: str
     unit: str
     description: str
     kind: type = float
+    component: str | None = None  # None: every scene has it
+    slot: str | None = None  # the constant of integrate/compiled/equations.py naming its entry
+    rate_of: str | None = None  # the coordinate whose rate it is (speeds)
 
 
-# The outputs of MODEL.md section 7 (model.output_names picks those a scene has).
+# The outputs of docs/model.md section 7, in the order a scene lists them; the one list of them:
+# model.assembly.output_names picks those a scene has, GearTrainModel.output_layout places them,
+# the FMU declares them, docs/model.md section 12 tables them.
 OUTPUTS: dict[str, Output] = {o.name: o for o in [
-    Output("k_mesh", "N/m", "mesh stiffness: sum of the stiffnesses of the points in contact"),
-    Output("k_mesh_left", "N/m", "mesh stiffness of the left half"),
-    Output("k_mesh_right", "N/m", "mesh stiffness of the right half"),
-    Output("F_mesh", "N", "mesh force: sum of the contact point forces"),
-    Output("F_mesh_left", "N", "mesh force of the left half"),
-    Output("F_mesh_right", "N", "mesh force of the right half"),
+    Output("k_mesh", "N/m", "mesh stiffness: sum of the stiffnesses of the points in contact",
+           slot="K_MESH"),
+    Output("k_mesh_left", "N/m", "mesh stiffness of the left half", slot="K_MESH_LEFT"),
+    Output("k_mesh_right", "N/m", "mesh stiffness of the right half", slot="K_MESH_RIGHT"),
+    Output("F_mesh", "N", "mesh force: sum of the contact point forces", slot="F_MESH"),
+    Output("F_mesh_left", "N", "mesh force of the left half", slot="F_MESH_LEFT"),
+    Output("F_mesh_right", "N", "mesh force of the right half", slot="F_MESH_RIGHT"),
     *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing "
-             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)")
+             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)",
+             component="bearings")
       for gear in ("pinion", "wheel") for side in ("left", "right")],
-    Output("w_motor", "rad/s", "motor speed"),
-    Output("w_pinion", "rad/s", "pinion speed"),
-    Output("w_wheel", "rad/s", "wheel speed (positive in its running direction)"),
-    Output("w_load", "rad/s", "load speed"),
-    Output("T_shaft_in", "N.m", "input shaft torque"),
-    Output("T_shaft_out", "N.m", "output shaft torque"),
-    Output("dte", "m", "dynamic transmission error Rp*phi_p - Rw*phi_w"),
-    Output("n_contacts", "1", "number of contact points carrying load", int),
+    Output("w_motor", "rad/s", "motor speed", component="motor", rate_of="phi_motor"),
+    Output("w_pinion", "rad/s", "pinion speed", rate_of="phi_pinion"),
+    Output("w_wheel", "rad/s", "wheel speed (positive in its running direction)",
+           rate_of="phi_wheel"),
+    Output("w_load", "rad/s", "load speed", component="load", rate_of="phi_load"),
+    Output("T_shaft_in", "N.m", "input shaft torque", component="motor"),
+    Output("T_shaft_out", "N.m", "output shaft torque", component="load"),
+    Output("dte", "m", "dynamic transmission error Rp*phi_p - Rw*phi_w", slot="DTE"),
+    Output("n_contacts", "1", "number of contact points carrying load", int,
+           slot="N_CONTACTS"),
 ]}
+
+
+def outputs_of(components: dict[str, bool]) -> dict[str, Output]:
+    """The outputs that a train with these components has, in the order of OUTPUTS."""
+    return {name: o for name, o in OUTPUTS.items()
+            if o.component is None or components[o.component]}

@@ -16,7 +16,7 @@ import bisect
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
-from pathlib import Path
+from typing import cast
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
 from .geometry import solid_cylinder_transverse_inertia
@@ -24,11 +24,30 @@ from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_
 
 
 class SceneError(ValueError):
-    """A scene that cannot be simulated; the message names the culprit and what is allowed."""
+    """A scene that cannot be simulated; the message names the culprit and what is allowed.
+
+    Its fields say where the problem lies, for a caller that words it its own way (the FMU):
+    `source` the file (or "<scene>"; None where there is no scene at all), `table` the table of
+    the scene file ("parameters", "components", "experiment", "inputs"; None for the file as a
+    whole), `key` the parameter, component or key at fault (None if none), `problem` what is
+    wrong, the key named in it ("z_pinion is 0; allowed: >= 1"). str() is the one-line message
+    "SOURCE: [TABLE] PROBLEM" (without the parts that are None)."""
+
+    def __init__(self, problem: str, source: str | None = None, table: str | None = None,
+                 key: str | None = None):
+        self.problem, self.source, self.table, self.key = problem, source, table, key
+        prefix = "" if source is None else f"{source}: "
+        super().__init__(f"{prefix}{'' if table is None else f'[{table}] '}{problem}")
+
+    def __reduce__(self):
+        """Pickled with its fields (a sweep's workers send it back to the client)."""
+        return type(self), (self.problem, self.source, self.table, self.key)
 
 
 @dataclass(frozen=True)
 class Experiment:
+    """A scene's run: simulated time and the interval between output samples, seconds."""
+
     stop_time: float = 0.1
     output_interval: float = 1e-4
 
@@ -38,19 +57,25 @@ class InputSchedule:
     """Input torques as a step function of time: row i holds from times[i] to times[i + 1]."""
 
     times: tuple[float, ...] = (0.0,)
-    M_motor: tuple[float, ...] = (INPUTS["M_motor"].default,)
-    M_load: tuple[float, ...] = (INPUTS["M_load"].default,)
+    M_motor: tuple[float, ...] = (cast(float, INPUTS["M_motor"].default),)
+    M_load: tuple[float, ...] = (cast(float, INPUTS["M_load"].default),)
 
     def at(self, time: float) -> tuple[float, float]:
+        """(M_motor, M_load), N·m, held at `time` (s): the last row at or before it."""
         row = max(bisect.bisect_right(self.times, time) - 1, 0)
         return self.M_motor[row], self.M_load[row]
 
     def change_times(self) -> tuple[float, ...]:
+        """The times (s) after 0 at which the torques change."""
         return self.times[1:]
 
 
 @dataclass(frozen=True)
 class Scene:
+    """A validated gear train: its components, the parameters it sets (and all it carries,
+    completed with reference values and derived inertias), its experiment and input torques,
+    and the file it came from."""
+
     name: str
     components: dict[str, bool]
     given: dict[str, float | int | bool]  # the parameters the scene sets itself
@@ -65,13 +90,14 @@ class Scene:
                            _complete_parameters(self.given, self.components, self.source))
 
     def has(self, component: str) -> bool:
+        """Whether the train has a component ("motor", "load" or "bearings")."""
         return self.components[component]
 
-    def with_parameters(self, **changes) -> "Scene":
+    def with_parameters(self, **changes) -> Scene:
         """A copy with some parameters changed, validated like a scene file."""
         return replace(self, given={**self.given, **changes})
 
-    def with_inputs(self, M_motor=None, M_load=None, table=None) -> "Scene":
+    def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
         """A copy with other input torques (constants, or rows of [time, M_motor, M_load])."""
         data = {"table": table} if table is not None else {
             "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,
@@ -86,11 +112,11 @@ def load_scene(path) -> Scene:
     if not path.is_file():
         names = (f"; shipped scenes: {', '.join(scene_files())} (`herringbone scenes`)"
                  if is_scene_name(given) else "")
-        raise SceneError(f"{path}: no such scene file{names}")
+        raise SceneError(f"no such scene file{names}", str(path))
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise SceneError(f"{path}: not a valid TOML file: {error}") from None
+        raise SceneError(f"not a valid TOML file: {error}", str(path)) from None
     return scene_from_dict(data, name=path.stem, source=str(path))
 
 
@@ -98,8 +124,9 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
     """Validate a scene given as the tables of a scene file."""
     unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
     if unknown:
-        raise SceneError(f"{source}: unknown table [{sorted(unknown)[0]}]; allowed: "
-                         "[parameters], [components], [experiment], [inputs]")
+        key = sorted(unknown)[0]
+        raise SceneError(f"unknown table [{key}]; allowed: [parameters], [components], "
+                         "[experiment], [inputs]", source, key=key)
     components = _components(_table(data, "components", source), source)
     return Scene(name=name, components=components,
                  given=dict(_table(data, "parameters", source)),
@@ -110,7 +137,7 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
 def _table(data, key, source):
     table = data.get(key, {})
     if not isinstance(table, dict):
-        raise SceneError(f"{source}: '{key}' must be a table [{key}], got {table!r}")
+        raise SceneError(f"'{key}' must be a table [{key}], got {table!r}", source, key=key)
     return table
 
 
@@ -118,10 +145,11 @@ def _components(table, source):
     components = {}
     for key, value in table.items():
         if key not in COMPONENTS:
-            raise SceneError(f"{source}: [components] unknown component '{key}'; "
-                             f"allowed: {', '.join(COMPONENTS)}")
+            raise SceneError(f"unknown component '{key}'; allowed: {', '.join(COMPONENTS)}",
+                             source, "components", key)
         if not isinstance(value, bool):
-            raise SceneError(f"{source}: [components] {key} must be true or false, got {value!r}")
+            raise SceneError(f"{key} must be true or false, got {value!r}", source,
+                             "components", key)
         components[key] = value
     return {c: components.get(c, True) for c in COMPONENTS}
 
@@ -131,14 +159,15 @@ def _complete_parameters(given, components, source):
     for key, value in given.items():
         if key not in PARAMETERS:
             hint = " (inputs belong in [inputs])" if key in INPUTS else ""
-            raise SceneError(f"{source}: [parameters] unknown parameter '{key}'{hint}")
+            raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key)
         if key not in carried:
-            raise SceneError(f"{source}: [parameters] {key} belongs to the component "
-                             f"'{PARAMETERS[key].component}', which this scene leaves out "
-                             f"([components] {PARAMETERS[key].component} = false)")
+            raise SceneError(f"{key} belongs to the component '{PARAMETERS[key].component}', "
+                             "which this scene leaves out "
+                             f"([components] {PARAMETERS[key].component} = false)",
+                             source, "parameters", key)
         problem = check_value(PARAMETERS[key], value)
         if problem:
-            raise SceneError(f"{source}: [parameters] {key} {problem}")
+            raise SceneError(f"{key} {problem}", source, "parameters", key)
     values = {name: given.get(name, p.default) for name, p in carried.items()}
     for name, p in carried.items():
         if p.kind is int:
@@ -157,51 +186,51 @@ def _experiment(table, source):
     for key, value in table.items():
         if key not in ("stop_time", "output_interval"):
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
-            raise SceneError(f"{source}: [experiment] unknown key '{key}'{hint}; "
-                             "allowed: stop_time, output_interval")
+            raise SceneError(f"unknown key '{key}'{hint}; allowed: stop_time, output_interval",
+                             source, "experiment", key)
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value) or value <= 0:
-            raise SceneError(f"{source}: [experiment] {key} is {value!r}; allowed: > 0")
+            raise SceneError(f"{key} is {value!r}; allowed: > 0", source, "experiment", key)
         values[key] = float(value)
     experiment = Experiment(**values)
     if experiment.output_interval > experiment.stop_time:
-        raise SceneError(f"{source}: [experiment] output_interval {experiment.output_interval:g} "
-                         f"exceeds stop_time {experiment.stop_time:g}")
+        raise SceneError(f"output_interval {experiment.output_interval:g} exceeds stop_time "
+                         f"{experiment.stop_time:g}", source, "experiment", "output_interval")
     return experiment
 
 
 def _inputs(table, source):
     if "table" in table:
         if set(table) != {"table"}:
-            raise SceneError(f"{source}: [inputs] give either constants (M_motor, M_load) "
-                             "or a table, not both")
+            raise SceneError("give either constants (M_motor, M_load) or a table, not both",
+                             source, "inputs", "table")
         rows = table["table"]
         if not isinstance(rows, list) or not rows:
-            raise SceneError(f"{source}: [inputs] table must be a list of rows "
-                             "[time, M_motor, M_load]")
+            raise SceneError("table must be a list of rows [time, M_motor, M_load]", source,
+                             "inputs", "table")
         for i, row in enumerate(rows):
             if not isinstance(row, list) or len(row) != 3 or not all(
                     isinstance(v, (int, float)) and not isinstance(v, bool)
                     and math.isfinite(v) for v in row):
-                raise SceneError(f"{source}: [inputs] table row {i} is {row!r}; "
-                                 "allowed: three finite numbers [time, M_motor, M_load]")
+                raise SceneError(f"table row {i} is {row!r}; allowed: three finite numbers "
+                                 "[time, M_motor, M_load]", source, "inputs", "table")
         times = [float(row[0]) for row in rows]
         if times[0] != 0.0:
-            raise SceneError(f"{source}: [inputs] table must start at time 0, "
-                             f"its first row is at {times[0]:g}")
+            raise SceneError(f"table must start at time 0, its first row is at {times[0]:g}",
+                             source, "inputs", "table")
         if any(b <= a for a, b in zip(times, times[1:])):
-            raise SceneError(f"{source}: [inputs] table times must increase strictly")
+            raise SceneError("table times must increase strictly", source, "inputs", "table")
         return InputSchedule(tuple(times), tuple(float(r[1]) for r in rows),
                              tuple(float(r[2]) for r in rows))
     values = {}
     for key, value in table.items():
         if key not in INPUTS:
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
-            raise SceneError(f"{source}: [inputs] unknown key '{key}'{hint}; "
-                             "allowed: M_motor, M_load, table")
+            raise SceneError(f"unknown key '{key}'{hint}; allowed: M_motor, M_load, table",
+                             source, "inputs", key)
         problem = check_value(INPUTS[key], value)
         if problem:
-            raise SceneError(f"{source}: [inputs] {key} {problem}")
+            raise SceneError(f"{key} {problem}", source, "inputs", key)
         values[key] = float(value)
     return InputSchedule((0.0,), (values.get("M_motor", INPUTS["M_motor"].default),),
                          (values.get("M_load", INPUTS["M_load"].default),))

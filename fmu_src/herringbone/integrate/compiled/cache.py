@@ -24,7 +24,7 @@ from numba.core import caching
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def package_digest() -> str:
     """The hash of every source file of this package, in name order, and of the package's
     module name: numba's index pickles objects by their modules' names, so a copy of the same
@@ -52,15 +52,18 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
         self._cache_path = str(kernels_folder())
 
     def get_cache_path(self):
+        """The folder of the package's compiled kernels."""
         return self._cache_path
 
     def get_source_stamp(self):
+        """The hash of the whole package, not of the one file: see below."""
         # numba checks only the function's own file; a kernel compiled into another (walk.py
         # holds dop853.step and the equations) must be compiled anew when any of them changes
         return package_digest()
 
     @classmethod
     def from_function(cls, py_func, py_file):
+        """The locator for a kernel of this package; None for anyone else's."""
         if Path(py_file).resolve().parent != PACKAGE_DIR:
             return None  # not ours: numba's own locators decide
         return super().from_function(py_func, py_file)  # None if the folder is not writable
@@ -68,7 +71,7 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
 
 def install() -> None:
     """Put the locator first (once per process); numba falls back to its own if it declines."""
-    implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.62
+    implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # type: ignore[attr-defined]  # numba < 0.62
     locators = implementation._locator_classes
     if SourceTextCacheLocator not in locators:
         locators.insert(0, SourceTextCacheLocator)
