@@ -10,12 +10,12 @@ import zipfile
 import fmpy
 import numpy as np
 import pytest
+from conftest import MODELS
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
 import herringbone
-from conftest import MODELS
 from herringbone.fmu import builder
 from herringbone.fmu.run import simulate_scene_fmu
 

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import test_cosimulation as cosim
 from fmpy import read_model_description
 
-import test_cosimulation as cosim
 from herringbone.fmu import ssp
 
 ROOT = Path(__file__).resolve().parent.parent

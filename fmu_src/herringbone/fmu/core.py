@@ -27,8 +27,9 @@ import dataclasses
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 # first: a missing dependency is named before anything imports it (herringbone/__init__.py
 # and herringbone/fmu/__init__.py import nothing)
@@ -39,17 +40,28 @@ import numpy as np  # noqa: E402
 
 import herringbone  # noqa: E402
 from herringbone.integrate import first_start  # noqa: E402
-from herringbone.model.assembly import GearTrainModel, output_names  # noqa: E402
-from herringbone.model.parameters import (INPUTS, OUTPUTS, Parameter, Range,  # noqa: E402
-                                          check_value, parameters_of)
-from herringbone.integrate.compiled_stepper import (DEFAULT_TOLERANCE, METHODS,  # noqa: E402
-                                                    STIFFNESS_RATIO, CompiledStepper,
-                                                    StepBudgetExceeded, warm_up)
-from herringbone.integrate.segments import Segment  # noqa: E402
+from herringbone.integrate.compiled_stepper import (  # noqa: E402
+    DEFAULT_TOLERANCE,
+    METHODS,
+    STIFFNESS_RATIO,
+    CompiledStepper,
+    StepBudgetExceeded,
+    warm_up,
+)
 from herringbone.integrate.contract import Position, start_position  # noqa: E402
+from herringbone.integrate.segments import Segment  # noqa: E402
+from herringbone.model.assembly import GearTrainModel, output_names  # noqa: E402
+from herringbone.model.parameters import (  # noqa: E402
+    INPUTS,
+    OUTPUTS,
+    Parameter,
+    Range,
+    check_value,
+    parameters_of,
+)
 
 SCENE_FILE = "scene.toml"
-DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (MODEL.md)"
+DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (docs/model.md)"
 TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise
 LOOSEST_TOLERANCE = 1e-2
 # Runaway guard: a doStep of h may take STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max
@@ -82,7 +94,8 @@ SOLVER_SETTINGS = {
 }
 KINDS = {bool: "boolean", int: "integer", str: "string", float: "real"}
 CONVERT = {"real": float, "integer": int, "boolean": bool, "string": str}
-REFUSED = {"real": math.nan, "integer": 0, "int64": 0, "boolean": False, "string": ""}  # a refused read
+# what a refused read returns
+REFUSED = {"real": math.nan, "integer": 0, "int64": 0, "boolean": False, "string": ""}
 
 
 @dataclasses.dataclass
@@ -375,8 +388,8 @@ class GearCore:
     # --- the model behind it -----------------------------------------------------------------
 
     def _start(self):
-        """Validate the values and place the train in its initial state (MODEL.md 6) at the
-        start time."""
+        """Validate the values and place the train in its initial state (docs/model.md section 6)
+        at the start time."""
         self.problem, self.input_problem, self.run = None, None, None
         problem = self._check_values() or self._build()
         if problem is not None:
@@ -420,8 +433,9 @@ class GearCore:
 
     def _apply_experiment_tolerance(self):
         """The experiment's tolerance (FMI 2.0: fmi2SetupExperiment's) becomes solver_tolerance
-        (both are relative errors per step), unless the host set solver_tolerance to other than its start value; one
-        outside solver_tolerance's range is clamped into it, with a warning."""
+        (both are relative errors per step), unless the host set solver_tolerance to other than
+        its start value; one outside solver_tolerance's range is clamped into it, with a
+        warning."""
         tolerance = self.experiment_tolerance
         if tolerance is None or \
                 self.values["solver_tolerance"] != self.start_values["solver_tolerance"]:

@@ -21,14 +21,22 @@ What pythonfmu3 (0.3) lets a slave do, and what differs from the FMI 2.0 slave b
 """
 import ctypes
 
-# first: the core checks the dependencies before anything imports numpy
-from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
-
 import pythonfmu3
-from pythonfmu3 import (Boolean, DefaultExperiment, Fmi3Causality, Fmi3Slave, Fmi3Variability,
-                        Float64, Int32, String)
+from pythonfmu3 import (
+    Boolean,
+    DefaultExperiment,
+    Float64,
+    Fmi3Causality,
+    Fmi3Slave,
+    Fmi3Variability,
+    Int32,
+    String,
+)
 from pythonfmu3.enums import Fmi3Status
 from pythonfmu3.fmi3slave import Fmi3StepResult
+
+# first: the core checks the dependencies before anything imports numpy
+from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
 
 
 def _with_range(node, low, high, start=None):

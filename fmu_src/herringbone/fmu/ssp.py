@@ -178,7 +178,7 @@ def system_structure(variables: dict, values: dict, stop_time: float, step: floa
     for unit in sorted(units):
         node = ET.SubElement(unit_list, _tag("ssc:Unit"), name=unit)
         ET.SubElement(node, _tag("ssc:BaseUnit"),
-                      **{k: str(v) for k, v in BASE_UNITS[unit].items()})
+                      {k: str(v) for k, v in BASE_UNITS[unit].items()})
     _default_experiment(root, stop_time, step)
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -58,7 +58,7 @@ class Parameter:
     type, allowed range and the component that carries it."""
 
     name: str
-    default: float | int | bool | None  # None: derived from other parameters (see gear.py)
+    default: float | int | bool | str | None  # None: derived from others (geometry.py)
     unit: str
     description: str
     kind: type = float

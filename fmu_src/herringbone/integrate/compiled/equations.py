@@ -1,4 +1,4 @@
-"""The equations of motion of the assembled gear train (MODEL.md section 5), compiled.
+"""The equations of motion of the assembled gear train (docs/model.md section 5), compiled.
 
 This is the one home of the dynamic equations: GearTrainModel (model.py) assembles the arrays
 of a `System` from the scene's elements and calls these kernels, and every integrator, the scipy
@@ -205,7 +205,7 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
 
 @njit(cache=True, error_model="numpy")
 def outputs(system, points, count, loaded, state, out):
-    """MODEL.md section 7 into `out`, laid out as the constants above say: mesh stiffness and
+    """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness and
     force (both halves), n_contacts, dte, then the shaft and bearing forces, then the speeds."""
     n = system.mass.shape[0]
     out[:FIRST_ELEMENT_FORCE] = 0.0
