@@ -12,18 +12,16 @@ honoured but harms nothing (setting an output, or a fixed parameter after initia
 reading a variable through the wrong type) is refused with a message and answered fmi2OK:
 pythonfmu has no fmi2Error to give.
 """
-import ctypes
-
 # first: the core checks the dependencies before anything imports numpy
 from herringbone.fmu.core import DESCRIPTION, GearCore
 from herringbone.fmu.core import (SOLVER_SETTINGS, STEP_BUDGET_FLOOR,  # noqa: F401
                                   STEP_BUDGET_PER_MODE, STATE_FORMAT)
 
-import pythonfmu
 from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
                        String)
 from pythonfmu.enums import Fmi2Status
 
+from herringbone.fmu import pythonfmu_logger
 from herringbone.fmu.units import BoundedInteger, RealWithUnit
 
 
@@ -97,12 +95,6 @@ class HerringboneGear(GearCore, Fmi2Slave):
         self._set_all(vrs, values, "string")
 
     def host_logs(self):
-        """Whether pythonfmu passes this instance's log messages to the host (loggingOn of
-        fmi2Instantiate, or fmi2SetDebugLogging): it does not tell the slave, so this reads its
-        C++ logger, whose address it hands to the slave, where pythonfmu 0.7.0 keeps the flag
-        (right after the vtable pointer). None (not known) for another pythonfmu version or
-        without a logger (the slave outside an FMU)."""
-        if not self.logger_address or pythonfmu.__version__ != "0.7.0":
-            return None
-        flag = ctypes.c_uint8.from_address(self.logger_address + ctypes.sizeof(ctypes.c_void_p))
-        return {0: False, 1: True}.get(flag.value)
+        """Whether pythonfmu passes this instance's log messages to the host: it does not tell
+        the slave, so this reads its logger (fmu.pythonfmu_logger); None where not known."""
+        return pythonfmu_logger.logging_on(self.logger_address, self.instance_name)

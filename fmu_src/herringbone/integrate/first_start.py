@@ -19,7 +19,6 @@ pythonfmu, logging off) the message goes to stderr at once and to the queue as w
 """
 from __future__ import annotations
 
-import ctypes
 import json
 import sys
 import threading
@@ -149,41 +148,17 @@ class HostLine:
     return. `say(message, status)` calls the host's fmi2CallbackLogger at once where it can,
     else writes to stderr and queues the message with the slave's log as well.
 
-    pythonfmu 0.7 hands the slave the address of its Fmi2Logger (C++): a vtable pointer, the
-    debug-logging flag at byte 8, the instance name (a std::string) at 16, the categories at
-    48 and the host's fmi2CallbackFunctions pointer at 72 (pythonfmu's src/pythonfmu/fmi2.cpp
-    and Logger.hpp). The line is used only if the pythonfmu in use is 0.7 and the name found
-    there is the instance's own, and only while the instance's __init__ runs (inside
+    The host's logger is found through pythonfmu 0.7's own logger object
+    (fmu.pythonfmu_logger), and called only while the instance's __init__ runs (inside
     fmi2Instantiate, when the host's callbacks are certainly alive; compiles happen there)."""
 
-    _NAME, _FLAG, _FUNCTIONS = 16, 8, 72
-    _LOGGER = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
-                               ctypes.c_char_p, ctypes.c_char_p)
-
     def __init__(self, slave, logger_address=None):
+        from ..fmu.pythonfmu_logger import host_logger
+
         self._slave = weakref.ref(slave)
         self._init = type(slave).__init__.__code__
         self._name = str(slave.instance_name).encode()
-        self._call = self._find_logger(logger_address)
-
-    def _find_logger(self, address):
-        import pythonfmu
-
-        if not address or not pythonfmu.__version__.startswith("0.7."):
-            return None
-        read = lambda offset: ctypes.c_void_p.from_address(address + offset).value  # noqa: E731
-        if ctypes.c_size_t.from_address(address + self._NAME + 8).value != len(self._name) \
-                or ctypes.string_at(read(self._NAME), len(self._name)) != self._name:
-            return None
-        if not ctypes.c_bool.from_address(address + self._FLAG).value:
-            return None  # the host turned logging off
-        functions = read(self._FUNCTIONS)  # fmi2CallbackFunctions: logger first, environment 5th
-        if not functions or not ctypes.c_void_p.from_address(functions).value:
-            return None
-        logger = ctypes.c_void_p.from_address(functions).value
-        environment = ctypes.c_void_p.from_address(functions + 32).value
-        function = self._LOGGER(logger)
-        return lambda status, text: function(environment, self._name, status, None, text)
+        self._call = host_logger(logger_address, str(slave.instance_name))
 
     def say(self, message: str, status: int = FMI_OK) -> None:
         """Show `message` to the host: through its logger callback while it instantiates the

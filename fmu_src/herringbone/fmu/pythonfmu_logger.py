@@ -1,0 +1,64 @@
+"""What pythonfmu 0.7 keeps in the logger object whose address it hands every slave (the
+`logger` keyword of the slave's constructor), read with ctypes. pythonfmu tells a slave neither
+whether the host enabled logging nor how to reach the host's logger before the FMI call returns
+(it queues a slave's messages until then), and the gear FMU needs both: to say a problem on
+stderr only where the host would not show it, and to announce a compile before it starts.
+
+pythonfmu 0.7's C++ Fmi2Logger (its src/pythonfmu/fmi2.cpp and Logger.hpp): a vtable pointer,
+the debug-logging flag at byte FLAG, the instance name (a std::string: data pointer, then size)
+at NAME, the host's fmi2CallbackFunctions pointer at FUNCTIONS. It is read only under pythonfmu
+0.7, and only after the name found there is the instance's own, the check that the layout is
+the one described here; anything else answers None ("not known").
+"""
+from __future__ import annotations
+
+import ctypes
+from collections.abc import Callable
+
+FLAG, NAME, FUNCTIONS = 8, 16, 72
+# fmi2CallbackLogger(environment, instance name, status, category, message)
+_CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
+                             ctypes.c_char_p, ctypes.c_char_p)
+
+
+def _pointer(address: int, offset: int) -> int | None:
+    return ctypes.c_void_p.from_address(address + offset).value
+
+
+def _is_instance(address: int | None, name: bytes) -> bool:
+    """Whether `address` is pythonfmu 0.7's logger of the instance called `name`."""
+    import pythonfmu
+
+    if not address or not pythonfmu.__version__.startswith("0.7."):
+        return False
+    size = ctypes.c_size_t.from_address(address + NAME + 8).value
+    data = _pointer(address, NAME)
+    if not data or size != len(name):
+        return False
+    return ctypes.string_at(data, size) == name
+
+
+def logging_on(address: int | None, instance_name: str) -> bool | None:
+    """Whether pythonfmu passes the instance's log messages to the host (loggingOn of
+    fmi2Instantiate, or fmi2SetDebugLogging); None where that cannot be known."""
+    if not _is_instance(address, instance_name.encode()):
+        return None
+    assert address is not None
+    return bool(ctypes.c_bool.from_address(address + FLAG).value)
+
+
+def host_logger(address: int | None, instance_name: str) -> Callable[[int, bytes], None] | None:
+    """A call `(status, message)` straight into the host's fmi2CallbackLogger, for the instance
+    called `instance_name`; None where the host turned logging off or the logger is unknown.
+    Valid while the host's callbacks live: call it only inside the instance's FMI calls."""
+    name = instance_name.encode()
+    if not logging_on(address, instance_name):
+        return None
+    assert address is not None
+    functions = _pointer(address, FUNCTIONS)  # fmi2CallbackFunctions: logger 1st, environment 5th
+    logger = _pointer(functions, 0) if functions else None
+    if not logger or not functions:
+        return None
+    environment = _pointer(functions, 4 * ctypes.sizeof(ctypes.c_void_p))
+    callback = _CALLBACK(logger)
+    return lambda status, text: callback(environment, name, status, None, text)
