@@ -502,6 +502,47 @@ def test_fmu_input_set_mid_run_is_discarded_with_one_message(scene_fmu, case):
         gear.free()
 
 
+# FMI calls a master may get wrong, after initialization (each through the FMU, in this
+# process): (id, the call on a Gear, the words its one message must contain). pythonfmu has no
+# fmi2Error to answer with, so each is refused with a message and answered fmi2OK, and the
+# instance steps on as if the call had not been made (tests/test_fmi_contract.py checks the
+# values such calls return).
+FMI_CALL_CASES = [
+    ("set-an-output", lambda g: g.slave.setReal([g.variables["F_mesh"].valueReference], [5.0]),
+     ("F_mesh", "output", "cannot be set")),
+    ("set-a-fixed-parameter-after-initialization",
+     lambda g: g.slave.setReal([g.variables["m_pinion"].valueReference], [2.0]),
+     ("m_pinion", "fixed parameter", "before exitInitializationMode")),
+    ("read-an-integer-as-real",
+     lambda g: g.slave.getReal([g.variables["n_contacts"].valueReference]),
+     ("n_contacts", "fmi2GetInteger")),
+    ("read-a-real-as-integer",
+     lambda g: g.slave.getInteger([g.variables["F_mesh"].valueReference]),
+     ("F_mesh", "fmi2GetReal")),
+    ("read-an-unknown-value-reference", lambda g: g.slave.getReal([100_000]),
+     ("value reference 100000",)),
+    ("set-a-local", lambda g: g.slave.setReal([g.variables["internal_steps"].valueReference],
+                                              [1.0]),
+     ("internal_steps",)),
+]
+
+
+@pytest.mark.parametrize("call, words", [pytest.param(call, words, id=case_id)
+                                         for case_id, call, words in FMI_CALL_CASES])
+def test_fmi_call_a_master_gets_wrong_is_refused_with_one_message(scene_fmu, call, words):
+    gear = Gear(scene_fmu("reference"))
+    try:
+        gear.step(1e-4)
+        call(gear)
+        errors, fatal = _fmu_messages(gear)
+        assert not fatal, fatal
+        assert len(errors) == 1, f"not one message: {errors}"
+        assert_one_clear_message(errors[0], words, "FMU log")
+        gear.step(1e-4)  # and the instance goes on
+    finally:
+        gear.free()
+
+
 def test_fmpy_simulate_stops_at_a_nan_input_with_the_message(scene_fmu):
     """The same through fmpy's own master loop: the run ends at the step that sees the NaN."""
     import fmpy
