@@ -21,6 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import common  # noqa: E402
+from tqdm import tqdm  # noqa: E402
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA")
 SHIPPED_SCENES = ("reference", "torsional", "staggered", "lead_error")
@@ -34,8 +35,9 @@ QUICK = dict(scenes=["reference"], stop_time=0.01, steps=[1e-4, 1e-3], tolerance
 
 def benchmark_scene(scene_path, stop_time, steps, tolerances, methods, fmu_methods=(None,),
                     scipy_step=1e-3, budget=math.inf, reference_tolerance=1e-12, repeat=3,
-                    log=print) -> list[dict]:
-    """One row per configuration (see the module docstring) of one scene file. Each FMU
+                    log=print, done=lambda: None) -> list[dict]:
+    """One row per configuration (see the module docstring) of one scene file; `done()` is
+    called as each row is made (a progress bar's step). Each FMU
     configuration runs `repeat` times, in a fresh process each, and gives the run of median
     wall time: a run of 0.02 s of wall time can take half as long again when the machine
     stirs. (scipy's runs take seconds each and run once.)"""
@@ -73,11 +75,16 @@ def benchmark_scene(scene_path, stop_time, steps, tolerances, methods, fmu_metho
         return entry
 
     rows = []
+
+    def add(entry):
+        rows.append(entry)
+        done()
+
     try:
         fmu_dir = common.scene_fmu(scene_path, log=log) if "fmu" in methods else None
     except common.BuildError as error:
         log(f"  {error}")
-        rows.append({**_skipped(scene, "FMU", "default", math.nan, math.nan, stop_time),
+        add({**_skipped(scene, "FMU", "default", math.nan, math.nan, stop_time),
                      "status": str(error)})
         fmu_dir = None
     if fmu_dir is not None:
@@ -97,7 +104,7 @@ def benchmark_scene(scene_path, stop_time, steps, tolerances, methods, fmu_metho
                 over_budget = False
                 for tolerance in sorted(set(tolerances) | {default_tolerance}, reverse=True):
                     if over_budget:  # tighter only costs more
-                        rows.append(_skipped(scene, "FMU", label, tolerance, step, stop_time))
+                        add(_skipped(scene, "FMU", label, tolerance, step, stop_time))
                         continue
                     start_values = {"solver_tolerance": tolerance}
                     if fmu_method is not None:
@@ -108,7 +115,7 @@ def benchmark_scene(scene_path, stop_time, steps, tolerances, methods, fmu_metho
                                                    [(stop_time, step, True)], forces,
                                                    start_values, budget=budget))
                     result = sorted(runs, key=lambda r: r["wall"])[len(runs) // 2]
-                    rows.append(row("FMU", label, tolerance, step, result,
+                    add(row("FMU", label, tolerance, step, result,
                                     default=fmu_method in (None, default_method)
                                     and tolerance == default_tolerance))
                     over_budget = result["status"] != "ok"
@@ -116,11 +123,11 @@ def benchmark_scene(scene_path, stop_time, steps, tolerances, methods, fmu_metho
         over_budget = False
         for tolerance in sorted(tolerances, reverse=True):
             if over_budget:
-                rows.append(_skipped(scene, "solve_ivp", method, tolerance, scipy_step, stop_time))
+                add(_skipped(scene, "solve_ivp", method, tolerance, scipy_step, stop_time))
                 continue
             result = common.run_scipy(scene, method, tolerance, stop_time, scipy_step, forces,
                                       budget=budget)
-            rows.append(row("solve_ivp", method, tolerance, scipy_step, result))
+            add(row("solve_ivp", method, tolerance, scipy_step, result))
             over_budget = result["status"] != "ok"
     return rows
 
@@ -364,14 +371,24 @@ def main(argv=None) -> int:
         parser.error(f"--repeat {args.repeat}: allowed: 1 or more")
     command = common.command_line(__file__, sys.argv[1:] if argv is None else argv)
 
+    from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE
+
+    scenes = common.scene_paths(args.scenes)
+    fmu_runs = (len(args.fmu_methods or [None]) * len(args.steps)
+                * len(set(args.tolerances) | {DEFAULT_TOLERANCE}) if "fmu" in args.methods else 0)
+    scipy_runs = len([m for m in args.methods if m != "fmu"]) * len(args.tolerances)
+    # configurations done and time left; the log lines go above the bar
+    bar = tqdm(total=len(scenes) * (fmu_runs + scipy_runs), unit="run", desc="benchmark",
+               file=sys.stderr, disable=not sys.stderr.isatty())
     rows = []
-    for scene_path in common.scene_paths(args.scenes):
+    for scene_path in scenes:
         rows += benchmark_scene(scene_path=scene_path, stop_time=args.stop_time,
                                 steps=args.steps, tolerances=args.tolerances,
                                 methods=args.methods, fmu_methods=args.fmu_methods or [None],
                                 scipy_step=args.scipy_step, budget=args.budget,
                                 reference_tolerance=args.reference_tolerance,
-                                repeat=args.repeat, log=lambda text: print(text, flush=True))
+                                repeat=args.repeat, log=bar.write, done=bar.update)
+    bar.close()
     output = Path(args.output_dir)
     common.write_csv(rows, output / "benchmark.csv")
     plot(rows, output / "error_vs_runtime.png")
