@@ -339,6 +339,9 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      ("--output", "is a file, not a folder"), "build_fmu"),
     ("build_fmu-examples-a-file", "--examples", ("--examples", "{file}"),
      ("--examples", "is a file", "folder"), "build_fmu"),
+    ("build_fmu-fmi-four", "--fmi", ("--fmi", "4"), ("--fmi 4", "allowed: 2, 3"), "build_fmu"),
+    ("build_fmu-ssp-in-no-folder", "--ssp", ("--ssp", "{file}/x.ssp"),
+     ("--ssp", "is a file, not a folder"), "build_fmu"),
 ]
 OPTION_CASES = [Case(f"argv-{id}", "option", name, arguments, words, ("argv",), (program,))
                 for id, name, arguments, words, program in OPTION_ROWS]
