@@ -13,7 +13,6 @@ FMU with fmpy instead of the package's integrator.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,12 +113,6 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
 def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **options):
     """The table of `run_sweep` alone; `options`: workers, scheduler, fmu, progress."""
     return run_sweep(scene, speeds, params, protocol, **options)[0]
-
-
-def resolution(values: np.ndarray) -> float:
-    """The largest spacing between neighbouring swept values."""
-    values = np.sort(np.asarray(values, dtype=float))
-    return float(np.diff(values).max()) if len(values) > 1 else math.inf
 
 
 def resonation_summary(table) -> str:

@@ -39,10 +39,14 @@ fmu_runtime.check_dependencies()
 import numpy as np  # noqa: E402
 
 import herringbone  # noqa: E402
+from herringbone.arguments import (  # noqa: E402
+    FMU_MAX_STEP,
+    FMU_SOLVER_METHOD,
+    FMU_SOLVER_TOLERANCE,
+)
 from herringbone.integrate import first_start  # noqa: E402
 from herringbone.integrate.compiled_stepper import (  # noqa: E402
     DEFAULT_TOLERANCE,
-    METHODS,
     STIFFNESS_RATIO,
     CompiledStepper,
     StepBudgetExceeded,
@@ -55,15 +59,12 @@ from herringbone.model.parameters import (  # noqa: E402
     INPUTS,
     OUTPUTS,
     Parameter,
-    Range,
     check_value,
     parameters_of,
 )
 
 SCENE_FILE = "scene.toml"
 DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (docs/model.md)"
-TIGHTEST_TOLERANCE = 1e-12  # below this the error control works on rounding noise
-LOOSEST_TOLERANCE = 1e-2
 # Runaway guard: a doStep of h may take STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max
 # internal steps (|λ|max the fastest eigenvalue). Measured on the shipped scenes at the default
 # tolerance: at most 2·h·|λ|max + 10 (from_rest), so the bound leaves 50 times that, and a
@@ -82,10 +83,10 @@ SOLVER_SETTINGS = {
         "relative to the static mesh force (tighter: more accurate, slower); left at its start "
         "value, a tolerance given by fmi2SetupExperiment takes its place (FMI 2.0; the FMI 3.0 "
         "FMU does not receive the experiment's tolerance)",
-        allowed=Range(TIGHTEST_TOLERANCE, LOOSEST_TOLERANCE)),
+        allowed=FMU_SOLVER_TOLERANCE.allowed),
     "max_step": Parameter(
         "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)",
-        allowed=Range(0.0, None)),
+        allowed=FMU_MAX_STEP.allowed),
     "solver_method": Parameter(
         "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
         "'radau' (implicit, L-stable, order 5, for stiff scenes) or 'auto' (radau when the "
@@ -425,8 +426,10 @@ class GearCore:
                                            max_step=self.values["max_step"] or math.inf)
             self.stepper_values = self._model_values()
         except herringbone.SceneError as error:
-            # the scene's own message names the variable; drop its file prefix
-            return str(error).split(": ", 1)[-1].replace("[parameters] ", "parameter ")
+            # the scene's own words, without its file: the FMU's variables are the parameters
+            where = ("parameter " if error.table == "parameters" else
+                     "" if error.table is None else f"[{error.table}] ")
+            return where + error.problem
         except Exception as error:
             return f"initialization failed: {error}"
         return None
@@ -444,24 +447,19 @@ class GearCore:
             return self._report(f"{self.API['setup']}: tolerance {tolerance!r} is not a "
                                 "positive number; solver_tolerance keeps its value",
                                 WARNING)
-        used = min(max(tolerance, TIGHTEST_TOLERANCE), LOOSEST_TOLERANCE)
+        allowed = FMU_SOLVER_TOLERANCE.allowed
+        used = min(max(tolerance, allowed.low), allowed.high)
         if used != tolerance:
             self._report(f"{self.API['setup']}: tolerance {tolerance:g} is outside "
-                         f"solver_tolerance's range [{TIGHTEST_TOLERANCE:g}, "
-                         f"{LOOSEST_TOLERANCE:g}]; using {used:g}", WARNING)
+                         f"solver_tolerance's range {allowed.describe()}; using {used:g}",
+                         WARNING)
         self.values["solver_tolerance"] = used
 
     @staticmethod
     def _check_solver_setting(name, value):
-        if name == "solver_method":
-            return None if value in METHODS else (
-                f"is {value!r}; allowed: {', '.join(repr(m) for m in METHODS)}")
-        allowed = {"solver_tolerance": f"[{TIGHTEST_TOLERANCE:g}, {LOOSEST_TOLERANCE:g}]",
-                   "max_step": ">= 0 (0: no limit)"}[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not SOLVER_SETTINGS[name].allowed.contains(value):
-            return f"is {value!r}; allowed: {allowed}"
-        return None
+        """Why a solver setting's value is not allowed, or None (ranges: arguments.py)."""
+        return {"solver_tolerance": FMU_SOLVER_TOLERANCE, "max_step": FMU_MAX_STEP,
+                "solver_method": FMU_SOLVER_METHOD}[name].problem(value)
 
     # --- how problems reach the user -----------------------------------------------------------
 
