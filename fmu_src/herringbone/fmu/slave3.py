@@ -56,6 +56,7 @@ class RangedFloat64(Float64):
         self.low, self.high = low, high
 
     def to_xml(self):
+        """pythonfmu3's element, with the range and an exact (repr) start value."""
         start = None if self.start is None else float(self.start)
         return _with_range(super().to_xml(), self.low, self.high, start)
 
@@ -68,10 +69,15 @@ class RangedInt32(Int32):
         self.low, self.high = low, high
 
     def to_xml(self):
+        """pythonfmu3's element, with the range."""
         return _with_range(super().to_xml(), self.low, self.high)
 
 
 class HerringboneGear(GearCore, Fmi3Slave):
+    """The gear train as an FMI 3.0 co-simulation slave (pythonfmu3): GearCore's variables,
+    solver and checks behind pythonfmu3's callbacks; value references equal the FMI 2.0
+    FMU's, with the independent variable `time` declared last."""
+
     API = {"prefix": "fmi3", "set_state": "fmi3SetFMUState",
            "setup": "fmi3EnterInitializationMode",
            "kinds": {"real": "Float64", "integer": "Int32", "boolean": "Boolean",
@@ -117,10 +123,14 @@ class HerringboneGear(GearCore, Fmi3Slave):
     # --- FMI callbacks -----------------------------------------------------------------------
 
     def exit_initialization_mode(self):
+        """Start the run from the values set in initialization mode (fmi3ExitInitializationMode);
+        a refused value or start raises, after the message has reached the host."""
         self._exit_initialization()
         self._raise_if_unheard()
 
     def do_step(self, current_time, step_size):
+        """Advance from `current_time` by `step_size` seconds with the inputs held
+        (fmi3DoStep); a failed step answers Error with the reason in the log."""
         if self.run is not None and self.run.time == self.start_time \
                 and self.stepper.accepted_steps == 0:
             # no step taken yet: the start time pythonfmu3 did not pass on is this one
@@ -131,33 +141,44 @@ class HerringboneGear(GearCore, Fmi3Slave):
         return Fmi3StepResult()
 
     def get_float64(self, vrs):
+        """Values of the Float64 variables `vrs` (outputs, inputs, parameters, time)."""
         return self._get_reals(vrs)
 
     def get_int32(self, vrs):
+        """Values of the Int32 variables `vrs`."""
         return self._get(vrs, "integer")
 
     def get_int64(self, vrs):
+        """There are no Int64 variables: any reference is refused with a message."""
         return self._get(vrs, "int64")  # none: refused with a message, not a Fatal
 
     def get_boolean(self, vrs):
+        """Values of the Boolean variables `vrs`."""
         return self._get(vrs, "boolean")
 
     def get_string(self, vrs):
+        """Values of the String variables `vrs`."""
         return self._get(vrs, "string")
 
     def set_float64(self, vrs, values):
+        """Set Float64 variables in turn; one that cannot be set (an output, a fixed parameter
+        after initialization, a value out of its range) is refused with an Error message."""
         self._set_all(vrs, values, "real")
 
     def set_int32(self, vrs, values):
+        """Set Int32 variables, checked as set_float64's."""
         self._set_all(vrs, values, "integer")
 
     def set_int64(self, vrs, values):
+        """There are no Int64 variables: refused with a message."""
         self._set_all(vrs, values, "int64")
 
     def set_boolean(self, vrs, values):
+        """Set Boolean variables, checked as set_float64's."""
         self._set_all(vrs, values, "boolean")
 
     def set_string(self, vrs, values):
+        """Set String variables, checked as set_float64's."""
         self._set_all(vrs, values, "string")
 
     def host_logs(self):
