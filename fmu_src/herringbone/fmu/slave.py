@@ -14,14 +14,15 @@ pythonfmu has no fmi2Error to give.
 """
 from typing import Any
 
+# before pythonfmu: the core checks the dependencies (herringbone.fmu.runtime) before anything
+# imports numpy; `isort: split` keeps it there
+from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
+
+# isort: split
 from pythonfmu import Boolean, DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, String
 from pythonfmu.enums import Fmi2Status
 
 from herringbone.fmu import pythonfmu_logger
-
-# fmu.core checks the dependencies itself before it imports numpy: pythonfmu, the modules
-# above and fmi_units import none of numpy, scipy or numba
-from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
 from herringbone.fmu.units import BoundedInteger, RealWithUnit
 
 
