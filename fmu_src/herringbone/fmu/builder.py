@@ -63,12 +63,13 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     pythonfmu3 Fmi3Slave class) into the FMU file `output`.
 
     `project_files` (files or package directories, copied recursively) land in the FMU's
-    `resources/`, which the FMU puts on `sys.path` at run time; directories and .py files among
-    them are also put on the build's PYTHONPATH, since the builder imports the script to write
-    the model description. For FMI 2.0 this module's `UNITS_MODULE` goes with them, as
-    `fmi_units`. `handle_state` declares canGetAndSetFMUstate; `serialize_state` declares
-    canSerializeFMUstate (the slave's state must then be JSON data, or the slave must override
-    pythonfmu's `_fmu_state_to_bytes`); `no_feedthrough`: see `fix_model_description`.  The
+    `resources/`, which the FMU puts on `sys.path` at run time; the folders that hold its
+    directories and .py files go on the build's PYTHONPATH, so that they import there too (the
+    builder imports the script to write the model description). For FMI 2.0 this module's
+    `UNITS_MODULE` goes with them, as `fmi_units`. `handle_state` declares
+    canGetAndSetFMUstate; `serialize_state` declares canSerializeFMUstate (the slave's state
+    must then be JSON data, or the slave must override pythonfmu's `_fmu_state_to_bytes`);
+    `no_feedthrough`: see `fix_model_description`.  The
     model description is then fixed by `fix_model_description`.  `output` (its parent
     directories are created) is replaced only once the FMU is complete and valid.  Needs
     pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns `output`.  Raises
