@@ -173,15 +173,36 @@ def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
 @pytest.mark.parametrize("scene_name", ["reference", "torsional", "contact_loss"])
 def test_packed_system_unpacks_to_the_same_arrays(scene_name):
     """The compiled loop takes the System packed into two arrays; unpacked it must be the
-    System field for field (a field added to one side and not the other fails here)."""
+    System field for field, exactly: values, shapes, entry types, and arrays as views of the
+    buffers (a field added to the declaration and not to unpack_system's readers, or read from
+    the wrong buffer or with the wrong shape, fails here)."""
     from herringbone.integrate.compiled.equations import System, pack_system, unpack_system
 
     system = GearTrainModel(herringbone.load_scene(MODELS / f"{scene_name}.toml")).system
-    unpacked = unpack_system(*pack_system(system))
-    assert len(unpacked) == len(System._fields)
-    for name, original, copy in zip(System._fields, system, unpacked):
-        assert np.array_equal(np.asarray(original), np.asarray(copy)), name
-        assert np.asarray(original).shape == np.asarray(copy).shape, name
+    floats, ints = pack_system(system)
+    assert floats.dtype == np.float64 and ints.dtype == np.int64
+    unpacked = unpack_system(floats, ints)
+    assert type(unpacked) is System
+    for name, original, copy in zip(System._fields, system, unpacked, strict=True):
+        if isinstance(original, np.ndarray):
+            assert copy.shape == original.shape, name
+            assert copy.dtype.kind == original.dtype.kind, name
+            assert np.array_equal(copy, original), name
+            assert np.shares_memory(copy, floats) or np.shares_memory(copy, ints), name
+        else:
+            assert type(copy) is type(original) and copy == original, name
+
+
+def test_packing_refuses_a_field_of_the_wrong_shape(reference_model):
+    """pack_system checks every field against System's declaration: a vector given as a matrix,
+    or two fields that disagree on a size, are refused, not packed into a wrong layout."""
+    from herringbone.integrate.compiled.equations import pack_system
+
+    system = reference_model.system
+    with pytest.raises(ValueError, match="mass"):
+        pack_system(system._replace(mass=system.mass[:, None]))
+    with pytest.raises(ValueError, match="coordinates"):
+        pack_system(system._replace(rigid_rotation=system.rigid_rotation[:-1]))
 
 
 @pytest.mark.parametrize("speed, acceleration, angle, target", [

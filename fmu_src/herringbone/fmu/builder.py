@@ -14,6 +14,7 @@ herringbone/fmu/core.py, and the builder hands pythonfmu(3) a copy named `GEAR_S
 """
 from __future__ import annotations
 
+import argparse
 import hashlib
 import os
 import shutil
@@ -22,6 +23,7 @@ import sys
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 from .. import shipped
@@ -41,7 +43,8 @@ DEFAULT_OUTPUT = Path("dist") / "HerringboneGear.fmu"
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
     ("parameter", "fixed"): "exact", ("parameter", "tunable"): "exact",
-    ("calculatedParameter", "fixed"): "calculated", ("calculatedParameter", "tunable"): "calculated",
+    ("calculatedParameter", "fixed"): "calculated",
+    ("calculatedParameter", "tunable"): "calculated",
     ("output", "constant"): "exact", ("output", "discrete"): "calculated",
     ("output", "continuous"): "calculated",
     ("local", "constant"): "exact", ("local", "fixed"): "calculated",
@@ -60,13 +63,16 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     pythonfmu3 Fmi3Slave class) into the FMU file `output`.
 
     `project_files` (files or package directories, copied recursively) land in the FMU's
-    `resources/`, which the FMU puts on `sys.path` at run time.  `serialize_state` declares
-    canSerializeFMUstate (the slave's state must then be JSON data, or the slave must override
-    pythonfmu's `_fmu_state_to_bytes`); `no_feedthrough`: see `fix_model_description`.  Directories among them are also
-    put on the build's PYTHONPATH, since the builder imports the script to write the model
-    description.  The model description is then fixed by `fix_model_description`.  `output` (its
-    parent directories are created) is replaced only once the FMU is complete and valid.
-    Needs pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns `output`.  Raises
+    `resources/`, which the FMU puts on `sys.path` at run time; the folders that hold its
+    directories and .py files go on the build's PYTHONPATH, so that they import there too (the
+    builder imports the script to write the model description). For FMI 2.0 this module's
+    `UNITS_MODULE` goes with them, as `fmi_units`. `handle_state` declares
+    canGetAndSetFMUstate; `serialize_state` declares canSerializeFMUstate (the slave's state
+    must then be JSON data, or the slave must override pythonfmu's `_fmu_state_to_bytes`);
+    `no_feedthrough`: see `fix_model_description`.  The
+    model description is then fixed by `fix_model_description`.  `output` (its parent
+    directories are created) is replaced only once the FMU is complete and valid.  Needs
+    pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns `output`.  Raises
     RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
     """
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
@@ -136,7 +142,7 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     ET.indent(root, space="  ")
     contents = {info.filename: data for info, data in entries.items()}
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    root.set(token, "{%s}" % _content_guid(contents))
+    root.set(token, "{" + _content_guid(contents) + "}")
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
     def write(staging: Path) -> None:
@@ -161,7 +167,9 @@ def _content_guid(contents: dict[str, bytes]) -> str:
     return "-".join(hex_digits[a:b] for a, b in ((0, 8), (8, 12), (12, 16), (16, 20), (20, 32)))
 
 
-def _replace_file(target: Path, write) -> None:
+def _replace_file(target: Path, write: Callable[[Path], object]) -> None:
+    """Replace `target` by what `write` writes to the staging path it is given; on any error
+    `target` is left as it was."""
     # Stage beside the target so that os.replace is atomic: a reader never sees half a zip.
     fd, staging = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial")
     os.close(fd)
@@ -175,7 +183,9 @@ def _replace_file(target: Path, write) -> None:
 
 
 def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:
-    variables = root.find("ModelVariables").findall("ScalarVariable")
+    """An FMI 2.0 model description's <ModelStructure>, written anew from its variables: see
+    `fix_model_description`."""
+    variables = root.findall("ModelVariables/ScalarVariable")
     outputs, initial_unknowns = [], []
     for index, var in enumerate(variables, start=1):
         causality = var.get("causality", "local")
@@ -198,7 +208,7 @@ def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:
         if indices:
             node = ET.SubElement(structure, tag)
             for index in indices:
-                ET.SubElement(node, "Unknown", index=str(index), **extra)
+                ET.SubElement(node, "Unknown", {"index": str(index), **extra})
 
 
 def _fix_fmi3_description(root: ET.Element, no_feedthrough: bool) -> None:
@@ -217,12 +227,16 @@ def _fix_fmi3_description(root: ET.Element, no_feedthrough: bool) -> None:
 
 
 def _add_unit_definitions(root: ET.Element) -> None:
+    """A <Unit> (with its <DisplayUnit>s) in <UnitDefinitions> for every unit a real variable
+    names that is not declared yet; <UnitDefinitions> is created where needed, in its place in
+    the schema's order."""
     used: dict[str, set[str]] = {}
     for real in [*root.iter("Real"), *root.iter("Float64")]:  # FMI 2.0, FMI 3.0
-        if real.get("unit"):
-            used.setdefault(real.get("unit"), set())
-            if real.get("displayUnit"):
-                used[real.get("unit")].add(real.get("displayUnit"))
+        unit_name, display_name = real.get("unit"), real.get("displayUnit")
+        if unit_name:
+            used.setdefault(unit_name, set())
+            if display_name:
+                used[unit_name].add(display_name)
     definitions = root.find("UnitDefinitions")
     if definitions is None:
         if not used:
@@ -292,10 +306,11 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
 
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
-    load it from the user's cache, herringbone.integrate.compiled.cache), saying so first and showing
-    progress on stdout, and copy the compiled code to `folder`/numba_cache, which the FMU
-    carries in its resources (herringbone.integrate.first_start). Returns that folder. Raises
-    RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
+    load it from the user's cache, herringbone.integrate.compiled.cache), saying so first and
+    showing progress on stdout, and copy the compiled code to `folder`/numba_cache, which the
+    FMU carries in its resources (herringbone.integrate.first_start). Returns that folder.
+    Raises RuntimeError if the cache folder lacks what was compiled (it could not be
+    written)."""
     from ..integrate import first_start
     from ..integrate.compiled import cache, walk
 
@@ -315,7 +330,7 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     return carried.parent
 
 
-def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
+def add_arguments(parser: argparse.ArgumentParser, default_output: Path = DEFAULT_OUTPUT) -> None:
     """The build command's arguments, on `parser` (build_fmu.py's own parser, or the `build-fmu`
     command of `herringbone`)."""
     from ..arguments import output_folder, output_path
@@ -339,7 +354,7 @@ def add_arguments(parser, default_output: Path = DEFAULT_OUTPUT) -> None:
                              "as an SSP archive into OUT.ssp instead (herringbone.fmu.ssp)")
 
 
-def build_command(args, parser) -> int:
+def build_command(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """Run the build command of parsed `args`; returns the process exit code: 2, with one line
     on stderr naming the culprit and what is allowed, for a bad argument or scene (checked
     before building)."""

@@ -12,13 +12,14 @@ honoured but harms nothing (setting an output, or a fixed parameter after initia
 reading a variable through the wrong type) is refused with a message and answered fmi2OK:
 pythonfmu has no fmi2Error to give.
 """
-# first: the core checks the dependencies before anything imports numpy
-from herringbone.fmu.core import DESCRIPTION, GearCore
-from herringbone.fmu.core import (SOLVER_SETTINGS, STEP_BUDGET_FLOOR,  # noqa: F401
-                                  STEP_BUDGET_PER_MODE, STATE_FORMAT)
+from typing import Any
 
-from pythonfmu import (DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean,
-                       String)
+# before pythonfmu: the core checks the dependencies (herringbone.fmu.runtime) before anything
+# imports numpy; `isort: split` keeps it there
+from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
+
+# isort: split
+from pythonfmu import Boolean, DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, String
 from pythonfmu.enums import Fmi2Status
 
 from herringbone.fmu import pythonfmu_logger
@@ -26,9 +27,16 @@ from herringbone.fmu.units import BoundedInteger, RealWithUnit
 
 
 class HerringboneGear(GearCore, Fmi2Slave):
+    """The gear FMU's FMI 2.0 slave: GearCore's logic behind pythonfmu's callbacks. Values
+    cross in the units the variables declare (SI: the model description's <UnitDefinitions>);
+    value references are those `_register` hands out."""
+
     description = DESCRIPTION
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
+        """pythonfmu's instantiation (instance_name, resources, logger, ...): load the scene
+        from the resources and declare its variables; the scene's experiment becomes the
+        default experiment."""
         super().__init__(**kwargs)
         self.logger_address = kwargs.get("logger")  # pythonfmu's C++ PyLogger (see host_logs)
         self._setup(kwargs.get("logger"))
@@ -37,7 +45,9 @@ class HerringboneGear(GearCore, Fmi2Slave):
             start_time=0.0, stop_time=experiment.stop_time,
             step_size=experiment.output_interval)
 
-    def _register(self, declaration):
+    def _register(self, declaration: Declaration) -> int:
+        """Declare `declaration` as a pythonfmu variable (a Real with its unit and range, an
+        Integer with its range, a Boolean or a String); returns its value reference."""
         arguments = dict(description=declaration.description,
                          causality=Fmi2Causality[declaration.causality],
                          variability=Fmi2Variability[declaration.variability],
@@ -52,49 +62,66 @@ class HerringboneGear(GearCore, Fmi2Slave):
         self.register_variable(variable)
         return variable.value_reference
 
-    def _log(self, text, status):
+    def _log(self, text: str, status: int) -> None:
+        """Queue `text` with pythonfmu's logger at `status` (an fmi2Status value)."""
         self.log(text, Fmi2Status(status))
 
-    # --- FMI callbacks -----------------------------------------------------------------------
+    # --- FMI callbacks: times in s, values in the variables' units ---------------------------
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+    def setup_experiment(self, start_time: float, stop_time: float | None = None,
+                         tolerance: float | None = None) -> None:
+        """fmi2SetupExperiment: the run starts at `start_time`; a `tolerance` takes the
+        place of solver_tolerance unless the host set that itself (GearCore._set_experiment).
+        The stop time is not used: the run goes where the doSteps take it."""
         self._set_experiment(start_time, tolerance)
 
-    def exit_initialization_mode(self):
+    def exit_initialization_mode(self) -> None:
+        """fmi2ExitInitializationMode: check the parameters and build the model; a problem
+        raises (fmi2Fatal) only where the host does not hear the log."""
         self._exit_initialization()
         self._raise_if_unheard()
 
-    def do_step(self, current_time, step_size):
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        """fmi2DoStep: advance from `current_time` by `step_size`; False (fmi2Discard) on a
+        problem, which raises instead (fmi2Fatal) where the host does not hear the log."""
         if self._step(current_time, step_size) is not None:
             self._raise_if_unheard()
             return False
         return True
 
-    def get_real(self, vrs):
+    def get_real(self, vrs: list[int]) -> list[float]:
+        """fmi2GetReal: the values of `vrs` (NaN, reported, for one that is not a Real)."""
         return self._get_reals(vrs)
 
-    def get_integer(self, vrs):
+    def get_integer(self, vrs: list[int]) -> list[int]:
+        """fmi2GetInteger: the values of `vrs` (see core.REFUSED for one that is not one)."""
         return self._get(vrs, "integer")
 
-    def get_boolean(self, vrs):
+    def get_boolean(self, vrs: list[int]) -> list[bool]:
+        """fmi2GetBoolean: the values of `vrs` (see core.REFUSED for one that is not one)."""
         return self._get(vrs, "boolean")
 
-    def get_string(self, vrs):
+    def get_string(self, vrs: list[int]) -> list[str]:
+        """fmi2GetString: the values of `vrs` (see core.REFUSED for one that is not one)."""
         return self._get(vrs, "string")
 
-    def set_real(self, vrs, values):
+    def set_real(self, vrs: list[int], values: list[float]) -> None:
+        """fmi2SetReal: set `vrs` to `values`; what cannot be set is refused with a message."""
         self._set_all(vrs, values, "real")
 
-    def set_integer(self, vrs, values):
+    def set_integer(self, vrs: list[int], values: list[int]) -> None:
+        """fmi2SetInteger: as set_real."""
         self._set_all(vrs, values, "integer")
 
-    def set_boolean(self, vrs, values):
+    def set_boolean(self, vrs: list[int], values: list[bool]) -> None:
+        """fmi2SetBoolean: as set_real."""
         self._set_all(vrs, values, "boolean")
 
-    def set_string(self, vrs, values):
+    def set_string(self, vrs: list[int], values: list[str]) -> None:
+        """fmi2SetString: as set_real."""
         self._set_all(vrs, values, "string")
 
-    def host_logs(self):
+    def host_logs(self) -> bool | None:
         """Whether pythonfmu passes this instance's log messages to the host: it does not tell
         the slave, so this reads its logger (fmu.pythonfmu_logger); None where not known."""
         return pythonfmu_logger.logging_on(self.logger_address, self.instance_name)

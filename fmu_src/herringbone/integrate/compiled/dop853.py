@@ -18,7 +18,8 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp.dop853_coefficients import A, B, E3, E5, N_STAGES
+from numpy.typing import ArrayLike
+from scipy.integrate._ivp.dop853_coefficients import E3, E5, N_STAGES, A, B
 
 from .equations import derivative
 
@@ -39,22 +40,23 @@ A41, A43 = A[3, 0], A[3, 2]
 A51, A53, A54 = A[4, 0], A[4, 2], A[4, 3]
 A61, A64, A65 = A[5, 0], A[5, 3], A[5, 4]
 A71, A74, A75, A76 = A[6, 0], A[6, 3], A[6, 4], A[6, 5]
-A81, A84, A85, A86, A87 = A[7, 0], *A[7, 3:7]
-A91, A94, A95, A96, A97, A98 = A[8, 0], *A[8, 3:8]
-A101, A104, A105, A106, A107, A108, A109 = A[9, 0], *A[9, 3:9]
-A111, A114, A115, A116, A117, A118, A119, A1110 = A[10, 0], *A[10, 3:10]
-A121, A124, A125, A126, A127, A128, A129, A1210, A1211 = A[11, 0], *A[11, 3:11]
-B1, B6, B7, B8, B9, B10, B11, B12 = B[0], *B[5:12]
-E51, E56, E57, E58, E59, E510, E511, E512 = E5[0], *E5[5:12]
-E31, E36, E37, E38, E39, E310, E311, E312 = E3[0], *E3[5:12]
+A81, A84, A85, A86, A87 = A[7, [0, *range(3, 7)]]
+A91, A94, A95, A96, A97, A98 = A[8, [0, *range(3, 8)]]
+A101, A104, A105, A106, A107, A108, A109 = A[9, [0, *range(3, 9)]]
+A111, A114, A115, A116, A117, A118, A119, A1110 = A[10, [0, *range(3, 10)]]
+A121, A124, A125, A126, A127, A128, A129, A1210, A1211 = A[11, [0, *range(3, 11)]]
+B1, B6, B7, B8, B9, B10, B11, B12 = B[[0, *range(5, 12)]]
+E51, E56, E57, E58, E59, E510, E511, E512 = E5[[0, *range(5, 12)]]
+E31, E36, E37, E38, E39, E310, E311, E312 = E3[[0, *range(5, 12)]]
 assert all(A[i, j] == 0.0 for i, j in ((3, 1), (4, 1), (5, 1), (5, 2)) + tuple(
     (i, j) for i in range(6, 12) for j in (1, 2))) and not B[1:5].any() \
     and not E5[1:5].any() and not E3[1:5].any() and E5[12] == E3[12] == 0.0
 
 
-def stability_function(z):
-    """R(z): the factor one step multiplies the mode y' = λ·y by, at z = h·λ (an array). The
-    exact factor is e^z; ln(R(z))/h is the eigenvalue the method integrates the mode with."""
+def stability_function(z: ArrayLike) -> np.ndarray:
+    """R(z): the factor one step multiplies the mode y' = λ·y by, at z = h·λ (complex, any
+    shape; the result has its shape). The exact factor is e^z; ln(R(z))/h is the eigenvalue
+    the method integrates the mode with."""
     z = np.asarray(z, dtype=complex)
     stages = np.ones(z.shape + (N_STAGES,), dtype=complex)
     for i in range(1, N_STAGES):  # explicit: each stage from the ones before it
@@ -69,6 +71,12 @@ def stability_function(z):
 @njit(cache=True, error_model="numpy")
 def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
          absolute_tolerance, relative_tolerance, stages, trial, new_state):
+    """One DOP853 step of size h (s) from `state`, whose derivative is `rate`: see the module's
+    docstring for the contract. The segment is (system, points, count, loaded, motor_torque,
+    load_torque) as equations.derivative takes it; `absolute_tolerance` is per entry of the
+    state (its units), `relative_tolerance` a number. Work arrays: `stages`, STAGE_ROWS rows
+    of the state's size (row k the stage k + 1 derivative, row N_STAGES the new state's),
+    and `trial`, one state. Returns the error norm (≤ 1: acceptable)."""
     size = state.shape[0]
     k1, k2, k3, k4, k5, k6 = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5]
     k7, k8, k9, k10, k11, k12 = stages[6], stages[7], stages[8], stages[9], stages[10], stages[11]

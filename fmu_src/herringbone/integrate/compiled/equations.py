@@ -1,101 +1,192 @@
 """The equations of motion of the assembled gear train (docs/model.md section 5), compiled.
 
-This is the one home of the dynamic equations: GearTrainModel (model.py) assembles the arrays
-of a `System` from the scene's elements and calls these kernels, and every integrator, the scipy
-reference and the FMU's own, evaluates them.
+This is the one home of the dynamic equations: GearTrainModel (model/assembly.py) assembles the
+arrays of a `System` from the scene's elements and calls these kernels, and every integrator,
+the scipy reference and the FMU's own, evaluates them.
 
-State: [y, ẏ] in the relative coordinates of model.py (y_i = q_i − r_i·φp, y_pinion = φp − the
-start of the contact set). Every element k deforms by δ_k = g̃_k·y (+ its lead error), g̃ being
-its row with the pinion entry zeroed (no element deforms under the rigid rotation), and pushes
-back with F_k = c_k·δ_k + h_k·δ̇_k; then M·q̈ = f_ext − Σ g_k·F_k.
+State: [y, ẏ] in the relative coordinates of model/assembly.py (y_i = q_i − r_i·φp, y_pinion =
+φp − the start of the contact set), in SI units per coordinate (rad or m, rad/s or m/s). Every
+element k deforms by δ_k = g̃_k·y (+ its lead error), g̃ being its row with the pinion entry
+zeroed (no element deforms under the rigid rotation), and pushes back with
+F_k = c_k·δ_k + h_k·δ̇_k; then M·q̈ = f_ext − Σ g_k·F_k.
 
 Contact points come as a table, one column a point, rows as named by the constants below; each
-entry is linear in the axial travel v·y_pinion of the points since the set began (mesh.py).
+entry is linear in the axial travel v·y_pinion (m) of the points since the set began
+(model/mesh.py). A kernel takes the table with `count`, the number of its columns in use, and
+where it asks for `loaded`, one entry a point: 1.0 where the point carries load in the current
+segment, 0.0 where not (walk.py decides).
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Annotated, NamedTuple, get_origin, get_type_hints
 
 import numpy as np
 from numba import njit
 
-# rows of a contact-point table
+# rows of a contact-point table: HALF 0 (left) or 1 (right); stiffness (N/m), lever arm (m) and
+# lead error (m) each as its value where the set began plus its slope per m of axial travel
 HALF, STIFFNESS0, STIFFNESS_SLOPE, LEVER_ARM0, LEVER_ARM_SLOPE, LEAD_ERROR0, LEAD_ERROR_SLOPE \
     = range(7)
 POINT_FIELDS = 7
 
-# layout of the vector `outputs` fills; the element forces follow, then the speeds
+# layout of the vector `outputs` fills (N/m, N, a count, m); the element forces follow, then the
+# speeds
 K_MESH, K_MESH_LEFT, K_MESH_RIGHT, F_MESH, F_MESH_LEFT, F_MESH_RIGHT, N_CONTACTS, DTE \
     = range(8)
 FIRST_ELEMENT_FORCE = 8
 
 
+class Packed(NamedTuple):
+    """How an array field of `System` is packed: its entries' type (float: the floats buffer,
+    int: the ints buffer) and its shape in named sizes, each the same wherever it appears:
+    "coordinates" (the generalized coordinates), "elements" (the shafts and bearings) and
+    "entries" (the nonzero coupling entries)."""
+
+    dtype: type
+    shape: tuple[str, ...]
+
+
 class System(NamedTuple):
-    """The assembled arrays of a gear train (built by GearTrainModel)."""
+    """The assembled arrays of a gear train (built by GearTrainModel). Units: SI throughout, per
+    coordinate (an angle's row in rad and N·m, a displacement's in m and N).
+
+    The annotations are also the layout `pack_system` and `unpack_system` follow: an array's
+    `Packed` says its buffer and shape; a scalar goes to the floats if a float, to the ints if
+    an int or a bool (0 or 1)."""
 
     pinion: int  # index of the pinion angle among the coordinates
-    wheel: int
-    mass: np.ndarray  # diagonal of M
-    rigid_rotation: np.ndarray  # r
-    element_rows_relative: np.ndarray  # g̃ of the shafts and bearings, one row each
-    element_stiffness: np.ndarray
-    element_damping: np.ndarray
+    wheel: int  # index of the wheel angle
+    mass: Annotated[np.ndarray, Packed(float, ("coordinates",))]  # diagonal of M
+    rigid_rotation: Annotated[np.ndarray, Packed(float, ("coordinates",))]  # r
+    # g̃ of the shafts and bearings, one row each
+    element_rows_relative: Annotated[np.ndarray, Packed(float, ("elements", "coordinates"))]
+    element_stiffness: Annotated[np.ndarray, Packed(float, ("elements",))]  # c
+    element_damping: Annotated[np.ndarray, Packed(float, ("elements",))]  # h
     # ÿ = P·(f_ext − Σ g·F) with P = (I − r̃·e_pinionᵀ)·M⁻¹, r̃ = r with its pinion entry
     # zeroed; the terms that do not depend on the contact set are assembled once:
-    motor_acceleration: np.ndarray  # P·(where M_motor acts)
-    load_acceleration: np.ndarray  # P·(where M_load resists)
+    motor_acceleration: Annotated[np.ndarray, Packed(float, ("coordinates",))]  # P·(M_motor's)
+    load_acceleration: Annotated[np.ndarray, Packed(float, ("coordinates",))]  # P·(M_load's)
     # −P·Σ g·c·g̃ (acting on y) and −P·Σ g·h·g̃ (acting on ẏ) of the shafts and bearings, as
     # their nonzero entries (a fifth of the matrix for the full train): row, column, values
-    coupling_row: np.ndarray
-    coupling_column: np.ndarray
-    elastic_acceleration: np.ndarray
-    damping_acceleration: np.ndarray
-    contact_base_acceleration: np.ndarray  # P·base, P·tilt: a point's row is base + ζ·tilt
-    contact_tilt_acceleration: np.ndarray
-    contact_row_base_relative: np.ndarray
-    contact_row_tilt_relative: np.ndarray
-    mesh_damping_factor: float  # η: a point's damping is η times its stiffness
-    axial_travel_per_radian: float  # v = Rp·cot β
-    radius_wheel: float
-    contact_loss: bool
+    coupling_row: Annotated[np.ndarray, Packed(int, ("entries",))]
+    coupling_column: Annotated[np.ndarray, Packed(int, ("entries",))]
+    elastic_acceleration: Annotated[np.ndarray, Packed(float, ("entries",))]
+    damping_acceleration: Annotated[np.ndarray, Packed(float, ("entries",))]
+    # P·base, P·tilt: a point's row is base + ζ·tilt
+    contact_base_acceleration: Annotated[np.ndarray, Packed(float, ("coordinates",))]
+    contact_tilt_acceleration: Annotated[np.ndarray, Packed(float, ("coordinates",))]
+    # g̃ of the base and tilt parts
+    contact_row_base_relative: Annotated[np.ndarray, Packed(float, ("coordinates",))]
+    contact_row_tilt_relative: Annotated[np.ndarray, Packed(float, ("coordinates",))]
+    mesh_damping_factor: float  # η (s): a point's damping is η times its stiffness
+    axial_travel_per_radian: float  # v = Rp·cot β (m/rad)
+    radius_wheel: float  # Rw (m)
+    contact_loss: bool  # whether a point whose approach turns negative lifts off
+
+
+def _packing() -> tuple[Packed, ...]:
+    """Every field's `Packed`, in System's order, read from System's annotations (a scalar's
+    shape is ())."""
+    hints = get_type_hints(System, include_extras=True)
+    packing = []
+    for name in System._fields:
+        hint = hints[name]
+        if get_origin(hint) is Annotated:
+            packing.append(hint.__metadata__[0])
+        else:
+            packing.append(Packed(int if hint is bool else hint, ()))
+    return tuple(packing)
+
+
+PACKING = _packing()
+# The ints buffer opens with a header, FIELD_HEADER entries a field (where the field starts in
+# its buffer, its rows and its columns; 1 and 1 for a scalar, n and 1 for a vector); the ints
+# fields follow it.
+FIELD_HEADER = 3
+HEADER = FIELD_HEADER * len(PACKING)
 
 
 def pack_system(system: System) -> tuple[np.ndarray, np.ndarray]:
-    """The System as two flat arrays, floats and ints, that `unpack_system` takes apart in
-    compiled code: numba types each of a call's arguments at every call, and the 21 fields
-    take it 1 µs, two arrays 0.05 µs. Laid out by field order, with the sizes first."""
-    sizes = (len(system.mass), len(system.element_stiffness), len(system.coupling_row))
-    floats = np.concatenate([
-        system.mass, system.rigid_rotation, system.element_rows_relative.ravel(),
-        system.element_stiffness, system.element_damping, system.motor_acceleration,
-        system.load_acceleration, system.elastic_acceleration, system.damping_acceleration,
-        system.contact_base_acceleration, system.contact_tilt_acceleration,
-        system.contact_row_base_relative, system.contact_row_tilt_relative,
-        [system.mesh_damping_factor, system.axial_travel_per_radian, system.radius_wheel]])
-    ints = np.concatenate([[*sizes, system.pinion, system.wheel, system.contact_loss],
-                           system.coupling_row, system.coupling_column]).astype(np.int64)
+    """The System as two flat arrays, floats (float64) and ints (int64), that `unpack_system`
+    takes apart in compiled code: numba types each of a call's arguments at every call, and the
+    21 fields take it 1 µs, two arrays 0.05 µs. Laid out as System's annotations say (see
+    `Packed`), each field's place and shape in the ints' header. Raises ValueError if a field's
+    shape does not match its declaration, or a named size differs between two fields."""
+    sizes: dict[str, int] = {}
+    parts: dict[type, list[np.ndarray]] = {float: [], int: []}
+    used = {float: 0, int: HEADER}
+    header = np.empty(HEADER, dtype=np.int64)
+    for k, (name, value, packed) in enumerate(zip(System._fields, system, PACKING)):
+        array = np.asarray(value, dtype=np.float64 if packed.dtype is float else np.int64)
+        if array.ndim != len(packed.shape):
+            raise ValueError(f"System.{name} has shape {array.shape}, declared "
+                             f"{packed.shape}")
+        for size, length in zip(packed.shape, array.shape):
+            if sizes.setdefault(size, length) != length:
+                raise ValueError(f"System.{name} has {length} {size}, another field "
+                                 f"{sizes[size]}")
+        rows, columns = (*array.shape, 1, 1)[:2]
+        header[FIELD_HEADER * k:FIELD_HEADER * (k + 1)] = used[packed.dtype], rows, columns
+        parts[packed.dtype].append(array.ravel())
+        used[packed.dtype] += array.size
+    floats = np.concatenate(parts[float]) if parts[float] else np.empty(0)
+    ints = np.concatenate([header, *parts[int]])
     return floats, ints
+
+
+# unpack_system's readers: field k of System (its index in System._fields) out of the buffer
+# that PACKING gives it, as a view
+@njit(cache=True, error_model="numpy", inline="always")
+def _scalar(buffer, ints, k):
+    return buffer[ints[FIELD_HEADER * k]]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _vector(buffer, ints, k):
+    start, rows = ints[FIELD_HEADER * k], ints[FIELD_HEADER * k + 1]
+    return buffer[start:start + rows]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _matrix(buffer, ints, k):
+    start, rows, columns = (ints[FIELD_HEADER * k], ints[FIELD_HEADER * k + 1],
+                            ints[FIELD_HEADER * k + 2])
+    return buffer[start:start + rows * columns].reshape((rows, columns))
 
 
 @njit(cache=True, error_model="numpy")
 def unpack_system(floats, ints):
-    """pack_system's inverse: a System whose arrays are views of the two."""
-    coordinates, elements, entries = ints[0], ints[1], ints[2]
-    row, column = ints[6:6 + entries], ints[6 + entries:6 + 2 * entries]
-    at = np.cumsum(np.array([0, coordinates, coordinates, elements * coordinates, elements,
-                             elements, coordinates, coordinates, entries, entries, coordinates,
-                             coordinates, coordinates, coordinates]))
-    return System(ints[3], ints[4], floats[at[0]:at[1]], floats[at[1]:at[2]],
-                  floats[at[2]:at[3]].reshape((elements, coordinates)), floats[at[3]:at[4]],
-                  floats[at[4]:at[5]], floats[at[5]:at[6]], floats[at[6]:at[7]], row, column,
-                  floats[at[7]:at[8]], floats[at[8]:at[9]], floats[at[9]:at[10]],
-                  floats[at[10]:at[11]], floats[at[11]:at[12]], floats[at[12]:at[13]],
-                  floats[at[13]], floats[at[13] + 1], floats[at[13] + 2], ints[5] != 0)
+    """pack_system's inverse: a System whose arrays are views of the two buffers. Argument k
+    of System reads field k with the reader of its shape (scalar, vector, matrix) from its
+    buffer (PACKING); test_packed_system_unpacks_to_the_same_arrays holds the two together."""
+    return System(
+        _scalar(ints, ints, 0),  # pinion
+        _scalar(ints, ints, 1),  # wheel
+        _vector(floats, ints, 2),  # mass
+        _vector(floats, ints, 3),  # rigid_rotation
+        _matrix(floats, ints, 4),  # element_rows_relative
+        _vector(floats, ints, 5),  # element_stiffness
+        _vector(floats, ints, 6),  # element_damping
+        _vector(floats, ints, 7),  # motor_acceleration
+        _vector(floats, ints, 8),  # load_acceleration
+        _vector(ints, ints, 9),  # coupling_row
+        _vector(ints, ints, 10),  # coupling_column
+        _vector(floats, ints, 11),  # elastic_acceleration
+        _vector(floats, ints, 12),  # damping_acceleration
+        _vector(floats, ints, 13),  # contact_base_acceleration
+        _vector(floats, ints, 14),  # contact_tilt_acceleration
+        _vector(floats, ints, 15),  # contact_row_base_relative
+        _vector(floats, ints, 16),  # contact_row_tilt_relative
+        _scalar(floats, ints, 17),  # mesh_damping_factor
+        _scalar(floats, ints, 18),  # axial_travel_per_radian
+        _scalar(floats, ints, 19),  # radius_wheel
+        _scalar(ints, ints, 20) != 0)  # contact_loss
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def point_at(points, i, travel):
-    """Stiffness c, lever arm ζ and lead error e of point i after the axial travel."""
+    """Stiffness c (N/m), lever arm ζ (m) and lead error e (m) of point i of the table `points`
+    after the axial travel `travel` (m) since its set began."""
     return (points[STIFFNESS0, i] + points[STIFFNESS_SLOPE, i] * travel,
             points[LEVER_ARM0, i] + points[LEVER_ARM_SLOPE, i] * travel,
             points[LEAD_ERROR0, i] + points[LEAD_ERROR_SLOPE, i] * travel)
@@ -103,7 +194,8 @@ def point_at(points, i, travel):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _contact_motion(system, state):
-    """g̃·y and g̃·ẏ of the base and tilt parts of a contact row, and the axial travel."""
+    """g̃·y and g̃·ẏ of the base and tilt parts of a contact row (m, m/s per unit lever arm
+    for the tilt), and the axial travel (m)."""
     n = system.mass.shape[0]
     base = tilt = base_rate = tilt_rate = 0.0
     for j in range(n):
@@ -116,8 +208,9 @@ def _contact_motion(system, state):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def point_approach(system, motion, lever_arm, lead_error):
-    """δ + η·δ̇ of a point with this lever arm and lead error, from _contact_motion's sums: its
-    load per unit stiffness (the point's force is its stiffness times this)."""
+    """δ + η·δ̇ (m) of a point with this lever arm (m) and lead error (m), from
+    _contact_motion's sums: its load per unit stiffness (the point's force, N, is its stiffness
+    times this)."""
     base, tilt, base_rate, tilt_rate, _ = motion
     return (base + lever_arm * tilt + lead_error
             + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
@@ -125,7 +218,9 @@ def point_approach(system, motion, lever_arm, lead_error):
 
 @njit(cache=True, error_model="numpy")
 def point_geometry(system, points, count, pinion_travel_angle):
-    """Stiffness, lever arm and lead error of every point of a set, as arrays."""
+    """Stiffness (N/m), lever arm (m) and lead error (m) of the first `count` points of the
+    table `points`, as three new arrays, once the pinion has turned `pinion_travel_angle` (rad)
+    since the set began."""
     travel = system.axial_travel_per_radian * pinion_travel_angle
     stiffness, lever_arm, lead_error = np.empty(count), np.empty(count), np.empty(count)
     for i in range(count):
@@ -136,8 +231,8 @@ def point_geometry(system, points, count, pinion_travel_angle):
 # inlined: walk.py evaluates it at every step, where a call's reference counting costs more
 @njit(cache=True, error_model="numpy", inline="always")
 def approaches(system, points, count, state, out):
-    """out[i] = δ + η·δ̇ of point i: its load per unit stiffness. A point is loaded while this
-    is positive, even where its stiffness ramps from zero."""
+    """out[i] = δ + η·δ̇ (m) of point i < count at `state`: its load per unit stiffness. A
+    point is loaded while this is positive, even where its stiffness ramps from zero."""
     motion = _contact_motion(system, state)
     travel = motion[4]
     for i in range(count):
@@ -148,9 +243,9 @@ def approaches(system, points, count, state, out):
 # inlined: walk.py evaluates it at every step where contact can be lost
 @njit(cache=True, error_model="numpy", inline="always")
 def approach_rates(system, points, count, state, rate, out):
-    """out[i] = d/dt (δ + η·δ̇) of point i, from the state and its derivative `rate`: with the
-    values of `approaches` at both ends of a step, it shows a point that lifts off and lands
-    again within the step (walk.py)."""
+    """out[i] = d/dt (δ + η·δ̇) (m/s) of point i < count, from the state and its derivative
+    `rate` (as `derivative` writes it): with the values of `approaches` at both ends of a step,
+    it shows a point that lifts off and lands again within the step (walk.py)."""
     _, tilt, _, tilt_rate, travel = _contact_motion(system, state)
     # the same sums over the derivative: g̃·ẏ and g̃·ÿ of the base and tilt parts
     base_rate, _, base_acceleration, tilt_acceleration, _ = _contact_motion(system, rate)
@@ -166,7 +261,8 @@ def approach_rates(system, points, count, state, rate, out):
 
 @njit(cache=True, error_model="numpy")
 def element_force(system, element, state):
-    """c·Δ + h·Δ̇ of a shaft or bearing."""
+    """c·δ + h·δ̇ of shaft or bearing `element` (its index among the System's element rows)
+    at `state`: its force (N) or, for a torsional element, its torque (N·m)."""
     n = system.mass.shape[0]
     deformation = rate = 0.0
     for j in range(n):
@@ -178,8 +274,9 @@ def element_force(system, element, state):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def derivative(system, points, count, loaded, motor_torque, load_torque, state, out):
-    """out = d(state)/dt with the contact set and its loaded points (loaded[i] = 1) fixed.
-    `out` must not be `state`."""
+    """out = d(state)/dt = [ẏ, ÿ] with the contact set (the first `count` points of `points`)
+    and its loaded points (loaded[i] = 1.0) fixed, the motor driving with `motor_torque` and the
+    load resisting with `load_torque` (N·m). `out` must not be `state`."""
     n = system.mass.shape[0]
     motion = _contact_motion(system, state)
     travel = motion[4]
@@ -205,8 +302,11 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
 
 @njit(cache=True, error_model="numpy")
 def outputs(system, points, count, loaded, state, out):
-    """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness and
-    force (both halves), n_contacts, dte, then the shaft and bearing forces, then the speeds."""
+    """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness
+    (N/m) and force (N), in all and per half, n_contacts (loaded points of nonzero stiffness),
+    dte (m), then the shaft and bearing forces (N or N·m, System's element order), then the
+    speeds of the coordinates (rad/s or m/s, absolute: the rigid rotation added back). `out`
+    holds FIRST_ELEMENT_FORCE + elements + coordinates entries."""
     n = system.mass.shape[0]
     out[:FIRST_ELEMENT_FORCE] = 0.0
     motion = _contact_motion(system, state)

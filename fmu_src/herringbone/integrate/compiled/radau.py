@@ -20,8 +20,15 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp.radau import (E, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, T, TI_COMPLEX,
-                                        TI_REAL)
+from scipy.integrate._ivp.radau import (
+    MU_COMPLEX,
+    MU_REAL,
+    NEWTON_MAXITER,
+    TI_COMPLEX,
+    TI_REAL,
+    E,
+    T,
+)
 
 from .equations import derivative
 
@@ -52,7 +59,8 @@ def lu_factor(matrix, pivots):
 
 @njit(cache=True, error_model="numpy")
 def lu_solve(matrix, pivots, vector):
-    """In place: solve with factors from lu_factor."""
+    """In place: `vector` becomes the solution x of A·x = vector, `matrix` and `pivots` being
+    the factors lu_factor made of A."""
     size = matrix.shape[0]
     for i in range(size):
         vector[i], vector[pivots[i]] = vector[pivots[i]], vector[i]
@@ -67,7 +75,11 @@ def lu_solve(matrix, pivots, vector):
 @njit(cache=True, error_model="numpy")
 def jacobian_of(system, points, count, loaded, motor_torque, load_torque, state, rate,
                 scale, jacobian, trial, column):
-    """Forward differences; exact but for rounding in every entry the equations are linear in."""
+    """The Jacobian ∂(derivative)/∂(state) of the segment at `state` (whose derivative is
+    `rate`) into `jacobian`, by forward differences of size 1e-7·max(|state_k|, scale_k) per
+    column k (`scale`: the state's typical magnitude per entry, in its units); exact but for
+    rounding in every entry the equations are linear in. Work arrays: `trial` and `column`,
+    one state each."""
     size = state.shape[0]
     for k in range(size):
         trial[:] = state
@@ -80,6 +92,9 @@ def jacobian_of(system, points, count, loaded, motor_torque, load_torque, state,
 
 @njit(cache=True, error_model="numpy")
 def factorize(jacobian, h, real, real_pivots, complex_, complex_pivots):
+    """The LU factors `step` takes for step size h (s): (MU_REAL/h·I − J) into `real` and
+    `real_pivots`, (MU_COMPLEX/h·I − J) into `complex_` (complex128) and `complex_pivots`,
+    each as lu_factor leaves them. `jacobian` is not changed."""
     size = jacobian.shape[0]
     for i in range(size):
         for k in range(size):
@@ -95,6 +110,12 @@ def factorize(jacobian, h, real, real_pivots, complex_, complex_pivots):
 def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
          absolute_tolerance, relative_tolerance, real, real_pivots, complex_, complex_pivots,
          stages, new_state):
+    """One Radau IIA step of size h (s) from `state`, whose derivative is `rate`, with the
+    factors `factorize` made for this h: see the module's docstring for the contract. The
+    segment is (system, points, count, loaded, motor_torque, load_torque) as
+    equations.derivative takes it; `absolute_tolerance` is per entry of the state (its units),
+    `relative_tolerance` a number. `stages`: a 3 × size work array. Returns (error norm,
+    Newton iterations); the norm is inf where Newton did not converge."""
     size = state.shape[0]
     newton_tolerance = max(10 * 2.220446049250313e-16 / relative_tolerance,
                            min(0.03, math.sqrt(relative_tolerance)))
@@ -162,7 +183,8 @@ def step(system, points, count, loaded, motor_torque, load_torque, state, rate, 
 
 @njit(cache=True, error_model="numpy")
 def step_factor(error_norm, iterations, rejected):
-    """By how much to scale h (scipy's Radau controller without its two-step prediction)."""
+    """By how much to scale h after a step with this error norm and Newton iterations (scipy's
+    Radau controller without its two-step prediction); at most 1 after a rejected step."""
     safety = SAFETY * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
     if error_norm > 1.0:
         return max(MIN_FACTOR, safety * error_norm ** -0.25)
