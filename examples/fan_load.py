@@ -10,9 +10,10 @@ import math
 from fmi_units import RealWithUnit
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
+from pythonfmu_references import BalancedSlave
 
 
-class FanLoad(Fmi2Slave):
+class FanLoad(BalancedSlave, Fmi2Slave):
     """Quadratic fan load: speed in, resisting torque out."""
 
     description = "Fan load M = k_fan w |w| (speed in, torque out)"

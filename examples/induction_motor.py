@@ -11,9 +11,10 @@ import math
 from fmi_units import RealWithUnit
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
+from pythonfmu_references import BalancedSlave
 
 
-class InductionMotor(Fmi2Slave):
+class InductionMotor(BalancedSlave, Fmi2Slave):
     """Kloss-curve induction motor: speed in, torque out."""
 
     description = "Induction motor, Kloss torque-speed curve (speed in, torque out)"

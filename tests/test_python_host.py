@@ -8,19 +8,20 @@ import sys
 import pytest
 
 # Instantiates the FMU (argv[1]) three times in one process, each time either initializing it
-# or making exitInitializationMode Fatal (argv[2] == "fatal": a negative solver tolerance, with
-# logging off so the slave raises), then frees it. Prints, after each instance, how far the
-# reference counts of the slave module's dictionary and of the slave class fall short of the
-# references the garbage collector finds (an offset the same for every object counted alike).
+# or making exitInitializationMode Fatal (argv[2] == "fatal": the gear's solver tolerance
+# negative, with logging off so the slave raises), then frees it. Prints, after each instance,
+# how far the reference counts of the slave module's dictionary and of the slave class (module
+# argv[3], class argv[4]) fall short of the references the garbage collector finds (an offset
+# the same for every object counted alike).
 HOST = r"""
 import gc, sys
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-path, mode = sys.argv[1], sys.argv[2]
+path, mode, module_name, class_name = sys.argv[1:5]
 description = read_model_description(path)
-tolerance = next(v.valueReference for v in description.modelVariables
-                 if v.name == "solver_tolerance")
+tolerance = next((v.valueReference for v in description.modelVariables
+                  if v.name == "solver_tolerance"), None)
 folder = extract(path)
 
 
@@ -53,14 +54,19 @@ for i in range(3):
     else:
         assert mode != "fatal"
     fmu.fmi2FreeInstance(fmu.component)
-    module = sys.modules["herringbone_gear_fmu"]
-    print(shortfall(module.__dict__), shortfall(module.HerringboneGear), flush=True)
+    module = sys.modules[module_name]
+    print(shortfall(module.__dict__), shortfall(getattr(module, class_name)), flush=True)
 """
 
 
-@pytest.mark.parametrize("mode", ["initialize", "fatal"])
-def test_repeated_instances_leave_the_slaves_references_balanced(built_fmus, mode):
-    run = subprocess.run([sys.executable, "-c", HOST, str(built_fmus["reference"]), mode],
+SLAVES = {"reference": ("herringbone_gear_fmu", "HerringboneGear"),
+          "motor": ("induction_motor", "InductionMotor"), "fan": ("fan_load", "FanLoad")}
+
+
+@pytest.mark.parametrize("fmu, mode", [("reference", "initialize"), ("reference", "fatal"),
+                                       ("motor", "initialize"), ("fan", "initialize")])
+def test_repeated_instances_leave_the_slaves_references_balanced(built_fmus, fmu, mode):
+    run = subprocess.run([sys.executable, "-c", HOST, str(built_fmus[fmu]), mode, *SLAVES[fmu]],
                          capture_output=True, text=True, timeout=300)
     # an over-released object is freed while still in use: at the latest the interpreter's
     # teardown frees it again, which glibc aborts on (-6) in some runs

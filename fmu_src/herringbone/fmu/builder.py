@@ -34,9 +34,12 @@ GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see 
 GEAR_SLAVE3 = GEAR_PACKAGE / "fmu" / "slave3.py"
 GEAR_SLAVE3_MODULE = "herringbone_gear_fmu3"  # not the FMI 2.0 one's: both may share a process
 FMI_VERSIONS = (2, 3)
-# shipped with every FMU as the module `fmi_units` (the examples import it so): see its docstring
+# shipped with every FMI 2.0 FMU as top-level modules (the examples import them so): see their
+# docstrings
 UNITS_MODULE = GEAR_PACKAGE / "fmu" / "units.py"
 UNITS_MODULE_NAME = "fmi_units"
+REFERENCES_MODULE = GEAR_PACKAGE / "fmu" / "pythonfmu_references.py"
+REFERENCES_MODULE_NAME = "pythonfmu_references"
 DEFAULT_SCENE = "reference"  # a shipped scene's name
 DEFAULT_OUTPUT = Path("dist") / "HerringboneGear.fmu"
 
@@ -66,7 +69,8 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     `resources/`, which the FMU puts on `sys.path` at run time; the folders that hold its
     directories and .py files go on the build's PYTHONPATH, so that they import there too (the
     builder imports the script to write the model description). For FMI 2.0 this module's
-    `UNITS_MODULE` goes with them, as `fmi_units`. `handle_state` declares
+    `UNITS_MODULE` and `REFERENCES_MODULE` go with them, as `fmi_units` and
+    `pythonfmu_references`. `handle_state` declares
     canGetAndSetFMUstate; `serialize_state` declares canSerializeFMUstate (the slave's state
     must then be JSON data, or the slave must override pythonfmu's `_fmu_state_to_bytes`);
     `no_feedthrough`: see `fix_model_description`.  The
@@ -78,11 +82,12 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
     with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
         project_files = [Path(p).resolve() for p in project_files]
-        if fmi_version == 2:  # fmi_units declares pythonfmu variables
-            units = Path(tmp) / "units" / f"{UNITS_MODULE_NAME}.py"
-            units.parent.mkdir()
-            shutil.copyfile(UNITS_MODULE, units)
-            project_files.append(units)
+        if fmi_version == 2:  # pythonfmu's variables with units; its references balanced
+            (Path(tmp) / "shipped").mkdir()
+            for module, name in ((UNITS_MODULE, UNITS_MODULE_NAME),
+                                 (REFERENCES_MODULE, REFERENCES_MODULE_NAME)):
+                shutil.copyfile(module, Path(tmp) / "shipped" / f"{name}.py")
+                project_files.append(Path(tmp) / "shipped" / f"{name}.py")
         # A separate interpreter: pythonfmu's builder imports the script and leaves it in
         # sys.modules and its folder on sys.path; an FMU loaded later in the same process would
         # then run that source copy instead of the packaged one.

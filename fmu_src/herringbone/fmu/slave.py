@@ -22,12 +22,12 @@ from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
 from pythonfmu import Boolean, DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, String
 from pythonfmu.enums import Fmi2Status
 
-from herringbone.fmu import pythonfmu_logger, pythonfmu_references
+from herringbone.fmu import pythonfmu_logger
+from herringbone.fmu.pythonfmu_references import BalancedSlave
 from herringbone.fmu.units import BoundedInteger, RealWithUnit
 
 
-@pythonfmu_references.balanced_callbacks
-class HerringboneGear(GearCore, Fmi2Slave):
+class HerringboneGear(BalancedSlave, GearCore, Fmi2Slave):
     """The gear FMU's FMI 2.0 slave: GearCore's logic behind pythonfmu's callbacks. Values
     cross in the units the variables declare (SI: the model description's <UnitDefinitions>);
     value references are those `_register` hands out."""
@@ -38,8 +38,6 @@ class HerringboneGear(GearCore, Fmi2Slave):
         """pythonfmu's instantiation (instance_name, resources, logger, ...): load the scene
         from the resources and declare its variables; the scene's experiment becomes the
         default experiment."""
-        if pythonfmu_references.affected(kwargs.get("logger")):
-            pythonfmu_references.balance_instantiation(globals())
         super().__init__(**kwargs)
         self.logger_address = kwargs.get("logger")  # pythonfmu's C++ PyLogger (see host_logs)
         self._setup(kwargs.get("logger"))
