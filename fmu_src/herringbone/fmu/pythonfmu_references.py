@@ -1,9 +1,9 @@
 """The Python references pythonfmu 0.7's C++ side releases once too often, and the balance the
 FMI 2.0 slave restores. Without it a Python host (fmpy) aborted at exit with "corrupted
 double-linked list" in 403 of 1058 runs of the reference scene, 16 at a time on a 16-core
-machine (8 of 174 in another batch; once in CI), and at every run that freed an instance after
-a Fatal call: memory freed while still in use, and freed again as the interpreter tears the
-slave's module down.
+machine (8 of 174 in another batch; once in CI), and 2 in 27 runs of a process that freed
+three instances after a Fatal call each: memory freed while still in use, and freed again as
+the interpreter tears the slave's module down.
 
 pythonfmu 0.7 (src/pythonfmu/PySlaveInstance.cpp):
 
