@@ -26,9 +26,9 @@ import time
 import numpy as np
 
 from ..arguments import COMPILED_METHODS, check_compiled_run
+from ..model.assembly import GearTrainModel
 from .compiled import dop853, walk
 from .compiled.equations import pack_system
-from ..model.assembly import GearTrainModel
 from .contract import IntegrationError, Position
 from .segments import Segment
 

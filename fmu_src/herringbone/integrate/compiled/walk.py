@@ -39,13 +39,17 @@ next phase event is aimed to end just past its predicted crossing, so one trial 
 it; and each contact interval starts with the step size its last entry settled on
 (`first_steps`), since the vibration a switch sets off is one the step before it did not see.
 
-The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), `take_step` (one
-step of the method), `control_step` (accept or reject it, and the next step size),
-`step_crossing` (the grazing check: which event the step crossed, if any), then `finish_step`
-(no event: the step is the new position) or `locate_event` and `end_segment` (the crossing, to
-the event time tolerance; the next segment). They work on records laid out once: the stepper's
-settings (one float array, `Setting`), the run's arrays, and its workspace, the scratch arrays
-that `allocate_workspace` makes once per run (rows named by `Vector` and `Values`).
+The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), the method's
+step (dop853.step, or `implicit_step` with its Jacobian and factors), `control_step` (accept
+or reject it, and the next step size), `crossed_event` and `grazing_check` (which event the
+step crossed; where a point may have lifted off and landed again inside it, `probe_inside`
+looks), then `finish_step` (no event: the step's end is the new start) or `end_segment` (the
+crossing located by `locate_event` to the event time tolerance, the next segment begun by
+`next_segment` and `begin_segment`). Trial steps (`trial_step`) serve the location, the probe
+and the debug check. They work on records laid out once: the stepper's settings (one float
+array, `Setting`), the run's arrays (its position), and its workspace, the scratch arrays that
+`allocate_workspace` makes once per run (rows named by `Vector` and `Values`, the loop's
+memory by `Counter` and `Memory`).
 
 Units: time and step sizes in s, angles in rad, the state as model.py lays it out, approaches
 in m (their rates in m/s), torques in N·m.
@@ -182,10 +186,15 @@ MAX_PHASE_REVERSALS = 1000
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
 
-# Helpers the loop runs at every step are inlined (inline="always"): a compiled call hands over
-# each array it is given by reference, which numba counts atomically on the way in and out (the
-# System alone has 15); inlined, the loop ran 9 % faster. What runs once per event or less
-# (end_segment, probe_inside, contact_violated_inside) stays a call, as do the methods' steps.
+# Inlining and speed. The helpers the loop runs at every step are inlined (inline="always"):
+# a compiled call hands over each array it is given by reference, which numba counts
+# atomically on the way in and out (the System alone has 15 arrays). An inlined helper's
+# arguments are copies, counted the same way, unless the copy is used on every path through
+# the helper and not handed on to a call (measured: 3-8 ns an array, against a step of about
+# 2 µs). So the loop calls the method's step with its own arrays, and the helpers it runs at
+# every step take only what they use on every path: plan_step and control_step scalars alone,
+# with what depends on the method or on contact loss decided in the loop. What runs once per
+# event or less (end_segment, probe_inside, contact_violated_inside) stays a call.
 
 
 # --- the records ------------------------------------------------------------------------------
@@ -450,10 +459,6 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
 
 
 # --- the steps of the loop --------------------------------------------------------------------
-# The loop's every step runs through helpers that call nothing (plan_step, control_step,
-# step_crossing, finish_step) and one call of the method's step, made from the loop itself with
-# its own arrays: an array that an inlined helper hands on to a call is counted (atomically) on
-# the way in and out, 3 ns each, and the System alone has 15.
 
 @njit(cache=True, error_model="numpy", inline="always")
 def plan_step(settings, time, end, h, ahead):
@@ -472,6 +477,19 @@ def plan_step(settings, time, end, h, ahead):
     if PREDICTION_FLOOR * h_step < passing < h_step:
         return passing, h_wanted, False, True
     return h_step, h_wanted, landing, False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def step_allowed(steps, max_steps, time, plan):
+    """Status.OVER_BUDGET where `steps` steps have been taken of `max_steps` (checked before a
+    step, where the position is a consistent one), STEP_TOO_SMALL where the planned step no
+    longer moves the time (s) but for rounding, else OK."""
+    if steps >= max_steps:
+        return Status.OVER_BUDGET
+    h_step, _, landing, _ = plan
+    if not landing and h_step <= 1e-15 * max(abs(time), 1.0):
+        return Status.STEP_TOO_SMALL
+    return Status.OK
 
 
 @njit(cache=True, error_model="numpy")
@@ -606,8 +624,9 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     values and slopes at the step's ends (fifty times closer than the chord's), the next ones
     Newton's from the latest trial. A contact event is found by secant steps. Trials are judged
     against the bracket's low end, so that of several events crossed by one the earliest is
-    taken. Returns (the event, the bracket's high end, the tolerance it is located to; s), the
-    state at the high end in NEW_STATE."""
+    taken. A debug run (contact slack >= 0) then checks the step up to the crossing
+    (contact_violated_inside). Returns (the event; the bracket's high end, s, its state in
+    NEW_STATE; whether the debug check failed)."""
     vectors, values = workspace[VECTORS], workspace[VALUES]
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
@@ -660,7 +679,12 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             low = trial_h
             low_values[:] = trial_values
         newer_h, newer_value, newer_slope = trial_h, trial_values[event], trial[pinion_rate]
-    return event, high, tolerance
+    # (a debug run looks inside the step to the event, where no other point may have
+    # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
+    violated = (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
+                and high > 16.0 * tolerance and contact_violated_inside(
+                    system, segment, settings, state, workspace, high))
+    return event, high, violated
 
 
 # --- the segment's end --------------------------------------------------------------------------
@@ -683,47 +707,43 @@ def count_progress(counters, event, high, h_step):
     return Status.OK
 
 
-@njit(cache=True, error_model="numpy")
-def end_segment(system, mesh, settings, run, workspace, segment, step, event):
-    """End the segment at `event`, crossed by the accepted step `step` = (time, end, h, h_step,
-    h_next, landing, high: the step's start, the run's end, the step size it was planned from,
-    its size and the next one, s; whether it lands on `end`; the end of the bracket the
-    crossing lies in, s from the step's start): locate the crossing, move the run's position
-    past it (state, clock, place) and begin the next segment there (next_segment). Returns
-    (Status, the next Segment: `segment` itself where the run fails)."""
-    clock, place, state, loaded, first_steps = run[0], run[1], run[2], run[3], run[4]
-    counters = workspace[COUNTERS]
-    time, end, h, h_step, h_next, landing, high = step
-    event, high, tolerance = locate_event(system, segment, settings, state, workspace, event,
-                                          high, h_step)
-    # (a debug run looks inside the step to the event, where no other point may have
-    # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
-    if (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
-            and high > 16.0 * tolerance and contact_violated_inside(
-                system, segment, settings, state, workspace, high)):
-        clock[0], clock[1] = time, h
-        return Status.CONTACT_VIOLATED, segment
+@njit(cache=True, error_model="numpy", inline="always")
+def pass_event(state, workspace, clock, step, event):
+    """Move the run past the crossing of `event` located by the accepted step `step` = (time,
+    end, h_step, h_next, landing, high: the step's start, the run's end, its size and the next
+    one's, s; whether it lands on `end`; the crossing's bracket end, s from the step's start):
+    the state there (NEW_STATE), the time and the step size to try. Returns count_progress's
+    Status."""
+    time, end, h_step, h_next, landing, high = step
     state[:] = workspace[VECTORS][Vector.NEW_STATE]
     clock[0] = end if landing and high == h_step else time + high
     clock[1] = h_next
-    status = count_progress(counters, event, high, h_step)
-    if status != Status.OK:
-        return status, segment
-    place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
-                                      workspace[VALUES][Values.APPROACH])
-    counters[Counter.SEGMENT] += 1
-    segment = begin_segment(system, mesh, place[0], state, loaded,
-                            (segment.motor_torque, segment.load_torque), workspace)
-    if event == Event.PHASE_END:
-        # The switch sets off vibration that the step before it did not see: start the
-        # set as the step taken after the last entry into it proposed (the mesh repeats).
-        if first_steps[place[0]] > 0.0:
-            clock[1] = min(h_next, first_steps[place[0]])
-        counters[Counter.OPENING] = place[0]
-    return Status.OK, segment
+    return count_progress(workspace[COUNTERS], event, high, h_step)
 
 
 @njit(cache=True, error_model="numpy")
+def end_segment(system, mesh, run, workspace, torques, event):
+    """Begin the segment that follows `event` at the run's state: the next contact set and its
+    loaded points (next_segment, into the run's place and loaded points), the rate, event
+    values and slopes there (begin_segment), and after a phase event into the next set, its
+    first step size. Returns the Segment. (It calls nothing that is not inlined and uses its
+    arrays on every path, so that numba need count none of them.)"""
+    clock, place, state, loaded, first_steps = run[0], run[1], run[2], run[3], run[4]
+    counters = workspace[COUNTERS]
+    place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
+                                      workspace[VALUES][Values.APPROACH])
+    counters[Counter.SEGMENT] += 1
+    interval = place[0]
+    segment = begin_segment(system, mesh, interval, state, loaded, torques, workspace)
+    # The switch sets off vibration that the step before it did not see: start the set as the
+    # step taken after the last entry into it proposed (the mesh repeats).
+    entered, first = event == Event.PHASE_END, first_steps[interval]
+    clock[1] = min(clock[1], first) if entered and first > 0.0 else clock[1]
+    counters[Counter.OPENING] = interval if entered else counters[Counter.OPENING]
+    return segment
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def next_segment(system, mesh, event, interval, cycle, state, loaded, approach):
     """What follows an event: a phase event moves to the next (or previous) contact set and
     re-expresses the pinion entry of `state` from the new set's start (by lengths, not
@@ -748,17 +768,15 @@ def next_segment(system, mesh, event, interval, cycle, state, loaded, approach):
     return interval, cycle
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def set_loaded_by_sign(system, points, count, state, approach, loaded):
     """Which points of a new set carry load: all, or where contact can be lost, those whose
     approach δ + η·δ̇ is not negative (segments.py). `approach` is scratch."""
     loaded[:] = 0.0
-    if not system.contact_loss:
-        loaded[:count] = 1.0
-        return
-    approaches(system, points, count, state, approach)
+    if system.contact_loss:
+        approaches(system, points, count, state, approach)
     for i in range(count):
-        loaded[i] = 1.0 if approach[i] >= 0.0 else 0.0
+        loaded[i] = 1.0 if not system.contact_loss or approach[i] >= 0.0 else 0.0
 
 
 # --- the loop ---------------------------------------------------------------------------------
@@ -775,8 +793,8 @@ def all_finite(state):
 @njit(cache=True, error_model="numpy")
 def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_steps):
     """Integrate a run to exactly `end` (s) with the torques (motor, load; N·m) held. Returns
-    (Status, accepted steps). At most `max_steps` steps are taken: beyond them the run stops
-    where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
+    (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
+    run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
 
     system_arrays: equations.pack_system's two arrays; mesh: (lengths, counts, tables) of
     mesh.period_table; settings: pack_settings' record; workspace: allocate_workspace's arrays;
@@ -790,7 +808,7 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     lengths, counts, tables = mesh
     interval = place[0]
     outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
-    return status, steps
+    return status.value, steps  # an int: numba hands an IntEnum member back at 0.8 µs a call
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -809,17 +827,14 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
     segment = begin_segment(system, mesh, run[1][0], state, loaded, torques, workspace)
     points, steps, status, controller = segment.points, 0, Status.OK, (1e-4, False)
     while clock[0] < end:
-        if steps >= max_steps:  # checked here, where the position is a consistent one
-            status = Status.OVER_BUDGET
-            break
         time, h = clock[0], clock[1]
         # (Radau IIA's steps are not aimed: with them its error stopped falling with the step
         # size in the order test, tests/test_integrator.py, and it steps to few events)
         ahead = phase_event_ahead(system, state, rate, segment.length) if explicit else math.inf
         plan = plan_step(settings, time, end, h, ahead)
         h_step, landing = plan[0], plan[2]
-        if not landing and h_step <= 1e-15 * max(abs(time), 1.0):
-            status = Status.STEP_TOO_SMALL
+        status = step_allowed(steps, max_steps, time, plan)
+        if status != Status.OK:
             break
         if explicit:
             error, iterations = dop853.step(
@@ -860,10 +875,16 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
             clock[0] = end if landing else time + h_step
             counters[Counter.STALLED] = 0
             continue
-        status, segment = end_segment(system, mesh, settings, run, workspace, segment,
-                                      (time, end, h, h_step, clock[1], landing, high), event)
+        event, high, violated = locate_event(system, segment, settings, state, workspace,
+                                             event, high, h_step)
+        if violated:
+            clock[1], status = h, Status.CONTACT_VIOLATED
+            break
+        status = pass_event(state, workspace, clock, (time, end, h_step, clock[1], landing, high),
+                            event)
         if status != Status.OK:
             break
+        segment = end_segment(system, mesh, run, workspace, torques, event)
         points = segment.points
     if status == Status.OK and not all_finite(state):
         status = Status.NOT_FINITE
