@@ -135,7 +135,7 @@ class Segment(NamedTuple):
     and the segment's events."""
 
     points: np.ndarray  # the contact set's point table (equations.py's rows)
-    count: int  # its number of points
+    point_count: int  # its number of points
     loaded: np.ndarray  # per point: 1 loaded, 0 not (the run's array)
     motor_torque: float  # N·m
     load_torque: float  # N·m
@@ -194,7 +194,8 @@ PREDICTION_FLOOR = 1e-3
 # 2 µs). So the loop calls the method's step with its own arrays, and the helpers it runs at
 # every step take only what they use on every path: plan_step and control_step scalars alone,
 # with what depends on the method or on contact loss decided in the loop. What runs once per
-# event or less (end_segment, probe_inside, contact_violated_inside) stays a call.
+# event or less (locate_event, end_segment, probe_inside, contact_violated_inside, trial_step)
+# stays a call; end_segment inlines all it calls, so that numba need count none of its arrays.
 
 
 # --- the records ------------------------------------------------------------------------------
@@ -248,8 +249,8 @@ def event_values(system, segment, state, approach, out):
     out[Event.PHASE_END] = state[system.pinion] - segment.length
     out[Event.PHASE_START] = state[system.pinion]
     if system.contact_loss:
-        approaches(system, segment.points, segment.count, state, approach)
-        for i in range(segment.count):
+        approaches(system, segment.points, segment.point_count, state, approach)
+        for i in range(segment.point_count):
             out[Event.CONTACT + i] = approach[i]
 
 
@@ -332,7 +333,7 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
     tolerance = settings[Setting.ABSOLUTE_TOLERANCE:]
     if int(settings[Setting.METHOD]) == Method.EXPLICIT:
-        dop853.step(system, segment.points, segment.count, segment.loaded,
+        dop853.step(system, segment.points, segment.point_count, segment.loaded,
                     segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
                     tolerance, settings[Setting.RELATIVE_TOLERANCE],
                     vectors[Vector.STAGES:], vectors[Vector.WORK], out)
@@ -340,7 +341,7 @@ def trial_step(system, segment, settings, state, workspace, h, out):
         workspace[MEMORY][Memory.FACTORED_H] = h
         radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
                         workspace[COMPLEX_FACTORS], pivots[1])
-        radau.step(system, segment.points, segment.count, segment.loaded,
+        radau.step(system, segment.points, segment.point_count, segment.loaded,
                    segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
                    tolerance, settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS],
                    pivots[0], workspace[COMPLEX_FACTORS], pivots[1], vectors[Vector.STAGES:],
@@ -360,8 +361,8 @@ def contact_violated_inside(system, segment, settings, state, workspace, h):
     loaded = segment.loaded
     for fraction in INSIDE_FRACTIONS:
         trial_step(system, segment, settings, state, workspace, fraction * h, trial)
-        approaches(system, segment.points, segment.count, trial, approach)
-        for i in range(segment.count):
+        approaches(system, segment.points, segment.point_count, trial, approach)
+        for i in range(segment.point_count):
             if (loaded[i] != 0.0 and approach[i] < -slack) or (
                     loaded[i] == 0.0 and approach[i] > slack):
                 return True
@@ -502,7 +503,7 @@ def implicit_step(system, segment, settings, state, workspace, h):
     vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
     counters, memory = workspace[COUNTERS], workspace[MEMORY]
     rate, tolerance = vectors[Vector.RATE], settings[Setting.ABSOLUTE_TOLERANCE:]
-    points, count, loaded = segment.points, segment.count, segment.loaded
+    points, count, loaded = segment.points, segment.point_count, segment.loaded
     torques = segment.motor_torque, segment.load_torque
     if counters[Counter.JACOBIAN_SEGMENT] != counters[Counter.SEGMENT]:
         radau.jacobian_of(system, points, count, loaded, torques[0], torques[1], state, rate,
@@ -569,9 +570,9 @@ def grazing_check(system, segment, new_state, rate_after, values, h):
     and leave) unseen by its ends, also before an event the step's end shows (a dip inside a
     short contact interval): grazing_suspect's turning point, −1 for none."""
     slopes_after = values[Values.SLOPES_AFTER]
-    approach_rates(system, segment.points, segment.count, new_state, rate_after, slopes_after)
+    approach_rates(system, segment.points, segment.point_count, new_state, rate_after, slopes_after)
     return grazing_suspect(values[Values.BEFORE], values[Values.AFTER],
-                           values[Values.SLOPES_BEFORE], slopes_after, h, segment.count,
+                           values[Values.SLOPES_BEFORE], slopes_after, h, segment.point_count,
                            segment.loaded)
 
 
@@ -592,11 +593,11 @@ def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
     (where contact can be lost) approach slopes at `state`, its start, in the workspace."""
     segment = segment_of(system, mesh, interval, loaded, torques)
     rate, values = workspace[VECTORS][Vector.RATE], workspace[VALUES]
-    derivative(system, segment.points, segment.count, loaded, torques[0], torques[1], state,
+    derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
                rate)
     event_values(system, segment, state, values[Values.APPROACH], values[Values.BEFORE])
     if system.contact_loss:
-        approach_rates(system, segment.points, segment.count, state, rate,
+        approach_rates(system, segment.points, segment.point_count, state, rate,
                        values[Values.SLOPES_BEFORE])
     return segment
 
@@ -838,7 +839,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
             break
         if explicit:
             error, iterations = dop853.step(
-                system, points, segment.count, loaded, torques[0], torques[1], state, rate,
+                system, points, segment.point_count, loaded, torques[0], torques[1], state, rate,
                 h_step, tolerance, settings[Setting.RELATIVE_TOLERANCE], stages, work,
                 new_state), 0
         else:
@@ -859,8 +860,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
         if explicit:  # its last stage is the rate at the step's end
             rate_after[:] = last_stage
         else:
-            derivative(system, points, segment.count, loaded, torques[0], torques[1], new_state,
-                       rate_after)
+            derivative(system, points, segment.point_count, loaded, torques[0], torques[1],
+                       new_state, rate_after)
         if system.contact_loss:
             suspect = grazing_check(system, segment, new_state, rate_after, values, h_step)
             if suspect > 0.0:
