@@ -321,7 +321,8 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
 
     # in this process: a build after the first (the test suite's) finds the code loaded
     first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
-    compiled = Path(walk.advance._cache._cache_path)  # where numba put it, whatever the env
+    # where numba put it, whatever the environment (a private attribute numba's types omit)
+    compiled = Path(walk.advance._cache._cache_path)  # type: ignore[attr-defined]
     missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
                                      for signature in walk.advance.signatures) if reason]
     if missing:

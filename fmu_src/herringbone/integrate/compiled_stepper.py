@@ -26,9 +26,9 @@ import time
 import numpy as np
 
 from ..arguments import COMPILED_METHODS, check_compiled_run
+from ..model.assembly import GearTrainModel
 from .compiled import dop853, walk
 from .compiled.equations import pack_system
-from ..model.assembly import GearTrainModel
 from .contract import IntegrationError, Position
 from .segments import Segment
 
@@ -149,6 +149,14 @@ CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that ent
                    "gradually")
 
 
+# what each failing walk.Status means, for the error raised
+FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing contact)",
+            walk.Status.STEP_TOO_SMALL: "the step size fell below the time's resolution",
+            walk.Status.NOT_FINITE: "the state is no longer finite",
+            walk.Status.CHATTER: CHATTER_MESSAGE,
+            walk.Status.CONTACT_VIOLATED: "a point carried tension, or penetrated without load, "
+                                          "inside a step (contact check of a debug run)"}
+
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 
 
@@ -162,15 +170,17 @@ class Run:
     one); `CompiledStepper.position` takes an immutable snapshot of it, for saving and
     restoring, and `CompiledStepper.start` makes a run from one."""
 
-    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs")
+    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs", "workspace")
 
-    def __init__(self, clock, place, state, loaded, first_steps, outputs):
+    def __init__(self, clock, place, state, loaded, first_steps, outputs, workspace):
         self.clock = clock  # [time (s), step size to try next (s)]
         self.place = place  # [contact interval, mesh cycle]
         self.state = state  # [y, ẏ]
         self.loaded = loaded  # per point of the set (padded to the widest set): 1 loaded, 0 not
         self.first_steps = first_steps  # per contact interval, its first step size (0: none)
         self.outputs = outputs  # equations.outputs at the run's position (model.output_layout)
+        # walk.allocate_workspace's scratch arrays: what they hold is not part of the position
+        self.workspace = workspace
 
     @property
     def time(self) -> float:
@@ -191,7 +201,7 @@ class CompiledStepper:
         self.tolerance = float(tolerance)
         modes = eigenvalues(model)
         self.method = choose_method(model, method, modes)
-        self.method_code = walk.IMPLICIT if self.method == "radau" else walk.EXPLICIT
+        self.method_code = walk.Method.IMPLICIT if self.method == "radau" else walk.Method.EXPLICIT
         fastest = np.abs(modes).max()  # |λ|max, 1/s
         self.fastest_rate = float(fastest)
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
@@ -200,7 +210,7 @@ class CompiledStepper:
         self.step_tolerance = self.tolerance * ringing_factor(modes)
         self.absolute_tolerance = self.step_tolerance * model.state_scales()
         self.max_step = float(max_step)
-        if self.method_code == walk.EXPLICIT:
+        if self.method_code == walk.Method.EXPLICIT:
             self.max_step = min(self.max_step, explicit_step_bound(modes, self.step_tolerance))
         self.event_time_tolerance = (EVENT_ERROR_FRACTION * self.step_tolerance / fastest
                                      if event_time_tolerance is None
@@ -210,7 +220,11 @@ class CompiledStepper:
         self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
                               if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
-        self.system_floats, self.system_ints = pack_system(model.system)
+        self.mesh = (self.lengths, self.counts, self.tables)  # as walk.advance takes them
+        self.system_arrays = pack_system(model.system)
+        self.settings = walk.pack_settings(self.method_code, self.step_tolerance, self.max_step,
+                                           self.event_time_tolerance, self.contact_slack,
+                                           self.absolute_tolerance)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
 
     def start(self, position: Position) -> Run:
@@ -226,7 +240,8 @@ class CompiledStepper:
                        else np.zeros(len(self.lengths)))
         return Run(np.array([position.time, h]),
                    np.array([contact_set.index, contact_set.cycle], dtype=np.int64),
-                   position.state.copy(), loaded, first_steps, outputs)
+                   position.state.copy(), loaded, first_steps, outputs,
+                   walk.allocate_workspace(len(position.state), self.tables.shape[2]))
 
     def position(self, run: Run) -> Position:
         """A snapshot of the run: its own copies, unchanged by the run going on."""
@@ -245,23 +260,17 @@ class CompiledStepper:
             return
         # float(): an int would make numba compile another version
         status, steps = walk.advance(
-            self.system_floats, self.system_ints, self.lengths, self.counts, self.tables,
-            self.method_code, run.clock, run.place, run.state, run.loaded, run.first_steps,
-            float(end), float(torques[0]), float(torques[1]), self.absolute_tolerance,
-            self.step_tolerance, self.max_step, self.event_time_tolerance, self.contact_slack,
-            run.outputs, NO_STEP_BUDGET if max_steps is None else int(max_steps))
+            self.system_arrays, self.mesh, self.settings,
+            (run.clock, run.place, run.state, run.loaded, run.first_steps, run.outputs),
+            run.workspace, float(end), (float(torques[0]), float(torques[1])),
+            NO_STEP_BUDGET if max_steps is None else int(max_steps))
         self.accepted_steps += steps
-        if status == walk.OVER_BUDGET:
+        if status == walk.Status.OVER_BUDGET:
             raise StepBudgetExceeded(f"stopped at t = {run.time:.9g} s after {steps} internal "
                                      f"steps short of t = {end:.9g} s")
-        if status != walk.OK:
-            reason = {walk.STALLED: "contact switches without progress (grazing contact)",
-                      walk.STEP_TOO_SMALL: "the step size fell below the time's resolution",
-                      walk.NOT_FINITE: "the state is no longer finite",
-                      walk.CHATTER: CHATTER_MESSAGE,
-                      walk.CONTACT_VIOLATED: "a point carried tension, or penetrated without "
-                      "load, inside a step (contact check of a debug run)"}[status]
-            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: {reason}")
+        if status != walk.Status.OK:
+            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: "
+                                   f"{FAILURES[status]}")
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:

@@ -3,42 +3,62 @@
 Contract of `advance`: from the run's position (time, state, contact interval and mesh cycle,
 loaded points, step size to try), integrate to exactly `end` with the torques held, and leave
 the new position in the same arrays, updated in place. The result depends on nothing but the
-arguments, so a saved position re-runs identically.
+position and the settings (not on what the workspace held before), so a saved position re-runs
+identically.
 
 Segments. Within one the contact set and its loaded points are fixed and the equations smooth;
 a segment ends where an event function crosses zero (as segments.py defines them):
-    0: φp reaches the end of the contact set's interval (rising), the next set begins;
-    1: φp falls back below its start (falling), the previous set begins;
-    2 + i: point i's approach δ + η·δ̇ crosses zero (falling while it is loaded, rising while it
-       is not), only where contact can be lost.
+    Event.PHASE_END: φp reaches the end of the contact set's interval (rising), the next set
+       begins;
+    Event.PHASE_START: φp falls back below its start (falling), the previous set begins;
+    Event.CONTACT + i: point i's approach δ + η·δ̇ crosses zero (falling while it is loaded,
+       rising while it is not), only where contact can be lost.
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
 by steps of the method itself taken from the step's start (aimed by Newton's method for a phase
 event, whose slope φp's rate is in the state, by secants for a contact), and the segment ends
-on the far side of the crossing, past it by at most `event_time_tolerance` seconds: a
-switch misplaced by δt leaves a force error of about ω_max·δt times the force that switched,
-and the caller keeps that to a hundredth of the relative tolerance. Every segment therefore
-ends with a true step of the method, which keeps its order (a step across a switch would drop
-it to first order). Where several events cross inside one step, the earliest is located
-(trials are judged against the bracket's low end, where nothing has crossed yet, and a last
-trial just before the located crossing makes sure no other came first). A point that lifts
-off and lands again inside one step (or touches and leaves) is caught from the cubic through
-its approach and approach rate at the step's ends (`grazing_fraction`).
+on the far side of the crossing, past it by at most the event time tolerance: a switch
+misplaced by δt leaves a force error of about ω_max·δt times the force that switched, and the
+caller keeps that to a hundredth of the relative tolerance. Every segment therefore ends with a
+true step of the method, which keeps its order (a step across a switch would drop it to first
+order). Where several events cross inside one step, the earliest is located (trials are judged
+against the bracket's low end, where nothing has crossed yet, and a last trial just before the
+located crossing makes sure no other came first). A point that lifts off and lands again inside
+one step (or touches and leaves) is caught from the cubic through its approach and approach
+rate at the step's ends (`grazing_suspect`), and looked for by trial steps inside the step
+(`probe_inside`).
 
 What follows an event (`next_segment`): the loaded points of the segment are decided by the
 sign of their approach, all of them, whatever the event was. So a point that crossed in the
 same bracket as the located event (a whole train separating, or landing, at once) starts the
 segment on its own side; and no segment starts with a loaded point in tension or an unloaded
-one penetrating. A debug run (`contact_slack` >= 0) also looks inside every step for such a
+one penetrating. A debug run (contact slack >= 0) also looks inside every step for such a
 point by other means (`contact_violated_inside`).
 
 Two step-size rules serve the switches (DOP853 only for the first): a step that would pass the
 next phase event is aimed to end just past its predicted crossing, so one trial step locates
 it; and each contact interval starts with the step size its last entry settled on
 (`first_steps`), since the vibration a switch sets off is one the step before it did not see.
+
+The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), the method's
+step (dop853.step, or `implicit_step` with its Jacobian and factors), `control_step` (accept
+or reject it, and the next step size), `crossed_event` and `grazing_check` (which event the
+step crossed; where a point may have lifted off and landed again inside it, `probe_inside`
+looks), then `finish_step` (no event: the step's end is the new start) or `end_segment` (the
+crossing located by `locate_event` to the event time tolerance, the next segment begun by
+`next_segment` and `begin_segment`). Trial steps (`trial_step`) serve the location, the probe
+and the debug check. They work on records laid out once: the stepper's settings (one float
+array, `Setting`), the run's arrays (its position), and its workspace, the scratch arrays that
+`allocate_workspace` makes once per run (rows named by `Vector` and `Values`, the loop's
+memory by `Counter` and `Memory`).
+
+Units: time and step sizes in s, angles in rad, the state as model.py lays it out, approaches
+in m (their rates in m/s), torques in N·m.
 """
 from __future__ import annotations
 
 import math
+from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -46,8 +66,105 @@ from numba import njit
 from . import dop853, radau
 from .equations import approach_rates, approaches, derivative, outputs, unpack_system
 
-EXPLICIT, IMPLICIT = 0, 1  # DOP853, Radau IIA
-OK, STALLED, STEP_TOO_SMALL, NOT_FINITE, CHATTER, CONTACT_VIOLATED, OVER_BUDGET = range(7)
+
+class Event(IntEnum):
+    """The event functions that end a segment, as indices into a row of event values."""
+
+    PHASE_END = 0  # φp − the interval's length (rad), rising: the next contact set begins
+    PHASE_START = 1  # φp (rad), falling: the previous contact set begins
+    CONTACT = 2  # CONTACT + i: point i's approach δ + η·δ̇ (m), where contact can be lost
+
+
+class Status(IntEnum):
+    """How `advance` ended (CompiledStepper.run_to raises for all but OK)."""
+
+    OK = 0
+    STALLED = 1  # MAX_EVENTS_WITHOUT_PROGRESS events in a row without time between them
+    STEP_TOO_SMALL = 2  # the step size fell below the time's resolution
+    NOT_FINITE = 3  # the state at `end` is not finite
+    CHATTER = 4  # MAX_PHASE_REVERSALS phase events in a row, each undoing the last
+    CONTACT_VIOLATED = 5  # the debug check found tension or penetration inside a step
+    OVER_BUDGET = 6  # `max_steps` steps taken short of `end`
+
+
+class Method(IntEnum):
+    """The step method."""
+
+    EXPLICIT = 0  # DOP853
+    IMPLICIT = 1  # Radau IIA
+
+
+class Setting(IntEnum):
+    """Entries of the settings record (`pack_settings`), one float array per stepper."""
+
+    METHOD = 0  # a Method
+    RELATIVE_TOLERANCE = 1
+    MAX_STEP = 2  # s
+    EVENT_TIME_TOLERANCE = 3  # s: how far past its crossing a segment may end
+    CONTACT_SLACK = 4  # m; >= 0 turns the debug contact check on, < 0 leaves it off
+    ABSOLUTE_TOLERANCE = 5  # from here to the end: per state entry, in the entry's units
+
+
+class Vector(IntEnum):
+    """Rows of the workspace's `vectors`, each as long as the state."""
+
+    RATE = 0  # d(state)/dt at the step's start
+    RATE_AFTER = 1  # at its end
+    NEW_STATE = 2  # the step's end state (or the bracketed crossing's)
+    TRIAL = 3  # a trial step's end state
+    WORK = 4  # the methods' own scratch
+    STAGES = 5  # dop853.STAGE_ROWS rows from here: the stages (Radau IIA uses the first 3)
+
+
+class Values(IntEnum):
+    """Rows of the workspace's `values`, Event.CONTACT + the widest set's points wide: event
+    function values (by Event), then per-point rows (indexed by point)."""
+
+    BEFORE = 0  # event values at the step's start
+    AFTER = 1  # at its end (or where the crossing was bracketed)
+    TRIAL = 2  # at a trial step's end
+    LOW = 3  # at the location bracket's low end
+    HIGH = 4  # at its high end
+    APPROACH = 5  # per point: δ + η·δ̇, m (scratch)
+    SLOPES_BEFORE = 6  # per point: its rate at the step's start, m/s
+    SLOPES_AFTER = 7  # at its end
+
+
+class Segment(NamedTuple):
+    """What holds over a segment: the equations (contact set, its loaded points, the torques)
+    and the segment's events."""
+
+    points: np.ndarray  # the contact set's point table (equations.py's rows)
+    point_count: int  # its number of points
+    loaded: np.ndarray  # per point: 1 loaded, 0 not (the run's array)
+    motor_torque: float  # N·m
+    load_torque: float  # N·m
+    length: float  # the contact interval's length in φp, rad
+    events: int  # the number of event functions: Event.CONTACT (+ count if contact can be lost)
+
+
+class Counter(IntEnum):
+    """Entries of the workspace's `counters`: the loop's memory within one call of `advance`."""
+
+    OPENING = 0  # the contact interval whose first step is being taken (forward entry); −1: none
+    SEGMENT = 1  # segments begun in this call (what Radau IIA's Jacobian is dated by)
+    JACOBIAN_SEGMENT = 2  # the segment Radau IIA's Jacobian belongs to; −1: none
+    JACOBIAN_FRESH = 3  # 1 while no step has been accepted on that Jacobian
+    STALLED = 4  # events in a row without progress
+    REVERSALS = 5  # phase events in a row that reversed the last one
+    LAST_PHASE_EVENT = 6  # Event.PHASE_END or PHASE_START; −1: none yet
+
+
+class Memory(IntEnum):
+    """Entries of the workspace's `memory`: the loop's floats within one call of `advance`."""
+
+    FACTORED_H = 0  # s: the step size Radau IIA's LU factors belong to; 0: none
+
+
+# Workspace: the tuple allocate_workspace returns, in this order
+VECTORS, VALUES, MATRICES, COMPLEX_FACTORS, PIVOTS, COUNTERS, MEMORY = range(7)
+JACOBIAN, REAL_FACTORS = 0, 1  # of MATRICES; PIVOTS: the real factors' row, the complex ones'
+
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
 INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 # A cubic through a mode's values and slopes at the ends of a step of h·ω = y misses it by
@@ -69,26 +186,80 @@ MAX_PHASE_REVERSALS = 1000
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
 
-# The helpers the loop calls at every step are inlined (inline="always"): a compiled call hands
-# over each array of the System by reference, which numba counts atomically on the way in and
-# out, 15 arrays a call; inlined, the loop ran 9 % faster (staggered and reference scenes).
+# Inlining and speed. The helpers the loop runs at every step are inlined (inline="always"):
+# a compiled call hands over each array it is given by reference, which numba counts
+# atomically on the way in and out (the System alone has 15 arrays). An inlined helper's
+# arguments are copies, counted the same way, unless the copy is used on every path through
+# the helper and not handed on to a call (measured: 3-8 ns an array, against a step of about
+# 2 µs). So the loop calls the method's step with its own arrays, and the helpers it runs at
+# every step take only what they use on every path: plan_step and control_step scalars alone,
+# with what depends on the method or on contact loss decided in the loop. What runs once per
+# event or less (locate_event, end_segment, probe_inside, contact_violated_inside, trial_step)
+# stays a call; end_segment inlines all it calls, so that numba need count none of its arrays.
+
+
+# --- the records ------------------------------------------------------------------------------
+
+def pack_settings(method: Method, relative_tolerance: float, max_step: float,
+                  event_time_tolerance: float, contact_slack: float,
+                  absolute_tolerance: np.ndarray) -> np.ndarray:
+    """The settings record `advance` takes: the entries laid out by Setting."""
+    settings = np.empty(Setting.ABSOLUTE_TOLERANCE + len(absolute_tolerance))
+    settings[Setting.METHOD] = method
+    settings[Setting.RELATIVE_TOLERANCE] = relative_tolerance
+    settings[Setting.MAX_STEP] = max_step
+    settings[Setting.EVENT_TIME_TOLERANCE] = event_time_tolerance
+    settings[Setting.CONTACT_SLACK] = contact_slack
+    settings[Setting.ABSOLUTE_TOLERANCE:] = absolute_tolerance
+    return settings
+
+
+def allocate_workspace(size: int, max_points: int) -> tuple[np.ndarray, ...]:
+    """The scratch arrays of a run with `size` state entries and sets of up to `max_points`
+    points, allocated once per run (CompiledStepper.start) and reused by every call of
+    `advance`, whose results do not depend on what they held: in the order VECTORS (rows by
+    Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors of Radau
+    IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex factors),
+    COUNTERS (by Counter), MEMORY (by Memory)."""
+    return (np.zeros((Vector.STAGES + dop853.STAGE_ROWS, size)),
+            np.zeros((len(Values), Event.CONTACT + max_points)),
+            np.zeros((2, size, size)),
+            np.zeros((size, size), dtype=np.complex128),
+            np.zeros((2, size), dtype=np.int64),
+            np.zeros(len(Counter), dtype=np.int64),
+            np.zeros(len(Memory)))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def event_values(system, points, count, length, state, approach, out):
-    out[0] = state[system.pinion] - length
-    out[1] = state[system.pinion]
+def segment_of(system, mesh, interval, loaded, torques):
+    """The Segment of contact interval `interval` of the mesh's period (lengths, counts,
+    tables: mesh.period_table), with the run's loaded points and the torques (N·m)."""
+    lengths, counts, tables = mesh
+    count = counts[interval]
+    return Segment(tables[interval], count, loaded, torques[0], torques[1], lengths[interval],
+                   Event.CONTACT + (count if system.contact_loss else 0))
+
+
+# --- the event functions ----------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy", inline="always")
+def event_values(system, segment, state, approach, out):
+    """The event functions at `state` into `out` (by Event): φp − length and φp (rad), then,
+    where contact can be lost, each point's approach (m; `approach` is scratch)."""
+    out[Event.PHASE_END] = state[system.pinion] - segment.length
+    out[Event.PHASE_START] = state[system.pinion]
     if system.contact_loss:
-        approaches(system, points, count, state, approach)
-        for i in range(count):
-            out[2 + i] = approach[i]
+        approaches(system, segment.points, segment.point_count, state, approach)
+        for i in range(segment.point_count):
+            out[Event.CONTACT + i] = approach[i]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def phase_event_ahead(system, state, rate, length):
-    """When φp would reach the end of its interval (moving forward) or its start (moving
-    back), from its rate and acceleration: the zero of the quadratic by one Newton step from
-    the linear guess; inf if φp stands still."""
+    """When (s from now) φp would reach the end of its interval of `length` rad (moving
+    forward) or its start (moving back), from its rate and acceleration in `rate`: the zero of
+    the quadratic by one Newton step from the linear guess; inf if φp stands still or turns back
+    before it gets there."""
     n = state.shape[0] // 2
     angle, speed, acceleration = (state[system.pinion], state[n + system.pinion],
                                   rate[n + system.pinion])
@@ -103,14 +274,23 @@ def phase_event_ahead(system, state, rate, length):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def crosses(before, after, event, loaded):
+    """Whether event function `event` crosses zero from `before` to `after` (its values), in
+    its direction: rising for PHASE_END and an unloaded point, falling for the others, ending
+    strictly past zero."""
+    rising = event == Event.PHASE_END or (event >= Event.CONTACT
+                                          and loaded[event - Event.CONTACT] == 0.0)
+    return (rising and before[event] <= 0.0 < after[event]) or (
+        not rising and before[event] >= 0.0 > after[event])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def first_crossing(before, after, number, loaded):
-    """The event whose function crosses zero first (by linear interpolation) between two
-    states, in its direction, ending strictly past zero; −1 if none does."""
+    """The event among the first `number` whose function crosses zero first (by linear
+    interpolation) between two rows of event values, in its direction; −1 if none does."""
     first, first_fraction = -1, 2.0
     for event in range(number):
-        rising = event == 0 or (event >= 2 and loaded[event - 2] == 0.0)
-        if (rising and before[event] <= 0.0 < after[event]) or (
-                not rising and before[event] >= 0.0 > after[event]):
+        if crosses(before, after, event, loaded):
             fraction = before[event] / (before[event] - after[event])
             if fraction < first_fraction:
                 first, first_fraction = event, fraction
@@ -119,127 +299,13 @@ def first_crossing(before, after, number, loaded):
 
 @njit(cache=True, error_model="numpy")
 def crossings(before, after, number, loaded):
-    """How many events cross zero between two states, each in its direction."""
+    """How many of the first `number` events cross zero between two rows of event values, each
+    in its direction."""
     crossed = 0
     for event in range(number):
-        rising = event == 0 or (event >= 2 and loaded[event - 2] == 0.0)
-        if (rising and before[event] <= 0.0 < after[event]) or (
-                not rising and before[event] >= 0.0 > after[event]):
+        if crosses(before, after, event, loaded):
             crossed += 1
     return crossed
-
-
-@njit(cache=True, error_model="numpy")
-def trial_step(method, system, points, count, loaded, motor_torque, load_torque, state, rate,
-               h, absolute_tolerance, relative_tolerance, jacobian, real, real_pivots, complex_,
-               complex_pivots, stages, work, out):
-    """A step of the method to `out`, taken only to look where an event lies (its error is
-    not checked: it is shorter than a step already accepted). Returns the step size the
-    implicit method's factors now belong to."""
-    if method == EXPLICIT:
-        dop853.step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
-                    absolute_tolerance, relative_tolerance, stages, work, out)
-    else:
-        radau.factorize(jacobian, h, real, real_pivots, complex_, complex_pivots)
-        radau.step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
-                   absolute_tolerance, relative_tolerance, real, real_pivots, complex_,
-                   complex_pivots, stages, out)
-    return h
-
-
-@njit(cache=True, error_model="numpy")
-def contact_violated_inside(method, system, points, count, loaded, motor_torque, load_torque,
-                            state, rate, h, absolute_tolerance, relative_tolerance, jacobian,
-                            real, real_pivots, complex_, complex_pivots, stages, work, trial,
-                            approach, slack):
-    """Debug check of a step from `state` of size h, by trial steps to INSIDE_FRACTIONS of it:
-    whether a loaded point's approach falls below −slack (tension) or an unloaded one's rises
-    above slack (penetration without load) anywhere there. It looks for what the event
-    search (crossings at step ends, the cubic for a dip within a step) would have missed,
-    by other means, at seven times the cost of a step."""
-    for fraction in INSIDE_FRACTIONS:
-        trial_step(method, system, points, count, loaded, motor_torque, load_torque, state,
-                   rate, fraction * h, absolute_tolerance, relative_tolerance, jacobian, real,
-                   real_pivots, complex_, complex_pivots, stages, work, trial)
-        approaches(system, points, count, trial, approach)
-        for i in range(count):
-            if (loaded[i] != 0.0 and approach[i] < -slack) or (
-                    loaded[i] == 0.0 and approach[i] > slack):
-                return True
-    return False
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def grazing_suspect(before, after, slopes_before, slopes_after, h, count, loaded):
-    """Where inside a step (a fraction of it) some point's approach may cross zero and come
-    back though both ends lie on the same side: a lift-off and landing, or a touch, too brief
-    for the ends to show. Each point's approach is modelled by the cubic through its values and
-    slopes at the step's ends; a point is suspect where that cubic turns back towards zero and
-    comes within GRAZING_MARGIN·h·(|ġ0| + |ġ1|) of it (the cubic's own error, for a step of
-    up to h·|λ|max = 3.5 of the mode that moves the point). The earliest suspect turning point,
-    or −1 if there is none."""
-    earliest = -1.0
-    for i in range(count):
-        g0, g1 = before[2 + i], after[2 + i]
-        d0, d1 = h * slopes_before[i], h * slopes_after[i]
-        sign = 1.0 if loaded[i] != 0.0 else -1.0  # loaded: watch for a dip below zero
-        if sign * g0 < 0.0 or sign * g1 < 0.0:
-            continue
-        margin = GRAZING_MARGIN * (abs(d0) + abs(d1))
-        # the cubic's slope terms lift or lower it by at most 4/27 of |d0| + |d1|
-        if min(sign * g0, sign * g1) > margin + 4.0 / 27.0 * (abs(d0) + abs(d1)):
-            continue
-        # Hermite cubic p(s) = g0 + d0·s + c2·s² + c3·s³ on [0, 1]
-        c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
-        c3 = 2.0 * (g0 - g1) + d0 + d1
-        # p'(s) = d0 + 2·c2·s + 3·c3·s² = 0
-        a, b, c = 3.0 * c3, 2.0 * c2, d0
-        first = second = -1.0
-        if a == 0.0:
-            if b != 0.0:
-                first = -c / b
-        else:
-            discriminant = b * b - 4.0 * a * c
-            if discriminant >= 0.0:
-                root = math.sqrt(discriminant)
-                first, second = (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
-        for s in (first, second):
-            if 0.0 < s < 1.0 and sign * (g0 + s * (d0 + s * (c2 + s * c3))) < margin:
-                if earliest < 0.0 or s < earliest:
-                    earliest = s
-    return earliest
-
-
-@njit(cache=True, error_model="numpy")
-def probe_inside(suspect, method, system, points, count, length, events, loaded, motor_torque,
-                 load_torque, state, rate, h, absolute_tolerance, relative_tolerance, jacobian,
-                 real, real_pivots, complex_, complex_pivots, stages, work, trial, approach,
-                 values_before, values_trial):
-    """Trial steps from `state` to fractions of the step h, in increasing order, the suspect
-    turning point among PROBE_FRACTIONS, until one shows an event crossed. Returns (the event,
-    or −1; the trial's step size, whose state is in `trial` and event values in
-    `values_trial`; the step size the implicit method's factors now belong to)."""
-    done = 0.0
-    trial_h = 0.0
-    for k in range(len(PROBE_FRACTIONS) + 1):
-        fraction = 2.0
-        for candidate in PROBE_FRACTIONS:  # the next fraction after `done`, the suspect's too
-            if done < candidate < fraction:
-                fraction = candidate
-        if done < suspect < fraction:
-            fraction = suspect
-        if fraction >= 1.0:
-            break
-        done = fraction
-        trial_h = fraction * h
-        trial_step(method, system, points, count, loaded, motor_torque, load_torque, state, rate,
-                   trial_h, absolute_tolerance, relative_tolerance, jacobian, real, real_pivots,
-                   complex_, complex_pivots, stages, work, trial)
-        event_values(system, points, count, length, trial, approach, values_trial)
-        event = first_crossing(values_before, values_trial, events, loaded)
-        if event >= 0:
-            return event, trial_h, trial_h
-    return -1, trial_h, trial_h
 
 
 @njit(cache=True, error_model="numpy")
@@ -257,284 +323,429 @@ def hermite_root(g0, g1, d0, d1):
     return s if 0.0 < s < 1.0 else -1.0
 
 
-@njit(cache=True, error_model="numpy")
-def advance(system_floats, system_ints, lengths, counts, tables, method, clock, place, state,
-            loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-            relative_tolerance, max_step, event_time_tolerance, contact_slack, outputs_at_end,
-            max_steps):
-    """Returns (status, accepted steps). At most `max_steps` steps are taken: beyond them the
-    run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
-    The position is read from and written back to
-    clock = [time, step size to try], place = [contact interval, mesh cycle], `state`,
-    `loaded` and `first_steps` (per contact interval, the step size to start it with; 0:
-    none yet), also where the run fails; `outputs_at_end` gets equations.outputs there. The
-    system comes packed (equations.pack_system). contact_slack >= 0 (m) turns on the debug
-    check of `contact_violated_inside` on every step; < 0 leaves it off."""
-    system = unpack_system(system_floats, system_ints)
-    time, interval, cycle, h, status, steps = _advance(
-        system, lengths, counts, tables, method, clock[0], place[0], place[1], clock[1], state,
-        loaded, first_steps, end, motor_torque, load_torque, absolute_tolerance,
-        relative_tolerance, max_step, event_time_tolerance, contact_slack, max_steps)
-    clock[0], clock[1] = time, h
-    place[0], place[1] = interval, cycle
-    outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
-    return status, steps
-
+# --- trial steps ------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy")
-def _advance(system, lengths, counts, tables, method, time, interval, cycle, h, state, loaded,
-             first_steps, end, motor_torque, load_torque, absolute_tolerance,
-             relative_tolerance, max_step, event_time_tolerance, contact_slack, max_steps):
-    size = state.shape[0]
-    max_points = tables.shape[2]
-    rate, new_state, trial_state, work = (np.empty(size), np.empty(size), np.empty(size),
-                                          np.empty(size))
-    stages = np.empty((dop853.STAGE_ROWS, size))
-    values_before, values_after = np.empty(2 + max_points), np.empty(2 + max_points)
-    values_trial, values_low = np.empty(2 + max_points), np.empty(2 + max_points)
-    values_high = np.empty(2 + max_points)
-    approach = np.empty(max_points)
-    rate_after = np.empty(size)
-    slopes_before, slopes_after = np.zeros(max_points), np.zeros(max_points)
-    jacobian = np.empty((size, size))
-    real, complex_ = np.empty((size, size)), np.empty((size, size), dtype=np.complex128)
-    real_pivots, complex_pivots = np.empty(size, np.int64), np.empty(size, np.int64)
+def trial_step(system, segment, settings, state, workspace, h, out):
+    """A step of size h (s) from `state` (its rate in the workspace's RATE row) to `out`, taken
+    only to look where an event lies: its error is not checked (it is shorter than a step
+    already accepted). Radau IIA factorizes for h (and says so in the workspace's memory)."""
+    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
+    tolerance = settings[Setting.ABSOLUTE_TOLERANCE:]
+    if int(settings[Setting.METHOD]) == Method.EXPLICIT:
+        dop853.step(system, segment.points, segment.point_count, segment.loaded,
+                    segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+                    tolerance, settings[Setting.RELATIVE_TOLERANCE],
+                    vectors[Vector.STAGES:], vectors[Vector.WORK], out)
+    else:
+        workspace[MEMORY][Memory.FACTORED_H] = h
+        radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
+                        workspace[COMPLEX_FACTORS], pivots[1])
+        radau.step(system, segment.points, segment.point_count, segment.loaded,
+                   segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+                   tolerance, settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS],
+                   pivots[0], workspace[COMPLEX_FACTORS], pivots[1], vectors[Vector.STAGES:],
+                   out)
 
-    points, count, length = tables[interval], counts[interval], lengths[interval]
-    events = 2 + (count if system.contact_loss else 0)
-    derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
-    event_values(system, points, count, length, state, approach, values_before)
+
+@njit(cache=True, error_model="numpy")
+def contact_violated_inside(system, segment, settings, state, workspace, h):
+    """Debug check of a step of h (s) from `state`, by trial steps to INSIDE_FRACTIONS of it:
+    whether a loaded point's approach falls below −slack (tension) or an unloaded one's rises
+    above slack (penetration without load) anywhere there, slack being the settings' contact
+    slack (m). It looks for what the event search (crossings at step ends, the cubic for a dip
+    within a step) would have missed, by other means, at seven times the cost of a step."""
+    trial = workspace[VECTORS][Vector.TRIAL]
+    approach = workspace[VALUES][Values.APPROACH]
+    slack = settings[Setting.CONTACT_SLACK]
+    loaded = segment.loaded
+    for fraction in INSIDE_FRACTIONS:
+        trial_step(system, segment, settings, state, workspace, fraction * h, trial)
+        approaches(system, segment.points, segment.point_count, trial, approach)
+        for i in range(segment.point_count):
+            if (loaded[i] != 0.0 and approach[i] < -slack) or (
+                    loaded[i] == 0.0 and approach[i] > slack):
+                return True
+    return False
+
+
+# --- the grazing check ------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy", inline="always")
+def grazing_suspect(before, after, slopes_before, slopes_after, h, count, loaded):
+    """Where inside a step of h (s), as a fraction of it, some point's approach may cross zero
+    and come back though both ends lie on the same side: a lift-off and landing, or a touch,
+    too brief for the ends to show. Each point's approach is modelled by the cubic through its
+    values (`before`, `after`: rows of event values) and slopes (m/s) at the step's ends; a
+    point is suspect where that cubic turns back towards zero and comes within
+    GRAZING_MARGIN·h·(|ġ0| + |ġ1|) of it (the cubic's own error, for a step of up to
+    h·|λ|max = 3.5 of the mode that moves the point). The earliest suspect turning point, or −1
+    if there is none."""
+    earliest = -1.0
+    for i in range(count):
+        g0, g1 = before[Event.CONTACT + i], after[Event.CONTACT + i]
+        d0, d1 = h * slopes_before[i], h * slopes_after[i]
+        sign = 1.0 if loaded[i] != 0.0 else -1.0  # loaded: watch for a dip below zero
+        if sign * g0 < 0.0 or sign * g1 < 0.0:
+            continue
+        margin = GRAZING_MARGIN * (abs(d0) + abs(d1))
+        # the cubic's slope terms lift or lower it by at most 4/27 of |d0| + |d1|
+        if min(sign * g0, sign * g1) > margin + 4.0 / 27.0 * (abs(d0) + abs(d1)):
+            continue
+        turning = cubic_turning_points(g0, g1, d0, d1)
+        for s in turning:
+            if 0.0 < s < 1.0 and sign * hermite_value(g0, g1, d0, d1, s) < margin:
+                if earliest < 0.0 or s < earliest:
+                    earliest = s
+    return earliest
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def cubic_turning_points(g0, g1, d0, d1):
+    """The zeros (−1 for none) of the slope of the Hermite cubic p(s) = g0 + d0·s + c2·s² +
+    c3·s³ on [0, 1] with values g0, g1 and slopes d0, d1 at its ends."""
+    c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
+    c3 = 2.0 * (g0 - g1) + d0 + d1
+    # p'(s) = d0 + 2·c2·s + 3·c3·s² = 0
+    a, b, c = 3.0 * c3, 2.0 * c2, d0
+    first = second = -1.0
+    if a == 0.0:
+        if b != 0.0:
+            first = -c / b
+    else:
+        discriminant = b * b - 4.0 * a * c
+        if discriminant >= 0.0:
+            root = math.sqrt(discriminant)
+            first, second = (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
+    return (first, second)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def hermite_value(g0, g1, d0, d1, s):
+    """The Hermite cubic of cubic_turning_points at s."""
+    c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
+    c3 = 2.0 * (g0 - g1) + d0 + d1
+    return g0 + s * (d0 + s * (c2 + s * c3))
+
+
+@njit(cache=True, error_model="numpy")
+def probe_inside(system, segment, settings, state, workspace, suspect, h, event):
+    """The grazing probe of a step of h (s) from `state` that crossed `event` (−1: none) by its
+    end: trial steps to fractions of it, in increasing order, the suspect turning point (a
+    fraction, grazing_suspect's) among PROBE_FRACTIONS, until one shows an event crossed. One
+    that does becomes the bracket's end: its state goes to NEW_STATE, its event values to the
+    AFTER row. Returns (the event crossed first, or −1; the bracket's end, s)."""
+    vectors, values = workspace[VECTORS], workspace[VALUES]
+    trial = vectors[Vector.TRIAL]
+    done = 0.0
+    for _ in range(len(PROBE_FRACTIONS) + 1):
+        fraction = 2.0
+        for candidate in PROBE_FRACTIONS:  # the next fraction after `done`, the suspect's too
+            if done < candidate < fraction:
+                fraction = candidate
+        if done < suspect < fraction:
+            fraction = suspect
+        if fraction >= 1.0:
+            break
+        done = fraction
+        trial_step(system, segment, settings, state, workspace, fraction * h, trial)
+        event_values(system, segment, trial, values[Values.APPROACH], values[Values.TRIAL])
+        found = first_crossing(values[Values.BEFORE], values[Values.TRIAL], segment.events,
+                               segment.loaded)
+        if found >= 0:  # crossed by then: the bracket shrinks to the probe
+            vectors[Vector.NEW_STATE, :] = trial
+            values[Values.AFTER, :] = values[Values.TRIAL]
+            return found, fraction * h
+    return event, h
+
+
+# --- the steps of the loop --------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy", inline="always")
+def plan_step(settings, time, end, h, ahead):
+    """The next step from `time` (s) with the controller's step size h (s): at most the
+    settings' max step, stretched by a hair to land on `end` rather than leave a remainder of
+    rounding size, or cut to end just past the phase event predicted `ahead` s from now
+    (phase_event_ahead; DOP853 only, inf for none). Returns (h_step, h_wanted, landing, aimed):
+    the step's size, the size the controller asked for (bounded), whether the step ends at
+    `end`, whether it is aimed at the phase event."""
+    h_wanted = min(h, settings[Setting.MAX_STEP])
+    landing = end - time <= h_wanted * (1.0 + 1e-7)
+    h_step = end - time if landing else h_wanted
+    # a step that would pass the next phase event ends just past it instead: the event is
+    # then located by a single trial step, and nothing of the step past it is thrown away
+    passing = (1.0 + PREDICTION_MARGIN) * ahead
+    if PREDICTION_FLOOR * h_step < passing < h_step:
+        return passing, h_wanted, False, True
+    return h_step, h_wanted, landing, False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def step_allowed(steps, max_steps, time, plan):
+    """Status.OVER_BUDGET where `steps` steps have been taken of `max_steps` (checked before a
+    step, where the position is a consistent one), STEP_TOO_SMALL where the planned step no
+    longer moves the time (s) but for rounding, else OK."""
+    if steps >= max_steps:
+        return Status.OVER_BUDGET
+    h_step, _, landing, _ = plan
+    if not landing and h_step <= 1e-15 * max(abs(time), 1.0):
+        return Status.STEP_TOO_SMALL
+    return Status.OK
+
+
+@njit(cache=True, error_model="numpy")
+def implicit_step(system, segment, settings, state, workspace, h):
+    """One step of Radau IIA of size h (s) from `state` to NEW_STATE, with the Jacobian of the
+    segment (made at its first step) and LU factors for h (kept while h stays), as the
+    workspace's counters and memory record them. Returns (retry: Newton failed on an old
+    Jacobian, which is dropped, and the step is to be tried again; the error norm, inf where
+    Newton did not converge; Newton iterations)."""
+    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
+    counters, memory = workspace[COUNTERS], workspace[MEMORY]
+    rate, tolerance = vectors[Vector.RATE], settings[Setting.ABSOLUTE_TOLERANCE:]
+    points, count, loaded = segment.points, segment.point_count, segment.loaded
+    torques = segment.motor_torque, segment.load_torque
+    if counters[Counter.JACOBIAN_SEGMENT] != counters[Counter.SEGMENT]:
+        radau.jacobian_of(system, points, count, loaded, torques[0], torques[1], state, rate,
+                          tolerance, matrices[JACOBIAN], vectors[Vector.TRIAL],
+                          vectors[Vector.WORK])
+        counters[Counter.JACOBIAN_SEGMENT] = counters[Counter.SEGMENT]
+        counters[Counter.JACOBIAN_FRESH] = 1
+        memory[Memory.FACTORED_H] = 0.0
+    if h != memory[Memory.FACTORED_H]:
+        radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
+                        workspace[COMPLEX_FACTORS], pivots[1])
+        memory[Memory.FACTORED_H] = h
+    error, iterations = radau.step(
+        system, points, count, loaded, torques[0], torques[1], state, rate, h, tolerance,
+        settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS], pivots[0],
+        workspace[COMPLEX_FACTORS], pivots[1], vectors[Vector.STAGES:],
+        vectors[Vector.NEW_STATE])
+    if math.isinf(error) and counters[Counter.JACOBIAN_FRESH] == 0:
+        counters[Counter.JACOBIAN_SEGMENT] = -1  # Newton failed on an old Jacobian: refresh it
+        return True, error, iterations
+    return False, error, iterations
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def control_step(explicit, error, iterations, plan, controller):
+    """Accept the step of `plan` (plan_step's) with this error norm and Newton iterations, or
+    reject it, by the explicit or the implicit method's controller. `controller` = (the
+    explicit method's last accepted error norm, whether the last step was rejected). Returns
+    (accepted; the step size to try next, s; the controller)."""
+    previous_error, rejected = controller
+    h_step, h_wanted, landing, aimed = plan
+    if not error <= 1.0:  # too large, or NaN
+        factor = (dop853.step_factor(error, previous_error, rejected) if explicit
+                  else radau.step_factor(error, iterations, rejected))
+        return False, h_step * (factor if math.isfinite(error) else 0.5), (previous_error, True)
+    if explicit:
+        factor = dop853.step_factor(error, previous_error, rejected)
+        if not (landing or aimed):  # a cut step's small error would hold the next one back
+            previous_error = max(error, 1e-4)
+    else:
+        factor = radau.step_factor(error, iterations, rejected)
+        if factor < 1.2:
+            factor = 1.0  # keep the factorization (scipy's rule)
+    h_next = h_step * factor
+    if landing or aimed:  # a step cut short says little about the next one
+        h_next = max(h_next, h_wanted)
+    return True, h_next, (previous_error, False)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def crossed_event(system, segment, new_state, values):
+    """The event values at the end of a step (NEW_STATE; into the AFTER row of `values`), and
+    which event the step crossed first (−1: none)."""
+    after = values[Values.AFTER]
+    event_values(system, segment, new_state, values[Values.APPROACH], after)
+    return first_crossing(values[Values.BEFORE], after, segment.events, segment.loaded)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def grazing_check(system, segment, new_state, rate_after, values, h):
+    """The grazing check of a step of h (s), where contact can be lost: the approach slopes
+    at its end (from `new_state` and its rate; into the SLOPES_AFTER row of `values`), and
+    where inside the step, as a fraction of it, a point may lift off and land again (or touch
+    and leave) unseen by its ends, also before an event the step's end shows (a dip inside a
+    short contact interval): grazing_suspect's turning point, −1 for none."""
+    slopes_after = values[Values.SLOPES_AFTER]
+    approach_rates(system, segment.points, segment.point_count, new_state, rate_after, slopes_after)
+    return grazing_suspect(values[Values.BEFORE], values[Values.AFTER],
+                           values[Values.SLOPES_BEFORE], slopes_after, h, segment.point_count,
+                           segment.loaded)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def finish_step(state, workspace):
+    """Make the accepted step's end, which crossed no event, the new start: state, rate,
+    event values and approach slopes."""
+    vectors, values = workspace[VECTORS], workspace[VALUES]
+    state[:] = vectors[Vector.NEW_STATE]
+    vectors[Vector.RATE, :] = vectors[Vector.RATE_AFTER]
+    values[Values.BEFORE, :] = values[Values.AFTER]
+    values[Values.SLOPES_BEFORE, :] = values[Values.SLOPES_AFTER]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
+    """The Segment of contact interval `interval` (segment_of), with the rate, event values and
+    (where contact can be lost) approach slopes at `state`, its start, in the workspace."""
+    segment = segment_of(system, mesh, interval, loaded, torques)
+    rate, values = workspace[VECTORS][Vector.RATE], workspace[VALUES]
+    derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
+               rate)
+    event_values(system, segment, state, values[Values.APPROACH], values[Values.BEFORE])
     if system.contact_loss:
-        approach_rates(system, points, count, state, rate, slopes_before)
-    jacobian_fresh = False
-    jacobian_state = -1  # the segment number the Jacobian belongs to (implicit method)
-    segment_number = 0
-    factored_h = 0.0
-    steps = 0
-    previous_error = 1e-4  # of the last accepted step (explicit method's controller)
-    rejected = False
-    stalled_events = 0
-    reversals, last_phase_event = 0, -1  # of the phase events: 0 forward, 1 backward
-    opening = -1  # the contact interval whose first step is being taken (forward entry)
+        approach_rates(system, segment.points, segment.point_count, state, rate,
+                       values[Values.SLOPES_BEFORE])
+    return segment
 
-    while time < end:
-        if steps >= max_steps:  # checked here, where the position is a consistent one
-            return time, interval, cycle, h, OVER_BUDGET, steps
-        h_wanted = min(h, max_step)
-        # stretch a step by a hair rather than leave a remainder of rounding size
-        landing = end - time <= h_wanted * (1.0 + 1e-7)
-        h_step = end - time if landing else h_wanted
-        # a step that would pass the next phase event ends just past it instead: the event is
-        # then located by a single trial step, and nothing of the step past it is thrown away.
-        # Radau IIA's steps are not aimed: with them its error stopped falling with the step
-        # size in the order test (tests/test_integrator.py), and it steps to few events.
-        aimed = False
-        if method == EXPLICIT:
-            passing = (1.0 + PREDICTION_MARGIN) * phase_event_ahead(system, state, rate, length)
-            if PREDICTION_FLOOR * h_step < passing < h_step:
-                h_step, landing, aimed = passing, False, True
-        if not landing and h_step <= 1e-15 * max(abs(time), 1.0):
-            return time, interval, cycle, h, STEP_TOO_SMALL, steps
 
-        # --- one step of the method ------------------------------------------------------
-        iterations = 0
-        if method == EXPLICIT:
-            error = dop853.step(system, points, count, loaded, motor_torque, load_torque, state,
-                                rate, h_step, absolute_tolerance, relative_tolerance, stages,
-                                work, new_state)
-        else:
-            if jacobian_state != segment_number:
-                radau.jacobian_of(system, points, count, loaded, motor_torque, load_torque,
-                                  state, rate, absolute_tolerance, jacobian, trial_state, work)
-                jacobian_state, jacobian_fresh, factored_h = segment_number, True, 0.0
-            if h_step != factored_h:
-                radau.factorize(jacobian, h_step, real, real_pivots, complex_, complex_pivots)
-                factored_h = h_step
-            error, iterations = radau.step(system, points, count, loaded, motor_torque,
-                                           load_torque, state, rate, h_step, absolute_tolerance,
-                                           relative_tolerance, real, real_pivots, complex_,
-                                           complex_pivots, stages, new_state)
-            if math.isinf(error) and not jacobian_fresh:
-                jacobian_state = -1  # Newton failed on an old Jacobian: refresh it first
-                continue
-        if not error <= 1.0:  # too large, or NaN
-            factor = (dop853.step_factor(error, previous_error, rejected) if method == EXPLICIT
-                      else radau.step_factor(error, iterations, rejected))
-            h = h_step * (factor if math.isfinite(error) else 0.5)
-            rejected = True
-            continue
-        if method == EXPLICIT:
-            factor = dop853.step_factor(error, previous_error, rejected)
-            if not (landing or aimed):  # a cut step's small error would hold the next one back
-                previous_error = max(error, 1e-4)
-        else:
-            factor = radau.step_factor(error, iterations, rejected)
-            if factor < 1.2:
-                factor = 1.0  # keep the factorization (scipy's rule)
-        rejected = False
-        jacobian_fresh = False
-        steps += 1
-        h_next = h_step * factor
-        if landing or aimed:  # a step cut short says little about the next one
-            h_next = max(h_next, h_wanted)
-        elif opening >= 0:
-            first_steps[opening] = h_next
-        opening = -1
+# --- event location -----------------------------------------------------------------------------
 
-        # --- did it cross an event? --------------------------------------------------------
-        event_values(system, points, count, length, new_state, approach, values_after)
-        event = first_crossing(values_before, values_after, events, loaded)
-        high = h_step
-        if method == EXPLICIT:
-            rate_after[:] = stages[dop853.N_STAGES]
-        else:
-            derivative(system, points, count, loaded, motor_torque, load_torque, new_state,
-                       rate_after)
-        if system.contact_loss:
-            approach_rates(system, points, count, new_state, rate_after, slopes_after)
-            # a point may lift off and land again (or touch and leave) inside the step, also
-            # before an event the step's end shows (a dip inside a short contact interval)
-            suspect = grazing_suspect(values_before, values_after, slopes_before, slopes_after,
-                                      h_step, count, loaded)
-            if suspect > 0.0:
-                found, trial_h, factored_h = probe_inside(
-                    suspect, method, system, points, count, length, events, loaded,
-                    motor_torque, load_torque, state, rate, h_step, absolute_tolerance,
-                    relative_tolerance, jacobian, real, real_pivots, complex_, complex_pivots,
-                    stages, work, trial_state, approach, values_before, values_trial)
-                if found >= 0:  # crossed by then: the bracket shrinks to the probe
-                    event, high = found, trial_h
-                    new_state[:] = trial_state
-                    values_after[:] = values_trial
-        if event < 0:
-            if contact_slack >= 0.0 and system.contact_loss:
-                factored_h = 0.0  # the check's trial steps factorize for their own sizes
-                if contact_violated_inside(
-                        method, system, points, count, loaded, motor_torque, load_torque, state,
-                        rate, h_step, absolute_tolerance, relative_tolerance, jacobian, real,
-                        real_pivots, complex_, complex_pivots, stages, work, trial_state,
-                        approach, contact_slack):
-                    return time, interval, cycle, h, CONTACT_VIOLATED, steps
-            state[:] = new_state
-            rate[:] = rate_after
-            values_before[:] = values_after
-            slopes_before[:] = slopes_after
-            time = end if landing else time + h_step
-            h = h_next
-            stalled_events = 0
-            continue
+@njit(cache=True, error_model="numpy", inline="always")
+def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope):
+    """Where (s from the step's start) event function `event` crosses zero, from its two
+    latest values: Newton's step for a phase event (its slope, φp's rate, is known), the
+    secant's zero for a contact; −1 where neither gives one."""
+    if event < Event.CONTACT and newer_slope != 0.0:
+        return newer_h - newer_value / newer_slope
+    if newer_value != older_value:
+        return newer_h - newer_value * (newer_h - older_h) / (newer_value - older_value)
+    return -1.0
 
-        # --- locate it: steps of the method inside the bracket [low, high] of step sizes -----
-        # A phase event's function is φp less a constant, and its slope, φp's rate, is part of
-        # the state: the first estimate is the zero of the cubic through values and slopes at
-        # the step's ends (fifty times closer than the chord's), the next ones Newton's from the
-        # latest trial. A contact event is found by secant steps.
-        low = 0.0
-        values_low[:] = values_before
-        values_high[:] = values_after
-        older_h, older_value = low, values_low[event]  # the two latest points, for the secant
-        newer_h, newer_value = high, values_after[event]
-        pinion_rate = size // 2 + system.pinion
-        newer_slope = new_state[pinion_rate]
-        tolerance = max(event_time_tolerance, 1e-14 * h_step)  # not below rounding
+
+@njit(cache=True, error_model="numpy")
+def locate_event(system, segment, settings, state, workspace, event, high, h_step):
+    """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
+    `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
+    by trial steps of the method. A phase event's function is φp less a constant, and its
+    slope, φp's rate, is part of the state: the first estimate is the zero of the cubic through
+    values and slopes at the step's ends (fifty times closer than the chord's), the next ones
+    Newton's from the latest trial. A contact event is found by secant steps. Trials are judged
+    against the bracket's low end, so that of several events crossed by one the earliest is
+    taken. A debug run (contact slack >= 0) then checks the step up to the crossing
+    (contact_violated_inside). Returns (the event; the bracket's high end, s, its state in
+    NEW_STATE; whether the debug check failed)."""
+    vectors, values = workspace[VECTORS], workspace[VALUES]
+    new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
+    low_values, high_values = values[Values.LOW], values[Values.HIGH]
+    trial_values = values[Values.TRIAL]
+    low = 0.0
+    low_values[:] = values[Values.BEFORE]
+    high_values[:] = values[Values.AFTER]
+    older_h, older_value = low, low_values[event]  # the two latest points, for the secant
+    newer_h, newer_value = high, high_values[event]
+    pinion_rate = state.shape[0] // 2 + system.pinion
+    newer_slope = new_state[pinion_rate]
+    tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
+    first_estimate = -1.0
+    if event < Event.CONTACT and high == h_step:
+        first_estimate = high * hermite_root(low_values[event], high_values[event],
+                                             high * state[pinion_rate], high * newer_slope)
+    for _ in range(MAX_LOCATION_TRIALS):
+        if high - low <= 2.0 * tolerance:
+            break  # whatever crossed in between crossed together, to the tolerance
+        estimate = first_estimate
         first_estimate = -1.0
-        if event < 2 and high == h_step:
-            first_estimate = high * hermite_root(values_low[event], values_after[event],
-                                                 high * state[pinion_rate],
-                                                 high * newer_slope)
-        for _ in range(MAX_LOCATION_TRIALS):
-            if high - low <= 2.0 * tolerance:
-                break  # whatever crossed in between crossed together, to the tolerance
-            estimate = first_estimate
-            first_estimate = -1.0
-            if estimate < 0.0:
-                if event < 2 and newer_slope != 0.0:
-                    estimate = newer_h - newer_value / newer_slope
-                elif newer_value != older_value:
-                    estimate = newer_h - newer_value * (newer_h - older_h) / (
-                        newer_value - older_value)
-            if not low <= estimate < high:
-                estimate = 0.5 * (low + high)
-            if high - estimate <= 2.0 * tolerance:
-                # located, unless another event that had also crossed by `high` crossed
-                # earlier: then a trial just before this crossing says which
-                if crossings(values_low, values_high, events, loaded) == 1:
-                    break
-                trial_h = high - 2.0 * tolerance
-            else:
-                # aim just past the estimate, so that a good estimate ends the search at once
-                trial_h = estimate + tolerance
-            factored_h = trial_step(method, system, points, count, loaded, motor_torque,
-                                    load_torque, state, rate, trial_h, absolute_tolerance,
-                                    relative_tolerance, jacobian, real, real_pivots, complex_,
-                                    complex_pivots, stages, work, trial_state)
-            event_values(system, points, count, length, trial_state, approach, values_trial)
-            # against the bracket's low end, where nothing has crossed yet: of several events
-            # crossed by the trial, the earliest is taken
-            crossed = first_crossing(values_low, values_trial, events, loaded)
-            if crossed >= 0:
-                if crossed != event:  # another event crosses first: locate that one
-                    event = crossed
-                    older_h, older_value = low, values_low[event]
-                else:
-                    older_h, older_value = newer_h, newer_value
-                high = trial_h
-                new_state[:] = trial_state
-                values_high[:] = values_trial
+        if estimate < 0.0:
+            estimate = next_estimate(event, older_h, older_value, newer_h, newer_value,
+                                     newer_slope)
+        if not low <= estimate < high:
+            estimate = 0.5 * (low + high)
+        if high - estimate <= 2.0 * tolerance:
+            # located, unless another event that had also crossed by `high` crossed
+            # earlier: then a trial just before this crossing says which
+            if crossings(low_values, high_values, segment.events, segment.loaded) == 1:
+                break
+            trial_h = high - 2.0 * tolerance
+        else:
+            # aim just past the estimate, so that a good estimate ends the search at once
+            trial_h = estimate + tolerance
+        trial_step(system, segment, settings, state, workspace, trial_h, trial)
+        event_values(system, segment, trial, values[Values.APPROACH], trial_values)
+        crossed = first_crossing(low_values, trial_values, segment.events, segment.loaded)
+        if crossed >= 0:
+            if crossed != event:  # another event crosses first: locate that one
+                event = crossed
+                older_h, older_value = low, low_values[event]
             else:
                 older_h, older_value = newer_h, newer_value
-                low = trial_h
-                values_low[:] = values_trial
-            newer_h, newer_value = trial_h, values_trial[event]
-            newer_slope = trial_state[pinion_rate]
+            high = trial_h
+            new_state[:] = trial
+            high_values[:] = trial_values
+        else:
+            older_h, older_value = newer_h, newer_value
+            low = trial_h
+            low_values[:] = trial_values
+        newer_h, newer_value, newer_slope = trial_h, trial_values[event], trial[pinion_rate]
+    # (a debug run looks inside the step to the event, where no other point may have
+    # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
+    violated = (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
+                and high > 16.0 * tolerance and contact_violated_inside(
+                    system, segment, settings, state, workspace, high))
+    return event, high, violated
 
-        # --- the next segment ----------------------------------------------------------------
-        # (a debug run looks inside the step to the event, where no other point may have
-        # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
-        if contact_slack >= 0.0 and system.contact_loss and high > 16.0 * tolerance:
-            factored_h = 0.0
-            if contact_violated_inside(
-                    method, system, points, count, loaded, motor_torque, load_torque, state,
-                    rate, high, absolute_tolerance, relative_tolerance, jacobian, real,
-                    real_pivots, complex_, complex_pivots, stages, work, trial_state, approach,
-                    contact_slack):
-                return time, interval, cycle, h, CONTACT_VIOLATED, steps
-        state[:] = new_state
-        time = end if landing and high == h_step else time + high
-        stalled_events = stalled_events + 1 if high <= 1e-12 * h_step else 0
-        if stalled_events > MAX_EVENTS_WITHOUT_PROGRESS:
-            return time, interval, cycle, h_next, STALLED, steps
-        if event < 2:
-            reversals = reversals + 1 if event != last_phase_event else 0
-            last_phase_event = event
-            if reversals > MAX_PHASE_REVERSALS:
-                return time, interval, cycle, h_next, CHATTER, steps
-        interval, cycle = next_segment(system, lengths, counts, tables, event, interval, cycle,
-                                       state, loaded, approach)
-        points, count, length = tables[interval], counts[interval], lengths[interval]
-        events = 2 + (count if system.contact_loss else 0)
-        segment_number += 1
-        derivative(system, points, count, loaded, motor_torque, load_torque, state, rate)
-        event_values(system, points, count, length, state, approach, values_before)
-        if system.contact_loss:
-            approach_rates(system, points, count, state, rate, slopes_before)
 
-        h = h_next
-        if event == 0:
-            # The switch sets off vibration that the step before it did not see: start the
-            # set as the step taken after the last entry into it proposed (the mesh repeats).
-            if first_steps[interval] > 0.0:
-                h = min(h, first_steps[interval])
-            opening = interval
-    for j in range(size):
-        if not math.isfinite(state[j]):
-            return time, interval, cycle, h, NOT_FINITE, steps
-    return time, interval, cycle, h, OK, steps
+# --- the segment's end --------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy", inline="always")
+def count_progress(counters, event, high, h_step):
+    """Whether the run still moves after an event located at `high` (s) into a step of h_step
+    (s), by the counters of events in a row without progress and of phase events in a row that
+    reversed the last one: Status.OK, STALLED or CHATTER."""
+    stalled = counters[Counter.STALLED] + 1 if high <= 1e-12 * h_step else 0
+    counters[Counter.STALLED] = stalled
+    if stalled > MAX_EVENTS_WITHOUT_PROGRESS:
+        return Status.STALLED
+    if event < Event.CONTACT:
+        reversals = (counters[Counter.REVERSALS] + 1
+                     if event != counters[Counter.LAST_PHASE_EVENT] else 0)
+        counters[Counter.REVERSALS], counters[Counter.LAST_PHASE_EVENT] = reversals, event
+        if reversals > MAX_PHASE_REVERSALS:
+            return Status.CHATTER
+    return Status.OK
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def pass_event(state, workspace, clock, step, event):
+    """Move the run past the crossing of `event` located by the accepted step `step` = (time,
+    end, h_step, h_next, landing, high: the step's start, the run's end, its size and the next
+    one's, s; whether it lands on `end`; the crossing's bracket end, s from the step's start):
+    the state there (NEW_STATE), the time and the step size to try. Returns count_progress's
+    Status."""
+    time, end, h_step, h_next, landing, high = step
+    state[:] = workspace[VECTORS][Vector.NEW_STATE]
+    clock[0] = end if landing and high == h_step else time + high
+    clock[1] = h_next
+    return count_progress(workspace[COUNTERS], event, high, h_step)
 
 
 @njit(cache=True, error_model="numpy")
-def next_segment(system, lengths, counts, tables, event, interval, cycle, state, loaded,
-                 approach):
+def end_segment(system, mesh, run, workspace, torques, event):
+    """Begin the segment that follows `event` at the run's state: the next contact set and its
+    loaded points (next_segment, into the run's place and loaded points), the rate, event
+    values and slopes there (begin_segment), and after a phase event into the next set, its
+    first step size. Returns the Segment. (It calls nothing that is not inlined and uses its
+    arrays on every path, so that numba need count none of them.)"""
+    clock, place, state, loaded, first_steps = run[0], run[1], run[2], run[3], run[4]
+    counters = workspace[COUNTERS]
+    place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
+                                      workspace[VALUES][Values.APPROACH])
+    counters[Counter.SEGMENT] += 1
+    interval = place[0]
+    segment = begin_segment(system, mesh, interval, state, loaded, torques, workspace)
+    # The switch sets off vibration that the step before it did not see: start the set as the
+    # step taken after the last entry into it proposed (the mesh repeats).
+    entered, first = event == Event.PHASE_END, first_steps[interval]
+    clock[1] = min(clock[1], first) if entered and first > 0.0 else clock[1]
+    counters[Counter.OPENING] = interval if entered else counters[Counter.OPENING]
+    return segment
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def next_segment(system, mesh, event, interval, cycle, state, loaded, approach):
     """What follows an event: a phase event moves to the next (or previous) contact set and
     re-expresses the pinion entry of `state` from the new set's start (by lengths, not
     absolute angles, so it stays exact however far the train has turned); then every point
@@ -542,13 +753,14 @@ def next_segment(system, lengths, counts, tables, event, interval, cycle, state,
     whose event fired, is what keeps the loaded set true to the state: a point that crossed
     zero in the same bracket as the located event (a whole train separating or landing at
     once) starts the segment on its own side, with its own event ahead of it. Updates state
-    and loaded; returns the new (interval, cycle)."""
-    if event == 0:
+    and loaded (`approach` is scratch); returns the new (interval, cycle)."""
+    lengths, counts, tables = mesh
+    if event == Event.PHASE_END:
         state[system.pinion] -= lengths[interval]
         interval += 1
         if interval == lengths.shape[0]:
             interval, cycle = 0, cycle + 1
-    elif event == 1:
+    elif event == Event.PHASE_START:
         interval -= 1
         if interval < 0:
             interval, cycle = lengths.shape[0] - 1, cycle - 1
@@ -557,14 +769,134 @@ def next_segment(system, lengths, counts, tables, event, interval, cycle, state,
     return interval, cycle
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def set_loaded_by_sign(system, points, count, state, approach, loaded):
     """Which points of a new set carry load: all, or where contact can be lost, those whose
-    approach δ + η·δ̇ is not negative (segments.py)."""
+    approach δ + η·δ̇ is not negative (segments.py). `approach` is scratch."""
     loaded[:] = 0.0
-    if not system.contact_loss:
-        loaded[:count] = 1.0
-        return
-    approaches(system, points, count, state, approach)
+    if system.contact_loss:
+        approaches(system, points, count, state, approach)
     for i in range(count):
-        loaded[i] = 1.0 if approach[i] >= 0.0 else 0.0
+        loaded[i] = 1.0 if not system.contact_loss or approach[i] >= 0.0 else 0.0
+
+
+# --- the loop ---------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy", inline="always")
+def all_finite(state):
+    """Whether every entry of `state` is finite."""
+    for j in range(state.shape[0]):
+        if not math.isfinite(state[j]):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_steps):
+    """Integrate a run to exactly `end` (s) with the torques (motor, load; N·m) held. Returns
+    (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
+    run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
+
+    system_arrays: equations.pack_system's two arrays; mesh: (lengths, counts, tables) of
+    mesh.period_table; settings: pack_settings' record; workspace: allocate_workspace's arrays;
+    run: the run's arrays (clock, place, state, loaded, first_steps, outputs), its position:
+    clock = [time, step size to try], place = [contact interval, mesh cycle], `state`, `loaded`
+    and `first_steps` (per contact interval, the step size to start it with; 0: none yet), read
+    and written back, also where the run fails; `outputs` gets equations.outputs there."""
+    system = unpack_system(system_arrays[0], system_arrays[1])
+    status, steps = walk(system, mesh, settings, run, workspace, end, torques, max_steps)
+    place, state, loaded, outputs_at_end = run[1], run[2], run[3], run[5]
+    lengths, counts, tables = mesh
+    interval = place[0]
+    outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
+    return status.value, steps  # an int: numba hands an IntEnum member back at 0.8 µs a call
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
+    """advance's loop: steps, and segments ended at events, until the run's time is `end` or
+    the run fails. Returns (Status, accepted steps)."""
+    clock, state, loaded, first_steps = run[0], run[2], run[3], run[4]
+    vectors, values, counters = workspace[VECTORS], workspace[VALUES], workspace[COUNTERS]
+    rate, rate_after = vectors[Vector.RATE], vectors[Vector.RATE_AFTER]
+    new_state, last_stage = vectors[Vector.NEW_STATE], vectors[Vector.STAGES + dop853.N_STAGES]
+    stages, work, tolerance = (vectors[Vector.STAGES:], vectors[Vector.WORK],
+                               settings[Setting.ABSOLUTE_TOLERANCE:])
+    explicit = int(settings[Setting.METHOD]) == Method.EXPLICIT
+    debug = settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
+    begin_walk(workspace)
+    segment = begin_segment(system, mesh, run[1][0], state, loaded, torques, workspace)
+    points, steps, status, controller = segment.points, 0, Status.OK, (1e-4, False)
+    while clock[0] < end:
+        time, h = clock[0], clock[1]
+        # (Radau IIA's steps are not aimed: with them its error stopped falling with the step
+        # size in the order test, tests/test_integrator.py, and it steps to few events)
+        ahead = phase_event_ahead(system, state, rate, segment.length) if explicit else math.inf
+        plan = plan_step(settings, time, end, h, ahead)
+        h_step, landing = plan[0], plan[2]
+        status = step_allowed(steps, max_steps, time, plan)
+        if status != Status.OK:
+            break
+        if explicit:
+            error, iterations = dop853.step(
+                system, points, segment.point_count, loaded, torques[0], torques[1], state, rate,
+                h_step, tolerance, settings[Setting.RELATIVE_TOLERANCE], stages, work,
+                new_state), 0
+        else:
+            retry, error, iterations = implicit_step(system, segment, settings, state,
+                                                     workspace, h_step)
+            if retry:
+                continue
+        accepted, clock[1], controller = control_step(explicit, error, iterations, plan,
+                                                      controller)
+        if not accepted:
+            continue
+        steps += 1
+        counters[Counter.JACOBIAN_FRESH] = 0
+        if counters[Counter.OPENING] >= 0 and not (landing or plan[3]):
+            first_steps[counters[Counter.OPENING]] = clock[1]
+        counters[Counter.OPENING] = -1
+        event, high = crossed_event(system, segment, new_state, values), h_step
+        if explicit:  # its last stage is the rate at the step's end
+            rate_after[:] = last_stage
+        else:
+            derivative(system, points, segment.point_count, loaded, torques[0], torques[1],
+                       new_state, rate_after)
+        if system.contact_loss:
+            suspect = grazing_check(system, segment, new_state, rate_after, values, h_step)
+            if suspect > 0.0:
+                event, high = probe_inside(system, segment, settings, state, workspace, suspect,
+                                           h_step, event)
+        if event < 0:
+            if debug and contact_violated_inside(system, segment, settings, state, workspace,
+                                                 h_step):
+                clock[1], status = h, Status.CONTACT_VIOLATED
+                break
+            finish_step(state, workspace)
+            clock[0] = end if landing else time + h_step
+            counters[Counter.STALLED] = 0
+            continue
+        event, high, violated = locate_event(system, segment, settings, state, workspace,
+                                             event, high, h_step)
+        if violated:
+            clock[1], status = h, Status.CONTACT_VIOLATED
+            break
+        status = pass_event(state, workspace, clock, (time, end, h_step, clock[1], landing, high),
+                            event)
+        if status != Status.OK:
+            break
+        segment = end_segment(system, mesh, run, workspace, torques, event)
+        points = segment.points
+    if status == Status.OK and not all_finite(state):
+        status = Status.NOT_FINITE
+    return status, steps
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def begin_walk(workspace):
+    """The loop's memory at the start of a call of `advance`."""
+    counters = workspace[COUNTERS]
+    counters[:] = 0
+    counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
+    counters[Counter.LAST_PHASE_EVENT] = -1
+    workspace[MEMORY][Memory.FACTORED_H] = 0.0
