@@ -77,6 +77,23 @@ def test_no_module_level_import_cycles():
         visit(name)
 
 
+def _undocumented(tree, path, nested=False):
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            if not (node.name.startswith("_") or nested or ast.get_docstring(node)):
+                yield f"{path}:{node.lineno} {node.name}"
+            yield from _undocumented(node, path, nested or isinstance(node, ast.FunctionDef))
+
+
+def test_every_public_function_class_and_kernel_has_a_docstring():
+    """Module-level functions (the compiled kernels among them), classes and their methods;
+    not functions nested inside a function."""
+    missing = [entry for path in sorted(PACKAGE.rglob("*.py"))
+               for entry in _undocumented(ast.parse(path.read_text()),
+                                          path.relative_to(PACKAGE))]
+    assert not missing, "no docstring: " + ", ".join(missing)
+
+
 def test_the_fmu_runtime_guard_imports_no_numpy():
     """The slave imports herringbone.fmu.runtime before numpy, so that a missing dependency is
     named: importing it (and the packages' __init__.py on the way) must not import numpy."""

@@ -184,10 +184,14 @@ class Run:
 
     @property
     def time(self) -> float:
+        """The run's time, s."""
         return float(self.clock[0])
 
 
 class CompiledStepper:
+    """The FMU's integrator (the Stepper contract of integrate/contract.py): the compiled loop
+    of compiled/walk.py with DOP853 or Radau IIA inside, stopping on every contact switch."""
+
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "auto",
                  max_step: float = math.inf, event_time_tolerance: float | None = None,
                  check_contact: bool | None = None):

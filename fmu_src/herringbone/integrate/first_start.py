@@ -103,6 +103,7 @@ class _Announcer(event.Listener):
         self.say, self.depth, self.started, self.kernel_started = say, 0, None, None
 
     def on_start(self, ev):
+        """numba begins to compile a kernel: the first of this package's announces it."""
         self.depth += 1
         dispatcher = ev.data["dispatcher"]
         if self.depth > 1 or not dispatcher.py_func.__module__.startswith(_COMPILED):
@@ -116,6 +117,7 @@ class _Announcer(event.Listener):
                      f"{cache.kernels_folder()}")
 
     def on_end(self, ev):
+        """numba is done with a kernel: record its time; the loop's end is announced."""
         self.depth -= 1
         kernel = ev.data["dispatcher"].py_func.__name__
         if self.depth > 0 or self.kernel_started is None:
