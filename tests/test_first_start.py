@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import MODELS
 
 import herringbone
 from herringbone.integrate import first_start
@@ -46,6 +47,30 @@ def test_a_built_fmu_starts_on_an_empty_cache_in_seconds(scene_fmu, tmp_path):
     # the carried code now sits in the user's cache, for every later start
     kernels = list(Path(environment["HERRINGBONE_CACHE_DIR"]).glob("kernels-*/walk.advance-*.nbi"))
     assert len(kernels) == 1
+
+
+# Loads or compiles the integrator for a scene (argv[1]) as its FMU would, in a fresh cache, and
+# prints the kernels numba compiled there.
+COMPILE_FOR_SCENE = """
+import sys
+from herringbone.integrate import first_start
+from herringbone.integrate.compiled import cache
+first_start.compile_for_scene(sys.argv[1], say=lambda message: None)
+print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder().glob("*.nbi"))))
+"""
+
+
+def test_a_scene_compiles_the_code_of_its_own_method_only(tmp_path):
+    """The reference scene runs DOP853 (as "auto" picks): no kernel of Radau IIA is compiled,
+    which shortens a cold compile by a quarter (README, First start)."""
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
+    run = subprocess.run([sys.executable, "-c", COMPILE_FOR_SCENE,
+                          str(MODELS / "reference.toml")],
+                         env=environment, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    compiled = run.stdout.split()
+    assert "walk.advance" in compiled and "dop853.step" in compiled
+    assert not [name for name in compiled if name.startswith("radau.") or "radau" in name]
 
 
 PROBE = """

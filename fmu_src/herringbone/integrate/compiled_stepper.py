@@ -226,7 +226,7 @@ class CompiledStepper:
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.mesh = (self.lengths, self.counts, self.tables)  # as walk.advance takes them
         self.system_arrays = pack_system(model.system)
-        self.settings = walk.pack_settings(self.method_code, self.step_tolerance, self.max_step,
+        self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
                                            self.event_time_tolerance, self.contact_slack,
                                            self.absolute_tolerance)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
@@ -245,7 +245,8 @@ class CompiledStepper:
         return Run(np.array([position.time, h]),
                    np.array([contact_set.index, contact_set.cycle], dtype=np.int64),
                    position.state.copy(), loaded, first_steps, outputs,
-                   walk.allocate_workspace(len(position.state), self.tables.shape[2]))
+                   walk.allocate_workspace(self.method_code, len(position.state),
+                                           self.tables.shape[2]))
 
     def position(self, run: Run) -> Position:
         """A snapshot of the run: its own copies, unchanged by the run going on."""

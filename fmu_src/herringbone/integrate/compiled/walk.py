@@ -61,7 +61,8 @@ from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from . import dop853, radau
 from .equations import approach_rates, approaches, derivative, outputs, unpack_system
@@ -95,14 +96,14 @@ class Method(IntEnum):
 
 
 class Setting(IntEnum):
-    """Entries of the settings record (`pack_settings`), one float array per stepper."""
+    """Entries of the settings record (`pack_settings`), one float array per stepper. (The
+    method is not among them: it is the workspace's, see allocate_workspace.)"""
 
-    METHOD = 0  # a Method
-    RELATIVE_TOLERANCE = 1
-    MAX_STEP = 2  # s
-    EVENT_TIME_TOLERANCE = 3  # s: how far past its crossing a segment may end
-    CONTACT_SLACK = 4  # m; >= 0 turns the debug contact check on, < 0 leaves it off
-    ABSOLUTE_TOLERANCE = 5  # from here to the end: per state entry, in the entry's units
+    RELATIVE_TOLERANCE = 0
+    MAX_STEP = 1  # s
+    EVENT_TIME_TOLERANCE = 2  # s: how far past its crossing a segment may end
+    CONTACT_SLACK = 3  # m; >= 0 turns the debug contact check on, < 0 leaves it off
+    ABSOLUTE_TOLERANCE = 4  # from here to the end: per state entry, in the entry's units
 
 
 class Vector(IntEnum):
@@ -161,7 +162,8 @@ class Memory(IntEnum):
     FACTORED_H = 0  # s: the step size Radau IIA's LU factors belong to; 0: none
 
 
-# Workspace: the tuple allocate_workspace returns, in this order
+# Workspace: the tuple allocate_workspace returns, in this order (MATRICES, COMPLEX_FACTORS and
+# PIVOTS are Radau IIA's: None in DOP853's)
 VECTORS, VALUES, MATRICES, COMPLEX_FACTORS, PIVOTS, COUNTERS, MEMORY = range(7)
 JACOBIAN, REAL_FACTORS = 0, 1  # of MATRICES; PIVOTS: the real factors' row, the complex ones'
 
@@ -200,12 +202,10 @@ PREDICTION_FLOOR = 1e-3
 
 # --- the records ------------------------------------------------------------------------------
 
-def pack_settings(method: Method, relative_tolerance: float, max_step: float,
-                  event_time_tolerance: float, contact_slack: float,
-                  absolute_tolerance: np.ndarray) -> np.ndarray:
+def pack_settings(relative_tolerance: float, max_step: float, event_time_tolerance: float,
+                  contact_slack: float, absolute_tolerance: np.ndarray) -> np.ndarray:
     """The settings record `advance` takes: the entries laid out by Setting."""
     settings = np.empty(Setting.ABSOLUTE_TOLERANCE + len(absolute_tolerance))
-    settings[Setting.METHOD] = method
     settings[Setting.RELATIVE_TOLERANCE] = relative_tolerance
     settings[Setting.MAX_STEP] = max_step
     settings[Setting.EVENT_TIME_TOLERANCE] = event_time_tolerance
@@ -214,20 +214,37 @@ def pack_settings(method: Method, relative_tolerance: float, max_step: float,
     return settings
 
 
-def allocate_workspace(size: int, max_points: int) -> tuple[np.ndarray, ...]:
-    """The scratch arrays of a run with `size` state entries and sets of up to `max_points`
-    points, allocated once per run (CompiledStepper.start) and reused by every call of
-    `advance`, whose results do not depend on what they held: in the order VECTORS (rows by
-    Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors of Radau
-    IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex factors),
-    COUNTERS (by Counter), MEMORY (by Memory)."""
+def allocate_workspace(method: Method, size: int, max_points: int) -> tuple:
+    """The scratch arrays of a run of `method` with `size` state entries and sets of up to
+    `max_points` points, allocated once per run (CompiledStepper.start) and reused by every
+    call of `advance`, whose results do not depend on what they held: in the order VECTORS
+    (rows by Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors
+    of Radau IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex
+    factors), COUNTERS (by Counter), MEMORY (by Memory); for DOP853 the three of Radau IIA are
+    None.
+
+    The method is so a matter of the workspace's type, which numba compiles `advance` for:
+    the code of the other method is never compiled (`implicit_step`,
+    `implicit_trial_step`)."""
+    implicit = method == Method.IMPLICIT
     return (np.zeros((Vector.STAGES + dop853.STAGE_ROWS, size)),
             np.zeros((len(Values), Event.CONTACT + max_points)),
-            np.zeros((2, size, size)),
-            np.zeros((size, size), dtype=np.complex128),
-            np.zeros((2, size), dtype=np.int64),
+            np.zeros((2, size, size)) if implicit else None,
+            np.zeros((size, size), dtype=np.complex128) if implicit else None,
+            np.zeros((2, size), dtype=np.int64) if implicit else None,
             np.zeros(len(Counter), dtype=np.int64),
             np.zeros(len(Memory)))
+
+
+def is_explicit(workspace):
+    """Whether the workspace is DOP853's (a constant in compiled code)."""
+    return workspace[MATRICES] is None
+
+
+@overload(is_explicit, inline="always")
+def _is_explicit(workspace):
+    explicit = isinstance(workspace[MATRICES], types.NoneType)
+    return lambda workspace: explicit
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -330,22 +347,39 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     """A step of size h (s) from `state` (its rate in the workspace's RATE row) to `out`, taken
     only to look where an event lies: its error is not checked (it is shorter than a step
     already accepted). Radau IIA factorizes for h (and says so in the workspace's memory)."""
-    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
-    tolerance = settings[Setting.ABSOLUTE_TOLERANCE:]
-    if int(settings[Setting.METHOD]) == Method.EXPLICIT:
+    vectors = workspace[VECTORS]
+    if is_explicit(workspace):
         dop853.step(system, segment.points, segment.point_count, segment.loaded,
                     segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
-                    tolerance, settings[Setting.RELATIVE_TOLERANCE],
+                    settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
                     vectors[Vector.STAGES:], vectors[Vector.WORK], out)
     else:
-        workspace[MEMORY][Memory.FACTORED_H] = h
-        radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
-                        workspace[COMPLEX_FACTORS], pivots[1])
-        radau.step(system, segment.points, segment.point_count, segment.loaded,
-                   segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
-                   tolerance, settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS],
-                   pivots[0], workspace[COMPLEX_FACTORS], pivots[1], vectors[Vector.STAGES:],
-                   out)
+        implicit_trial_step(system, segment, settings, state, workspace, h, out)
+
+
+def implicit_trial_step(system, segment, settings, state, workspace, h, out):
+    """trial_step's step of Radau IIA where the workspace is its; never called (and nothing
+    compiled) where the workspace is DOP853's."""
+
+
+@overload(implicit_trial_step)
+def _implicit_trial_step(system, segment, settings, state, workspace, h, out):
+    if isinstance(workspace[MATRICES], types.NoneType):
+        return lambda system, segment, settings, state, workspace, h, out: None
+    return radau_trial_step
+
+
+def radau_trial_step(system, segment, settings, state, workspace, h, out):
+    """A step of Radau IIA of size h (s) from `state` to `out`, its LU factors made for h."""
+    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
+    workspace[MEMORY][Memory.FACTORED_H] = h
+    radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
+                    workspace[COMPLEX_FACTORS], pivots[1])
+    radau.step(system, segment.points, segment.point_count, segment.loaded,
+               segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+               settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
+               matrices[REAL_FACTORS], pivots[0], workspace[COMPLEX_FACTORS], pivots[1],
+               vectors[Vector.STAGES:], out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -493,8 +527,21 @@ def step_allowed(steps, max_steps, time, plan):
     return Status.OK
 
 
-@njit(cache=True, error_model="numpy")
 def implicit_step(system, segment, settings, state, workspace, h):
+    """`radau_step` where the workspace is Radau IIA's; never called (and nothing compiled)
+    where it is DOP853's, whose loop takes the explicit branch."""
+
+
+@overload(implicit_step)
+def _implicit_step(system, segment, settings, state, workspace, h):
+    # radau_step itself, compiled as a call of its own (a wrapper that called it would count
+    # every array it passes on: 5 % of a Radau IIA step)
+    if isinstance(workspace[MATRICES], types.NoneType):
+        return lambda system, segment, settings, state, workspace, h: (False, math.inf, 0)
+    return radau_step
+
+
+def radau_step(system, segment, settings, state, workspace, h):
     """One step of Radau IIA of size h (s) from `state` to NEW_STATE, with the Jacobian of the
     segment (made at its first step) and LU factors for h (kept while h stays), as the
     workspace's counters and memory record them. Returns (retry: Newton failed on an old
@@ -502,6 +549,7 @@ def implicit_step(system, segment, settings, state, workspace, h):
     Newton did not converge; Newton iterations)."""
     vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
     counters, memory = workspace[COUNTERS], workspace[MEMORY]
+    complex_factors = workspace[COMPLEX_FACTORS]
     rate, tolerance = vectors[Vector.RATE], settings[Setting.ABSOLUTE_TOLERANCE:]
     points, count, loaded = segment.points, segment.point_count, segment.loaded
     torques = segment.motor_torque, segment.load_torque
@@ -514,13 +562,12 @@ def implicit_step(system, segment, settings, state, workspace, h):
         memory[Memory.FACTORED_H] = 0.0
     if h != memory[Memory.FACTORED_H]:
         radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
-                        workspace[COMPLEX_FACTORS], pivots[1])
+                        complex_factors, pivots[1])
         memory[Memory.FACTORED_H] = h
     error, iterations = radau.step(
         system, points, count, loaded, torques[0], torques[1], state, rate, h, tolerance,
         settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS], pivots[0],
-        workspace[COMPLEX_FACTORS], pivots[1], vectors[Vector.STAGES:],
-        vectors[Vector.NEW_STATE])
+        complex_factors, pivots[1], vectors[Vector.STAGES:], vectors[Vector.NEW_STATE])
     if math.isinf(error) and counters[Counter.JACOBIAN_FRESH] == 0:
         counters[Counter.JACOBIAN_SEGMENT] = -1  # Newton failed on an old Jacobian: refresh it
         return True, error, iterations
@@ -822,7 +869,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
     new_state, last_stage = vectors[Vector.NEW_STATE], vectors[Vector.STAGES + dop853.N_STAGES]
     stages, work, tolerance = (vectors[Vector.STAGES:], vectors[Vector.WORK],
                                settings[Setting.ABSOLUTE_TOLERANCE:])
-    explicit = int(settings[Setting.METHOD]) == Method.EXPLICIT
+    explicit = is_explicit(workspace)
     debug = settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
     begin_walk(workspace)
     segment = begin_segment(system, mesh, run[1][0], state, loaded, torques, workspace)
