@@ -371,15 +371,31 @@ def _implicit_trial_step(system, segment, settings, state, workspace, h, out):
 
 def radau_trial_step(system, segment, settings, state, workspace, h, out):
     """A step of Radau IIA of size h (s) from `state` to `out`, its LU factors made for h."""
-    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
-    workspace[MEMORY][Memory.FACTORED_H] = h
+    factorize_for(workspace, h)
+    factored_step(system, segment, settings, state, workspace, h, out)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def factorize_for(workspace, h):
+    """Radau IIA's LU factors of the workspace's Jacobian for a step of h (s), and the record
+    of the step size they belong to."""
+    matrices, pivots = workspace[MATRICES], workspace[PIVOTS]
     radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
                     workspace[COMPLEX_FACTORS], pivots[1])
-    radau.step(system, segment.points, segment.point_count, segment.loaded,
-               segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
-               settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
-               matrices[REAL_FACTORS], pivots[0], workspace[COMPLEX_FACTORS], pivots[1],
-               vectors[Vector.STAGES:], out)
+    workspace[MEMORY][Memory.FACTORED_H] = h
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def factored_step(system, segment, settings, state, workspace, h, out):
+    """Radau IIA's step of size h (s) from `state` (its rate in the RATE row) to `out`, on the
+    factors made for h. Returns (the error norm, inf where Newton did not converge; Newton
+    iterations)."""
+    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
+    return radau.step(system, segment.points, segment.point_count, segment.loaded,
+                      segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+                      settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
+                      matrices[REAL_FACTORS], pivots[0], workspace[COMPLEX_FACTORS], pivots[1],
+                      vectors[Vector.STAGES:], out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -547,27 +563,19 @@ def radau_step(system, segment, settings, state, workspace, h):
     workspace's counters and memory record them. Returns (retry: Newton failed on an old
     Jacobian, which is dropped, and the step is to be tried again; the error norm, inf where
     Newton did not converge; Newton iterations)."""
-    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
-    counters, memory = workspace[COUNTERS], workspace[MEMORY]
-    complex_factors = workspace[COMPLEX_FACTORS]
-    rate, tolerance = vectors[Vector.RATE], settings[Setting.ABSOLUTE_TOLERANCE:]
-    points, count, loaded = segment.points, segment.point_count, segment.loaded
-    torques = segment.motor_torque, segment.load_torque
+    vectors, counters, memory = workspace[VECTORS], workspace[COUNTERS], workspace[MEMORY]
     if counters[Counter.JACOBIAN_SEGMENT] != counters[Counter.SEGMENT]:
-        radau.jacobian_of(system, points, count, loaded, torques[0], torques[1], state, rate,
-                          tolerance, matrices[JACOBIAN], vectors[Vector.TRIAL],
-                          vectors[Vector.WORK])
+        radau.jacobian_of(system, segment.points, segment.point_count, segment.loaded,
+                          segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE],
+                          settings[Setting.ABSOLUTE_TOLERANCE:], workspace[MATRICES][JACOBIAN],
+                          vectors[Vector.TRIAL], vectors[Vector.WORK])
         counters[Counter.JACOBIAN_SEGMENT] = counters[Counter.SEGMENT]
         counters[Counter.JACOBIAN_FRESH] = 1
         memory[Memory.FACTORED_H] = 0.0
     if h != memory[Memory.FACTORED_H]:
-        radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
-                        complex_factors, pivots[1])
-        memory[Memory.FACTORED_H] = h
-    error, iterations = radau.step(
-        system, points, count, loaded, torques[0], torques[1], state, rate, h, tolerance,
-        settings[Setting.RELATIVE_TOLERANCE], matrices[REAL_FACTORS], pivots[0],
-        complex_factors, pivots[1], vectors[Vector.STAGES:], vectors[Vector.NEW_STATE])
+        factorize_for(workspace, h)
+    error, iterations = factored_step(system, segment, settings, state, workspace, h,
+                                      vectors[Vector.NEW_STATE])
     if math.isinf(error) and counters[Counter.JACOBIAN_FRESH] == 0:
         counters[Counter.JACOBIAN_SEGMENT] = -1  # Newton failed on an old Jacobian: refresh it
         return True, error, iterations
