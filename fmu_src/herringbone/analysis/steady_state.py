@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..arguments import check_scene
+from ..integrate.compiled import equations
 from ..integrate.compiled_stepper import CompiledStepper
 from ..integrate.contract import IntegrationError, Position, start_position
 from ..integrate.segments import begin
@@ -104,6 +105,25 @@ def check_balanced(scene) -> tuple[float, float]:
     return motor, load
 
 
+def unknown_scales(model: GearTrainModel) -> np.ndarray:
+    """For each state entry, the change that moves its generalized elastic force by the
+    static mesh force's share in that coordinate: F·Rp on the motor and pinion angles, F·Rw on
+    the wheel and load angles, F on displacements, F times the widest lever arm on tilts,
+    divided by the coordinate's mean stiffness; a rate by its ω_i = √(K_ii/M_ii) times that.
+    (model.state_scales takes F itself on every coordinate: on the soft motor shaft a unit
+    would wind it up 40 times its static torque, which makes the map strongly nonlinear per
+    unit there.)"""
+    force = model.force_scale()
+    g = model.geometry
+    lever = float(np.abs(model.mesh.period_table()[2][:, equations.LEVER_ARM0]).max())
+    levers = {"phi_motor": g.radius_pinion, "phi_pinion": g.radius_pinion,
+              "phi_wheel": g.radius_wheel, "phi_load": g.radius_wheel,
+              "psi_pinion": lever, "psi_wheel": lever, "x_pinion": 1.0, "x_wheel": 1.0}
+    stiffness = np.diag(model.mean_stiffness_matrix())
+    deflection = force * np.array([levers[c] for c in model.coordinates]) / stiffness
+    return np.concatenate([deflection, deflection * np.sqrt(stiffness / model.mass)])
+
+
 class PeriodMap:
     """z -> z(T) on the section, and its derivatives, for one scene (any speed)."""
 
@@ -118,7 +138,7 @@ class PeriodMap:
         self.pinion = model.pinion
         self.free = np.array([i for i in range(n) if i != model.pinion])
         self.unknown_entries = np.concatenate([self.free, n + self.free])
-        self.scales = model.state_scales()[self.unknown_entries]
+        self.scales = unknown_scales(model)[self.unknown_entries]
         weights = model.mass * model.rigid_rotation
         self.rigid_inertia = float(weights @ model.rigid_rotation)  # R
         self.momentum_weights = weights[self.free] / self.rigid_inertia  # M_i·r_i/R, i ≠ p
@@ -233,6 +253,7 @@ class PeriodMap:
             for name, value in outputs.items():
                 window[name].append(value)
 
+        self.evaluations += 1
         self.stepper.advance(self.start(state), period, self.torques, times, record)
         if len(window["F_mesh"]) != count:  # a sample time at T rounds to the period's end
             raise IntegrationError("orbit samples lost to rounding")
