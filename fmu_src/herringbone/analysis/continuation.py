@@ -256,7 +256,10 @@ class SpeedContinuation:
     def near_fold(self) -> bool:
         """A real multiplier of the last orbit within FOLD_PROXIMITY of +1: ∂G/∂z is nearly
         singular, and a step at fixed speed may find no solution (or jump across a fold)."""
-        values = self.points[-1].orbit.multipliers
+        orbit = self.points[-1].orbit
+        if orbit is None:
+            return True
+        values = orbit.multipliers
         real = np.abs(values.imag) <= 1e-9 * np.abs(values)
         return bool(np.any(real & (np.abs(values - 1.0) < FOLD_PROXIMITY)))
 
