@@ -44,10 +44,11 @@ from .steady_state import (
 
 AMPLITUDE_UNIT = 1.0  # Z: fraction of the static mesh force that one unit of step moves z
 ALONG_SPEED = 0.3  # |t_ω| above which a step may land on a requested speed
-CORRECTOR_ITERATIONS = 8
+CORRECTOR_ITERATIONS = 6
 REUSE_DISTANCE = 1e-2  # see SpeedContinuation.accept
 FOLD_PROXIMITY = 0.05  # see SpeedContinuation.near_fold
-REFRESHES = 2  # fresh Jacobians a corrector may take where the chord contracts slowly
+CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's step
+REFRESHES = 1  # fresh Jacobians a corrector may take where the chord contracts slowly
 SMALLEST_STEP = 1e-3
 LARGEST_STEP = 3.0  # three spacings of the requested speeds
 MOST_POINTS_PER_SPEED = 8  # the continuation gives up past this many points per requested speed
@@ -178,6 +179,8 @@ class SpeedContinuation:
                     return None
                 if np.abs(new_r).max() <= self.newton_tolerance:
                     return v, base, iteration, fresh
+                if np.abs(new_r).max() > np.abs(r).max() and refreshes == REFRESHES:
+                    return None  # diverging with a fresh Jacobian
                 if np.abs(new_r).max() > 0.5 * np.abs(r).max() and refreshes < REFRESHES:
                     refreshes += 1
                     fresh = (v.copy(), *self.full_jacobian(v, base))
@@ -293,6 +296,9 @@ class SpeedContinuation:
                 step, constraint = self.step, self.tangent
                 predicted = self.v + step * self.tangent
             solved = self.correct(predicted, constraint)
+            if solved is not None and (np.linalg.norm(solved[0] - predicted)
+                                       > CORRECTION_FRACTION * np.linalg.norm(predicted - self.v)):
+                solved = None  # the corrector went far: it may have landed on another branch
             if solved is None:
                 if natural:
                     natural = False

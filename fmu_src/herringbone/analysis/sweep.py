@@ -115,6 +115,30 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **op
     return run_sweep(scene, speeds, params, protocol, **options)[0]
 
 
+def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = False):
+    """A speed sweep by time integration in the order of `speeds` (rad/s), each point started
+    from the end state of the point before (the first from the static start), its rigid speed
+    moved to the point's: what a test rig sees when the speed is raised or lowered slowly,
+    which stays on one branch of a multi-valued response until that branch ends at a fold.
+    A table as `sweep`'s (method "time"), one row a speed, in the order given."""
+    import pandas as pd
+    from tqdm import tqdm
+
+    from ..model.assembly import GearTrainModel
+    from .sweep_point import at_speed, run_window_from
+
+    values = np.atleast_1d(np.asarray(speeds, dtype=float))
+    sweep_axes(scene, speeds=values)
+    rows, end = [], None
+    for speed in tqdm(values, unit="point", desc="time sweep", disable=not progress):
+        at = scene.with_parameters(w0_pinion=float(speed))
+        start = None if end is None else at_speed(GearTrainModel(at), end, float(speed))
+        window, end = run_window_from(at, protocol, start)
+        rows.append({SPEED: float(speed), **point_row(at, window, protocol),
+                     "stability": "time", "method": "time"})
+    return pd.DataFrame(rows)
+
+
 def resonation_summary(table) -> str:
     """Where the largest K_v of a table lies, as 'name = value, …'."""
     row = table.loc[table["K_v"].idxmax()]
