@@ -124,15 +124,17 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
     import pandas as pd
     from tqdm import tqdm
 
+    from ..integrate.contract import Position
     from ..model.assembly import GearTrainModel
     from .sweep_point import at_speed, run_window_from
 
     values = np.atleast_1d(np.asarray(speeds, dtype=float))
     sweep_axes(scene, speeds=values)
-    rows, end = [], None
+    rows: list[dict] = []
+    end = None
     for speed in tqdm(values, unit="point", desc="time sweep", disable=not progress):
         at = scene.with_parameters(w0_pinion=float(speed))
-        start = None if end is None else at_speed(GearTrainModel(at), end, float(speed))
+        start: Position | None = None if end is None else at_speed(GearTrainModel(at), end, float(speed))
         window, end = run_window_from(at, protocol, start)
         rows.append({SPEED: float(speed), **point_row(at, window, protocol),
                      "stability": "time", "method": "time"})
