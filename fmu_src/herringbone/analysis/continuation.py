@@ -48,10 +48,12 @@ CORRECTOR_ITERATIONS = 6
 REUSE_DISTANCE = 1e-2  # see SpeedContinuation.accept
 FOLD_PROXIMITY = 0.05  # see SpeedContinuation.near_fold
 CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's step
+NATURAL_HALVINGS = 5  # see SpeedContinuation.advance
 REFRESHES = 1  # fresh Jacobians a corrector may take where the chord contracts slowly
 SMALLEST_STEP = 1e-3
 LARGEST_STEP = 3.0  # three spacings of the requested speeds
-MOST_POINTS_PER_SPEED = 8  # the continuation gives up past this many points per requested speed
+MOST_POINTS = 2000  # the continuation gives up past this many points, and past
+MOST_POINTS_PER_SPEED = 8  # this many per requested speed where that is more
 
 
 @dataclass
@@ -281,28 +283,38 @@ class SpeedContinuation:
         return np.append(z, speed)
 
     def advance(self) -> bool:
-        """One step along the branch: to the next requested speed at fixed speed where the
-        branch is not near a fold, else a pseudo-arclength step (shrinking it until the
-        corrector converges); False where it cannot go on with steps down to SMALLEST_STEP."""
+        """One step along the branch. Away from folds, at fixed speed: to the next requested
+        speed, or where that fails to halfway there (an intermediate point), down to
+        1/2^NATURAL_HALVINGS of the way; near a fold or past that, a pseudo-arclength step
+        (halved until the corrector converges). False where it cannot go on with steps down
+        to SMALLEST_STEP."""
         target = self.target()
         natural = target is not None and not self.near_fold()
+        goal = None if target is None else target / self.speed_unit
+        halvings = 0
         while self.step >= SMALLEST_STEP:
             if natural:
-                step = (target / self.speed_unit - self.v[-1]) / self.tangent[-1]
                 constraint = np.zeros(self.size + 1)
                 constraint[-1] = 1.0
-                predicted = self.along_speed(target / self.speed_unit)
+                predicted = self.along_speed(goal)
             else:
                 step, constraint = self.step, self.tangent
+                if goal is not None:  # stop short of the next requested speed, not past it
+                    landing = (goal - self.v[-1]) / self.tangent[-1]
+                    if 0.0 < landing:
+                        step = min(step, 0.9 * landing)
                 predicted = self.v + step * self.tangent
             solved = self.correct(predicted, constraint)
             if solved is not None and (np.linalg.norm(solved[0] - predicted)
                                        > CORRECTION_FRACTION * np.linalg.norm(predicted - self.v)):
                 solved = None  # the corrector went far: it may have landed on another branch
             if solved is None:
-                if natural:
+                if natural and halvings < NATURAL_HALVINGS:
+                    halvings += 1
+                    goal = 0.5 * (goal + self.v[-1])
+                elif natural:
                     natural = False
-                    self.step = min(self.step, 0.5 * abs(step))
+                    self.step = min(self.step, abs(goal - self.v[-1]))
                 else:
                     self.step *= 0.5
                 continue
@@ -313,7 +325,7 @@ class SpeedContinuation:
                 heading = np.zeros(self.size + 1)
                 heading[-1] = np.sign(self.tangent[-1])
             v, base, iterations, fresh = solved
-            self.accept(v, base, iterations, fresh, natural, heading)
+            self.accept(v, base, iterations, fresh, natural and halvings == 0, heading)
             self.step = min(self.step * (1.5 if iterations <= 2 else
                                          0.6 if iterations >= 5 else 1.0), LARGEST_STEP)
             return True
@@ -335,7 +347,7 @@ def continue_in_speed(scene, speeds, tolerance=SHOOTING_TOLERANCE,
     check_scene(scene)
     grid = np.sort(check_speeds(speeds))
     run = SpeedContinuation(scene, grid, tolerance, newton_tolerance, protocol)
-    most = MOST_POINTS_PER_SPEED * len(grid)
+    most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
     with tqdm(total=len(grid), unit="speed", desc="continuation", disable=not progress,
               smoothing=0.0) as bar:
         def moved():

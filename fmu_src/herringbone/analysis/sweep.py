@@ -110,9 +110,68 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     return table, [series for _, series in results]
 
 
-def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **options):
-    """The table of `run_sweep` alone; `options`: workers, scheduler, fmu, progress."""
-    return run_sweep(scene, speeds, params, protocol, **options)[0]
+METHODS = ("shooting", "time")
+
+
+def shooting_applies(scene, speeds, params, fmu) -> str | None:
+    """Why the periodic steady state cannot be computed directly for this sweep, or None: it
+    needs a sweep of speeds alone, run by the package (not through an FMU), at constant
+    torques that balance."""
+    from .steady_state import ShootingError, check_balanced
+
+    if speeds is None or params:
+        return "it sweeps other quantities than the speed (--param)"
+    if fmu is not None:
+        return "it runs through an FMU"
+    try:
+        check_balanced(scene)
+    except ShootingError as error:
+        return str(error)
+    return None
+
+
+def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), method=None,
+          **options):
+    """The sweep's table (pandas DataFrame).
+
+    method "shooting" (the default where it applies: a speed sweep at balanced constant
+    torques, not through an FMU): the branch of periodic steady states by continuation
+    (continuation.continue_in_speed), a row a point in branch order: a row at each requested
+    speed the branch passes (several where it folds back) and the points between that passing
+    a fold took; columns as the time table's figures plus floquet_exponent_per_s, stability
+    ("stable", "unstable", or "time" where no orbit converged and the point was run by time
+    integration), method, on_grid, event ("fold", "period doubling", "torus"). The protocol
+    serves the time-integration fallback. method "time": `run_sweep`'s table (the protocol of
+    sweep_point, each point from its static start), with method = stability = "time".
+    `options`: workers, scheduler, fmu, progress (workers and scheduler: time only)."""
+    if method not in (None, *METHODS):
+        raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
+    why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
+    if method == "shooting" and why_not:
+        raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
+                         "allowed: method='time'")
+    if method == "time" or why_not:
+        table = run_sweep(scene, speeds, params, protocol, **options)[0]
+        return table.assign(stability="time", method="time")
+    return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True))
+
+
+def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True):
+    """The branch table of `sweep`'s method "shooting" (each row's static force and mesh
+    frequency added, as the time table has them)."""
+    import math
+
+    from .continuation import continue_in_speed
+    from .sweep_point import static_mesh_force
+
+    checked = sweep_axes(scene, speeds=speeds)[SPEED]
+    branch = continue_in_speed(scene, checked, protocol=protocol, progress=progress)
+    table = branch.table()
+    table.insert(2, "mesh_frequency_Hz",
+                 table[SPEED] * scene.parameters["z_pinion"] / (2.0 * math.pi))
+    table.insert(3, "static_mesh_force_N", static_mesh_force(scene))
+    table.attrs["folds"] = list(branch.folds)
+    return table
 
 
 def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = False):
@@ -134,7 +193,8 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
     end = None
     for speed in tqdm(values, unit="point", desc="time sweep", disable=not progress):
         at = scene.with_parameters(w0_pinion=float(speed))
-        start: Position | None = None if end is None else at_speed(GearTrainModel(at), end, float(speed))
+        start: Position | None = (None if end is None
+                                  else at_speed(GearTrainModel(at), end, float(speed)))
         window, end = run_window_from(at, protocol, start)
         rows.append({SPEED: float(speed), **point_row(at, window, protocol),
                      "stability": "time", "method": "time"})
