@@ -43,7 +43,7 @@ from ..arguments import check_scene
 from ..integrate.compiled import equations
 from ..integrate.compiled_stepper import CompiledStepper
 from ..integrate.contract import IntegrationError, Position, start_position
-from ..integrate.segments import begin
+from ..integrate.segments import Segment, begin, contact_band, point_approaches
 from ..model.assembly import GearTrainModel
 from .sweep_point import static_mesh_force, window_figures
 
@@ -146,6 +146,8 @@ class PeriodMap:
         self.section_phase = 0.5 * self.section_set.length
         self.pitch = model.geometry.angular_pitch
         self.evaluations = 0  # period integrations done, for benchmarks
+        self.contact_band = contact_band(model)
+        self.run = self.stepper.start(start_position(model, self.torques[0]))
 
     # --- coordinates --------------------------------------------------------------------
 
@@ -181,19 +183,41 @@ class PeriodMap:
 
     # --- the map ------------------------------------------------------------------------
 
+    def loaded(self, state: np.ndarray) -> np.ndarray:
+        """Which points of the section's set carry load at a state on it: segments.begin's
+        rule, its approaches by the compiled equations; a point within the contact band is
+        left to begin itself (its approach rate decides)."""
+        model = self.model
+        if not model.contact_loss:
+            return np.ones(len(self.section_set))
+        approach = point_approaches(model, self.section_set, state)
+        if np.any(np.abs(approach) <= self.contact_band):
+            return begin(model, self.section_set, state.copy(), self.torques).loaded
+        return (approach > 0.0).astype(float)
+
     def start(self, state: np.ndarray) -> Position:
         """A position at time 0 on the section (points loaded by their approach)."""
-        return Position(0.0, state, begin(self.model, self.section_set, state.copy(),
-                                          self.torques))
+        return Position(0.0, state, Segment(self.section_set, self.loaded(state)))
 
     def flow(self, state: np.ndarray, speed: float) -> tuple[np.ndarray, float]:
         """The state after T, re-expressed on the section's interval k periods on, and the
-        offset of its φp from the section (rad; 0 on a periodic orbit)."""
+        offset of its φp from the section (rad; 0 on a periodic orbit). The period runs on
+        one Run of the compiled integrator, reset in place to the same start each time (no
+        step-size memory carried from one period integration to the next: the map depends on
+        the state alone, as differences of it need)."""
         self.evaluations += 1
-        end = self.stepper.advance(self.start(state), self.period(speed), self.torques)
+        run, stepper = self.run, self.stepper
+        run.clock[0], run.clock[1] = 0.0, stepper.first_step
+        run.place[0], run.place[1] = self.section_set.index, self.section_set.cycle
+        run.state[:] = state
+        run.loaded[:] = 0.0
+        run.loaded[:len(self.section_set)] = self.loaded(state)
+        run.first_steps[:] = 0.0
+        stepper.run_to(run, self.period(speed), self.torques)
+        end_set = self.model.mesh.contact_set(int(run.place[1]), int(run.place[0]))
         target = self.model.mesh.interval_start(self.mesh_periods, 0) + self.section_phase
-        offset = end.segment.contact_set.pinion_angle + end.state[self.pinion] - target
-        return end.state, float(offset)
+        offset = end_set.pinion_angle + run.state[self.pinion] - target
+        return run.state.copy(), float(offset)
 
     def residual(self, unknowns: np.ndarray, speed: float):
         """G = z(T) − z (scaled), the end state and its φp offset."""
