@@ -45,7 +45,7 @@ from .steady_state import (
 AMPLITUDE_UNIT = 1.0  # Z: fraction of the static mesh force that one unit of step moves z
 ALONG_SPEED = 0.3  # |t_ω| above which a step may land on a requested speed
 CORRECTOR_ITERATIONS = 6
-REUSE_DISTANCE = 1e-2  # see SpeedContinuation.accept
+REUSE_DISTANCE = 3e-2  # see SpeedContinuation.accept
 FOLD_PROXIMITY = 0.05  # see SpeedContinuation.near_fold
 CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's step
 NATURAL_HALVINGS = 5  # see SpeedContinuation.advance
