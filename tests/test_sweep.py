@@ -282,3 +282,35 @@ def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
                      "--output-interval", "2e-5", "--plot", "-o", str(csv)]) == 0
     for name in ("run_time.png", "run_spectrum.png"):
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
+    """A branch table: stable stretches solid, unstable dashed (each stretch joined to the next
+    point), folds crossed, time sweeps as triangles; the picture is written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis.sweep_plots import draw_branch, plot_resonance_curve
+
+    table = pd.DataFrame({"w0_pinion": [1.0, 2.0, 3.0, 2.5, 2.0, 3.0],
+                          "K_v": [1.0, 1.2, 1.5, 1.8, 2.0, 1.9],
+                          "dte_p2p_um": [1.0, 2.0, 3.0, 4.0, 5.0, 4.5],
+                          "stability": ["stable", "stable", "unstable", "unstable", "stable",
+                                        "stable"],
+                          "event": ["", "", "fold", "", "fold", ""]})
+    table["speed_rpm"] = table["w0_pinion"] * 30 / math.pi
+    figure, axes = plt.subplots(2, 1)
+    draw_branch(axes, table, [("K_v", "k"), ("dte_p2p_um", "C2")])
+    lines = {line.get_label(): line for line in axes[0].get_lines()}
+    stable, unstable = lines["K_v, stable orbits"], lines["K_v, unstable orbits"]
+    assert stable.get_linestyle() == "-" and unstable.get_linestyle() == "--"
+    assert list(np.isnan(stable.get_ydata())) == [False, False, False, True, False, False]
+    assert list(np.isnan(unstable.get_ydata())) == [True, True, False, False, False, True]
+    assert list(lines["fold (jump)"].get_ydata()) == [1.5, 2.0]
+    plt.close(figure)
+    up = table.iloc[:3].assign(stability="time")
+    path = tmp_path / "curve.png"
+    plot_resonance_curve(table, path, [], 10, "branch", sweeps={"up": up})
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -139,3 +139,30 @@ def test_unbalanced_torques_are_refused(reference_scene):
         periodic_orbit(scene, 500.0)
     with pytest.raises(ValueError, match="pinion_speed"):
         periodic_orbit(reference_scene, -1.0)
+
+
+def test_a_speed_without_a_converged_orbit_falls_back_to_time_integration(reference_scene,
+                                                                          monkeypatch):
+    """Where no orbit converges (here: every period integration between 650 and 750 rad/s
+    fails) the requested speed is run by the time protocol and marked so; shooting starts
+    again at the next one from the last orbit."""
+    from herringbone.analysis import steady_state
+    from herringbone.integrate.contract import IntegrationError
+
+    flow = steady_state.PeriodMap.flow
+
+    def failing(self, state, speed):
+        if 650.0 < speed < 750.0:
+            raise IntegrationError("no orbit here")
+        return flow(self, state, speed)
+
+    monkeypatch.setattr(steady_state.PeriodMap, "flow", failing)
+    short = Protocol(settle_time=0.02, window_periods=4, floquet=False)
+    table = continue_in_speed(reference_scene, [600.0, 700.0, 800.0], protocol=short).table()
+    on_grid = table[table["on_grid"]]
+    assert list(on_grid["w0_pinion"]) == [600.0, 700.0, 800.0]
+    assert list(on_grid["method"]) == ["shooting", "time", "shooting"]
+    assert list(on_grid["stability"]) == ["stable", "time", "stable"]
+    timed = window_figures(run_window(reference_scene.with_parameters(w0_pinion=700.0), short),
+                           static_mesh_force(reference_scene))
+    assert on_grid["K_v"].iloc[1] == timed["K_v"]
