@@ -182,8 +182,8 @@ def test_through_fmu_matches_the_compiled_sweep(reference_scene, scene_fmu):
 def test_shooting_is_the_default_and_agrees_with_settled_time_points(reference_scene):
     """A speed sweep computes the periodic steady state directly by default: a stable row at
     each requested speed, whose K_v and dte peak-to-peak agree with the time protocol settled
-    to 1e-6 within 1e-5 relative (the time protocol's default residual 1e-3 leaves 1e-4 of
-    the transient: measured spread of today's sweep ...)."""
+    to 1e-6 within 1e-5 relative (at the default residual 1e-3 the time sweep lies 5.8e-6
+    (K_v) and 8e-5 (dte peak-to-peak) from the orbits: benchmarks/steady_state.py)."""
     speeds = [300.0, 650.0, 1200.0]
     branch = sweep(reference_scene, speeds=speeds, progress=False)
     assert set(branch["method"]) == {"shooting"} and set(branch["stability"]) == {"stable"}

@@ -2,4 +2,5 @@
 (mesh-phase theory, `herringbone info`), `campbell`, `plots`, `run_progress`; sweeps:
 `sweep` (grids, the API), `sweep_point` (one point's protocol and figures), `distributed_run`
 (serial or Dask), `sweep_fmu` (a point through the FMU), `sweep_report`, `sweep_plots`,
-`sweep_cli`."""
+`sweep_cli`; the periodic steady state directly: `steady_state` (Newton shooting, Floquet
+multipliers), `continuation` (the branch over speed, folds)."""
