@@ -228,7 +228,8 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
     speed that is not finite and > 0, or no speed, raises ValueError before any work.
     progress: a bar on stderr (tqdm) over groups of speeds; None: where the chart has at
     least LONG_CHART speeds and stderr is a terminal. The groups are neighbouring speeds,
-    which share their Magnus step counts, so grouping costs nothing measurable."""
+    which share their Magnus step counts, so the work is the same; only the batches of
+    exponentials are smaller (the numbers are the same to 1e-13: tests/test_stability.py)."""
     import sys
 
     from tqdm import tqdm
