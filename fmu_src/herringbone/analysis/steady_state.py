@@ -61,6 +61,13 @@ DIFFERENCE_STEP = 1e-6  # forward-difference step, in state scales
 # a multiplier is on the unit circle (neither stable nor unstable) within this much
 UNIT_CIRCLE_BAND = 1e-6
 SAMPLES_PER_PERIOD = 64  # as sweep_point.Protocol's default
+# A period integration gives up (StepBudgetExceeded, an IntegrationError: the iterate fails)
+# past this many steps per radian of the fastest mode, plus LEAST_STEP_BUDGET: a Newton iterate
+# far from the orbit may lose and regain contact over and over (the gear pair alone at 700 rad/s
+# took 18.9 million steps, 154 s, for one period where an orbit takes 550). DOP853 takes at
+# least 1/3.5 of a step per radian of it (compiled_stepper.EXPLICIT_STEP_BOUND).
+STEP_BUDGET_PER_FASTEST = 50.0
+LEAST_STEP_BUDGET = 5000
 
 
 @dataclass(frozen=True)
@@ -216,7 +223,10 @@ class PeriodMap:
         run.loaded[:] = 0.0
         run.loaded[:len(self.section_set)] = self.loaded(state)
         run.first_steps[:] = 0.0
-        stepper.run_to(run, self.period(speed), self.torques)
+        period = self.period(speed)
+        stepper.run_to(run, period, self.torques,
+                       int(STEP_BUDGET_PER_FASTEST * period * stepper.fastest_rate)
+                       + LEAST_STEP_BUDGET)
         end_set = self.model.mesh.contact_set(int(run.place[1]), int(run.place[0]))
         target = self.model.mesh.interval_start(self.mesh_periods, 0) + self.section_phase
         offset = end_set.pinion_angle + run.state[self.pinion] - target
