@@ -197,3 +197,12 @@ def test_documented_script_answers_help(script):
     completed = run([sys.executable, script, "--help"], cwd=ROOT)
     assert completed.returncode == 0, completed.stderr
     assert "usage" in completed.stdout.lower()
+
+
+def test_readme_links_lead_to_files_of_the_repository():
+    """The README is read outside the site (where mkdocs checks the links): its own check."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text)
+    local = [t for t in targets if "://" not in t]
+    assert len(local) >= 10
+    assert [t for t in local if not (ROOT / t).exists()] == []
