@@ -54,7 +54,7 @@ def _same(a, b) -> bool:
 
 def _plot_halves(axes, time, results) -> None:
     """Mesh force and its halves (kN); a pair of equal halves drawn once and named so."""
-    axes.plot(time, results["F_mesh"] / 1e3, color="k", lw=1.0, label="F_mesh")
+    axes.plot(time, results["F_mesh"] / 1e3, color="k", lw=1.0, label="F_mesh", zorder=3)
     left, right = results["F_mesh_left"], results["F_mesh_right"]
     if _same(left, right):
         axes.plot(time, left / 1e3, color="C0", lw=0.8,
