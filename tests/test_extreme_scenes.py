@@ -221,11 +221,6 @@ started = time.perf_counter()
 result = simulate_scene_fmu(fmu, scene, stop_time=float(stop_time),
                             output_interval=float(output_interval))
 np.savez(out, wall=time.perf_counter() - started, **result)
-# The results are written: end without the C library's exit handlers, where a fault of
-# pythonfmu 0.7 not yet cured still aborts an fmpy process now and then (README, "In a Python
-# host"); tests/test_python_host.py is the test of the host's exit.
-import os
-os._exit(0)
 """
 
 

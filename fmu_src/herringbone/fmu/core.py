@@ -131,7 +131,6 @@ class GearCore:
     def _setup(self, logger_address):
         """Load the scene, declare the variables (through the adapter's `_register`) and
         start the train at t = 0 with the scene's own values."""
-        fmu_runtime.finalize_python_first(self.resources)  # C hosts: no crash at exit
         first_start.prepare(self, logger_address)  # before anything is compiled
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         self.values = dict(self.scene.parameters)
