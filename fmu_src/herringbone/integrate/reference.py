@@ -30,6 +30,8 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e
     """
     check_reference_run(scene, stop_time, output_interval, tolerance, method,
                         initial_pinion_angle)
-    stepper = ScipyStepper(GearTrainModel(scene), tolerance, method, check_tension=check_tension)
+    stop_time = scene.experiment.stop_time if stop_time is None else stop_time
+    stepper = ScipyStepper(GearTrainModel(scene), tolerance, method, check_tension=check_tension,
+                           horizon=stop_time)
     return simulate_with(stepper, scene,
                          stop_time, output_interval, initial_pinion_angle)
