@@ -2,6 +2,7 @@
 random-scene distribution, undamped trains included (issue 25).
 
     PYTHONPATH=fmu_src python3 benchmarks/reference_accuracy.py --count 10 --seed 0 [--undamped]
+    PYTHONPATH=fmu_src python3 benchmarks/reference_accuracy.py --seeds 1202 1028 [--undamped]
 
 Scene k is the one tests/scene_distribution.py draws from seed S + k; with --undamped each is run
 a second time with every damping set to zero (mesh, shafts, bearings), the trains whose step
@@ -59,12 +60,15 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seeds", type=int, nargs="*",
+                        help="these seeds instead of --count from --seed")
     parser.add_argument("--undamped", action="store_true",
                         help="also run each scene with every damping set to zero")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore", UserWarning)  # scipy's note when rtol reaches its floor
     figures = []
-    for seed in range(args.seed, args.seed + args.count):
+    seeds = args.seeds or range(args.seed, args.seed + args.count)
+    for seed in seeds:
         scene = random_scene(seed)
         variants = [("drawn", scene)] + ([("undamped", undamped(scene))] if args.undamped else [])
         for label, variant in variants:

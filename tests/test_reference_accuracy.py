@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 from conftest import MODELS, force_error
+from scene_distribution import random_scene
 
 import herringbone
 from herringbone.integrate import stepping
@@ -52,3 +53,18 @@ def test_the_step_tolerance_stops_at_scipys_finest():
     scene = herringbone.load_scene(SCENES / "undamped_reference_drift.toml")
     model = GearTrainModel(scene)
     assert stepping.step_tolerance(model, 1e-12, 1.0) == stepping.FINEST_STEP_TOLERANCE
+
+
+@pytest.mark.xfail(strict=True, reason="issue 25 open on rattling trains: the reference at 1e-10 "
+                   "is 3.2e-7 of the force scale off itself at 1e-12 on random scene 1029")
+def test_a_rattling_train_agrees_with_a_hundred_times_tighter():
+    """Random scene 1029 (tests/scene_distribution.py): a light load with contact loss that
+    rattles through about 400 losses and regains in 9 ms. Measured 3.2e-7 (before the reference
+    held its tolerance over the run, 2.3e-5); the worst of seeds 1000-1299 are 1202 (5.8e-5),
+    1028 (1.3e-5), 1072 (8.8e-7), 1200 (7.4e-7). Moving each event from the dense output onto
+    the stepped solution changed nothing (it moved them by at most 1e-8 of a step): not the
+    event times, then; these are the trains through whose impacts a small difference grows."""
+    scene = random_scene(1029)
+    default = herringbone.reference_simulate(scene)
+    tighter = herringbone.reference_simulate(scene, tolerance=1e-12)
+    assert force_error(default, tighter, scene) < 1e-8
