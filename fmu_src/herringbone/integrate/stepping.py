@@ -12,6 +12,14 @@ INTERIOR_NODES points inside it, so that a function that crosses zero and return
 step is seen unless it does so between two nodes; there the cubic through the values and slopes
 at the two nodes shows the bump, whose top is then found on the dense output. The earliest
 crossing in the event's direction is located by brentq to rounding, and the segment ends there.
+The state there, and at every sample time, is then computed by steps of the method from the
+start of the step that holds it: the dense output only says when.
+
+Error control (with a `horizon`, as reference_simulate gives it): the tolerance holds for the
+forces over the whole run. Every step's error rings on in the train's modes, for the run or for
+1/ζ radians, whichever is shorter, and the errors of the steps add up over those radians; the
+step tolerance is cut by the radians the train rings (ringing_radians, step_tolerance), which
+this module works out from the model's own matrices.
 """
 from __future__ import annotations
 
