@@ -167,9 +167,9 @@ class ScipyStepper:
     def _state_at(self, step, time, segment, torques):
         """The state at `time` inside the step, by steps of the method from the step's start
         (error-controlled like every step): the dense output finds events, but its own error,
-        beyond the step's where the step spans more than a radian of the fastest mode (stable
-        but coarse for the interpolant), is kept out of samples and out of the states that
-        events restart from."""
+        large where a step spans several radians of the fastest mode (stable, but coarse for
+        the interpolant), is kept out of samples and out of the states that events restart
+        from (docs/reference-accuracy.md)."""
         if time == step.start:
             return step.start_state.copy()
         solver = self._solver(segment, torques, step.start, step.start_state, time,
