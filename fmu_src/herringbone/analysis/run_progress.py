@@ -38,5 +38,5 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
               file=sys.stderr, disable=not progress,
               bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated "
                          "[{elapsed}<{remaining}]") as bar:
-        stepper = ProgressStepper(ScipyStepper(GearTrainModel(scene), tolerance), bar)
+        stepper = ProgressStepper(ScipyStepper(GearTrainModel(scene), tolerance, horizon=stop), bar)
         return simulate_with(stepper, scene, stop_time, output_interval)
