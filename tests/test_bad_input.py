@@ -266,13 +266,20 @@ def _call_cases():
                          ("string", "fast")):
         rows.append((f"pinion_speed-{label}", "pinion_speed", {"pinion_speed": value},
                      ("pinion_speed", "> 0"), ("monodromy",)))
+    for name, value, words in (("settle_residual", 1.0, ("(0, 1)",)),
+                               ("settle_time", -1.0, (">= 0",)),
+                               ("window_periods", 2.5, ("whole number >= 1",)),
+                               ("samples_per_period", 3, ("whole number >= 4",)),
+                               ("tolerance", 0.5, COMPILED_TOL[1:])):
+        rows.append((f"protocol-{name}", name, {name: value}, (name, *words), ("Protocol",)))
     return [Case(f"call-{id}", "argument", name, kwargs, words, ("call",), functions)
             for id, name, kwargs, words, functions in rows]
 
 
 RUN = ("run", "{scene}")
 STABILITY = ("stability", "{scene}")
-RUN_TOL = ("--tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT))
+RUN_TOL = ("--tolerance", *allowed_words(arguments.COMPILED_TOLERANCE_ARGUMENT))
+SWEEP_RUN = ("sweep", "{scene}", "--speeds", "100", "200", "2")
 SWEEP = ("--speeds", "0 < FROM < TO")
 OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("run-stop-time-negative", "--stop-time", RUN + ("--stop-time", "-1"),
@@ -295,6 +302,9 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("run-tolerance-one", "--tolerance", RUN + ("--tolerance", "1"), RUN_TOL, "herringbone"),
     ("run-tolerance-too-tight", "--tolerance", RUN + ("--tolerance", "1e-13"), RUN_TOL,
      "herringbone"),
+    ("run-reference-tolerance-above-maximum", "--tolerance",
+     RUN + ("--reference", "--tolerance", "1e-4"),
+     ("--tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT)), "herringbone"),
     ("run-unknown-option", "--bogus", RUN + ("--bogus",), ("--bogus", "--help"), "herringbone"),
     ("run-missing-scene", "SCENE", ("run",), ("SCENE", "required"), "herringbone"),
     ("run-output-in-no-folder", "--output", RUN + ("-o", "{file}/out.csv"),
@@ -321,6 +331,27 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      ("--speeds", "3 arguments"), "herringbone"),
     ("stability-output-in-no-folder", "--output", STABILITY + ("-o", "{file}/chart.png"),
      ("--output", "is a file, not a folder"), "herringbone"),
+    ("sweep-settle-residual-one", "--settle-residual", SWEEP_RUN + ("--settle-residual", "1"),
+     ("--settle-residual 1", *allowed_words(arguments.SETTLE_RESIDUAL)), "herringbone"),
+    ("sweep-settle-time-negative", "--settle-time", SWEEP_RUN + ("--settle-time", "-1"),
+     ("--settle-time -1", ">= 0"), "herringbone"),
+    ("sweep-window-periods-fraction", "--window-periods",
+     SWEEP_RUN + ("--window-periods", "2.5"), ("--window-periods 2.5", "whole number >= 1"),
+     "herringbone"),
+    ("sweep-samples-per-period-two", "--samples-per-period",
+     SWEEP_RUN + ("--samples-per-period", "2"), ("--samples-per-period 2", "whole number >= 4"),
+     "herringbone"),
+    ("sweep-tolerance-one", "--tolerance", SWEEP_RUN + ("--tolerance", "1"), RUN_TOL,
+     "herringbone"),
+    ("sweep-workers-negative", "--workers", SWEEP_RUN + ("--workers", "-1"),
+     ("--workers -1", "whole number >= 0"), "herringbone"),
+    ("sweep-output-a-file", "--output", SWEEP_RUN + ("-o", "{file}"),
+     ("--output", "is a file", "folder"), "herringbone"),
+    ("campbell-speeds-descending", "--speeds", ("campbell", "{scene}", "--speeds", "500", "400",
+                                                "2"), SWEEP + ("FROM 500 is not below TO 400",),
+     "herringbone"),
+    ("campbell-output-not-a-picture", "--output", ("campbell", "{scene}", "-o", "{tmp}/c.csv"),
+     ("--output", "not a .png"), "herringbone"),
     ("unknown-command", "COMMAND", ("frob",), ("COMMAND 'frob'", "'run'", "'stability'"),
      "herringbone"),
     ("no-command", "COMMAND", (), ("COMMAND", "required"), "herringbone"),
@@ -615,12 +646,14 @@ def no_work(monkeypatch):
 
 def _api_function(name):
     from herringbone.analysis.stability import monodromy, stability_chart
+    from herringbone.analysis.sweep_point import Protocol
     from herringbone.integrate.contract import simulate_with
 
     return {"simulate": herringbone.simulate,
             "reference_simulate": herringbone.reference_simulate,
             "simulate_with": lambda scene, **kwargs: simulate_with(Untouchable(), scene, **kwargs),
-            "stability_chart": stability_chart, "monodromy": monodromy}[name]
+            "stability_chart": stability_chart, "monodromy": monodromy,
+            "Protocol": lambda scene, **kwargs: Protocol(**kwargs)}[name]
 
 
 @pytest.mark.parametrize("function, case", [
@@ -686,13 +719,14 @@ def test_a_bad_command_line_argument_exits_2_with_one_line(case, command_line_ru
 def test_the_table_covers_every_option_and_run_argument():
     """A checked option or API argument added without a row here fails this test."""
     from herringbone import arguments
-    from herringbone.cli import _parser
+    from herringbone.cli import parser
 
-    _, commands, _ = _parser()
+    _, commands = parser()
     options = {action.option_strings[-1] for parser in commands.values()
                for action in parser._actions if action.option_strings and action.type}
     assert options <= {case.name for case in CASES if "argv" in case.routes}
     names = {value.name for value in vars(arguments).values()
              if isinstance(value, arguments.Argument)}
-    # COUNT: by the --speeds rows; the FMU's solver settings: by the "solver" rows
+    # COUNT: by the --speeds rows; the FMU's solver settings: by the "solver" rows; the sweep's
+    # protocol: by the "call" rows of Protocol
     assert names - {"COUNT"} <= {case.name for case in CASES}

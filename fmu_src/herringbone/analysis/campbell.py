@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.assembly import natural_modes
-from .plots import RPM_PER_RAD_S, _pyplot, _save
+from ..model.parameters import RPM_PER_RAD_S
+from .plots import _pyplot, _save
 from .report import HARMONICS, resonance_speeds
 
 

@@ -4,11 +4,8 @@ input was in rad/s), frequencies in Hz, forces in kN, dte in µm. Each function 
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-RPM_PER_RAD_S = 30.0 / math.pi
 HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
 
 

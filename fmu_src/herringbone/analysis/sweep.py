@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.parameters import INPUTS
+from ..model.parameters import INPUTS, unit_of, with_unit
+from ..suggest import did_you_mean
 from .sweep_point import Protocol, point_row, run_window
 
 SPEED = "w0_pinion"
@@ -43,14 +44,16 @@ def sweep_axes(scene, speeds=None, params=None) -> dict[str, np.ndarray]:
         axes[name] = values
     if not axes:
         raise ValueError("nothing to sweep; allowed: speeds or a parameter "
-                         "(--speeds LO HI N, --param NAME LO HI N)")
+                         "(--speeds FROM TO COUNT, --param NAME FROM TO COUNT)")
     if len(axes) > MOST_AXES:
         raise ValueError(f"{len(axes)} quantities swept ({', '.join(axes)}); allowed: "
                          f"at most {MOST_AXES} (a grid of two)")
     checked = {}
     for name, values in axes.items():
         if name not in scene.parameters and name not in INPUTS:
-            raise ValueError(f"{name} is not a parameter of scene {scene.name}; allowed: "
+            known = [*scene.parameters, *INPUTS]
+            raise ValueError(f"{name} is not a parameter of scene {scene.name}"
+                             f"{did_you_mean(name, known)}; allowed: "
                              f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
         values = np.atleast_1d(np.asarray(values, dtype=float))
         if values.ndim != 1 or not len(values) or not np.all(np.isfinite(values)):
@@ -116,8 +119,9 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **op
 
 
 def resonation_summary(table) -> str:
-    """Where the largest K_v of a table lies, as 'name = value, …'."""
+    """Where the largest K_v of a table lies, as 'name = value unit, …'
+    ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
     row = table.loc[table["K_v"].idxmax()]
     names = list(table.columns[:list(table.columns).index("speed_rpm")])
-    text = ", ".join(f"{name} = {row[name]:.6g}" for name in names)
+    text = ", ".join(f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}" for name in names)
     return text + (f" ({row['speed_rpm']:.0f} rpm)" if SPEED in names else "")

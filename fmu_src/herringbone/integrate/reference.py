@@ -14,8 +14,12 @@ from ..model.assembly import GearTrainModel
 from .contract import simulate_with
 from .stepping import ScipyStepper
 
+# the reference's default error per step, relative to the static mesh force (reference_simulate,
+# `herringbone run --reference`)
+DEFAULT_TOLERANCE = 1e-10
 
-def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=1e-10,
+
+def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
                        method="DOP853", initial_pinion_angle=0.0, check_tension=False):
     """Simulate a scene; returns {"time": …, output name: …} sampled every output_interval.
 

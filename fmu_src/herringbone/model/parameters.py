@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass
 
 COMPONENTS = ("motor", "load", "bearings")
+# rpm per rad/s: the one conversion of a speed to revolutions per minute
+RPM_PER_RAD_S = 30.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -141,19 +143,44 @@ def parameters_of(components: dict[str, bool]) -> dict[str, Parameter]:
             if p.component is None or components[p.component]}
 
 
+def with_unit(text: str, unit: str) -> str:
+    """`text` followed by its `unit` as messages write it ("22.86 rad"); a pure number (unit
+    "1" or "") gets none."""
+    if unit in ("", "1"):
+        return text
+    return f"{text} {unit}"
+
+
 def check_value(parameter: Parameter, value) -> str | None:
-    """Why `value` is not allowed for `parameter`, or None if it is."""
+    """Why `value` is not allowed for `parameter`, or None if it is; the value and what is
+    allowed carry the parameter's unit ("beta is 22.86 rad; allowed: (0, 1.5708) rad, an
+    angle in radians")."""
     if parameter.kind is bool:
         return None if isinstance(value, bool) else "must be true or false"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"must be a number, got {type(value).__name__} {value!r}"
-    if not math.isfinite(value):
-        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
-    if parameter.kind is int and value != int(value):
+    if parameter.kind is int and math.isfinite(value) and value != int(value):
         return f"must be a whole number, got {value!r}"
     if not parameter.allowed.contains(float(value)):
-        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
+        angle = ", an angle in radians" if parameter.unit == "rad" else ""
+        return (f"is {with_unit(repr(value), parameter.unit)}; allowed: "
+                f"{with_unit(parameter.allowed.describe(), parameter.unit)}{angle}")
     return None
+
+
+def name_with_unit(name: str) -> str:
+    """A table column's header: the name and its SI unit, "F_mesh [N]"; pure numbers
+    ("n_contacts", "z_pinion") and unknown names bare."""
+    unit = unit_of(name)
+    return f"{name} [{unit}]" if unit not in ("", "1") else name
+
+
+def unit_of(name: str) -> str:
+    """The unit of a parameter, input or output by name ("" if it has none or is unknown)."""
+    for table in (PARAMETERS, INPUTS, OUTPUTS):
+        if name in table:
+            return table[name].unit
+    return "s" if name == "time" else ""
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 from typing import cast
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
+from ..suggest import did_you_mean
 from .geometry import solid_cylinder_transverse_inertia
 from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_of
 
@@ -110,7 +111,8 @@ def load_scene(path) -> Scene:
     ("reference") that is not a file names a shipped scene (herringbone.shipped)."""
     given, path = path, resolve_scene(path)
     if not path.is_file():
-        names = (f"; shipped scenes: {', '.join(scene_files())} (`herringbone scenes`)"
+        names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
+                 f"{', '.join(scene_files())} (`herringbone scenes`)"
                  if is_scene_name(given) else "")
         raise SceneError(f"no such scene file{names}", str(path))
     try:
@@ -158,7 +160,8 @@ def _complete_parameters(given, components, source):
     carried = parameters_of(components)
     for key, value in given.items():
         if key not in PARAMETERS:
-            hint = " (inputs belong in [inputs])" if key in INPUTS else ""
+            hint = (" (inputs belong in [inputs])" if key in INPUTS
+                    else did_you_mean(key, PARAMETERS))
             raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key)
         if key not in carried:
             raise SceneError(f"{key} belongs to the component '{PARAMETERS[key].component}', "
