@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..optional import require
+
 HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
 
 
 def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+    """matplotlib.pyplot drawing to files (Agg); MissingDependency naming the extra to install
+    if matplotlib is not."""
+    require("matplotlib", "the pictures").use("Agg")
+    return require("matplotlib.pyplot", "the pictures")
 
 
 def _save(figure, path):

@@ -41,6 +41,7 @@ import scipy.linalg
 
 from ..arguments import check_scene, check_speeds
 from ..model.assembly import GearTrainModel
+from ..model.parameters import RPM_PER_RAD_S
 
 SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
@@ -221,11 +222,10 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> 
 def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of |λ|max against pinion speed (rpm; mesh frequency in Hz on the top axis),
     with the line |λ| = 1 and the unstable bands shaded."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import _pyplot
 
-    rpm = 60.0 / (2.0 * math.pi)
+    plt = _pyplot()
+    rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
     figure, axes = plt.subplots(figsize=(9, 4.5))
     axes.plot(chart.speeds * rpm, chart.largest_modulus, color="C0", lw=1.2,

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.parameters import INPUTS, unit_of, with_unit
+from ..optional import require
 from ..suggest import did_you_mean
 from .sweep_point import Protocol, point_row, run_window
 
@@ -97,7 +98,7 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     window series (for spectra). workers: 0 runs the points here, one after the other; N >= 1
     starts a LocalCluster of N single-threaded worker processes (None: one per core);
     scheduler: address of a running Dask scheduler (workers is then ignored)."""
-    import pandas as pd
+    pd = require("pandas", "a sweep's table")
 
     from .distributed_run import map_points
 
@@ -114,7 +115,36 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
 
 
 def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **options):
-    """The table of `run_sweep` alone; `options`: workers, scheduler, fmu, progress."""
+    """Run a scene over speeds and/or parameters past its start-up transient.
+
+    Parameters
+    ----------
+    scene : Scene
+    speeds : array_like or None
+        Pinion speeds w0_pinion, rad/s.
+    params : dict or None
+        {parameter name (or "M_motor", "M_load"): values, in its unit}; with `speeds`, at
+        most two quantities in all (a grid).
+    protocol : Protocol
+        How each point is settled and recorded (analysis.sweep_point.Protocol).
+    **options
+        workers (0: here, one point after the other; None: one Dask process per core),
+        scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU),
+        progress (a bar on stderr).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A row per point in grid order: the swept values, then speed_rpm, K_v, forces (N), dte
+        (µm), contact_lost_share, floquet_max (the columns name their units).
+
+    Raises
+    ------
+    ValueError
+        A swept name or value that is not allowed, before any work.
+    MissingDependency
+        pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
+    """
     return run_sweep(scene, speeds, params, protocol, **options)[0]
 
 

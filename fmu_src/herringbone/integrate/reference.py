@@ -21,16 +21,37 @@ DEFAULT_TOLERANCE = 1e-10
 
 def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
                        method="DOP853", initial_pinion_angle=0.0, check_tension=False):
-    """Simulate a scene; returns {"time": …, output name: …} sampled every output_interval.
+    """Simulate a scene with the scipy reference (independent of the compiled integrator).
 
-    tolerance: the error allowed per step, relative to the force scale (the static mesh force),
-    applied to every state entry through GearTrainModel.state_scales.
-    initial_pinion_angle: φp at t = 0 (docs/model.md starts at 0; any other angle must give the same
-    run shifted in mesh phase).
-    check_tension: raise IntegrationError wherever a loaded point pulls or a free one penetrates
-    (stepping.ScipyStepper's debug check; it costs a third more time).
-    Arguments outside arguments.check_reference_run's ranges (tolerance in [1e-12, 1e-5], a
-    solve_ivp method) raise ValueError before any work.
+    Parameters
+    ----------
+    scene : Scene
+    stop_time, output_interval : float or None
+        Simulated seconds, and seconds between samples (at most stop_time); None: the scene's.
+    tolerance : float
+        The error allowed per step, relative to the force scale (the static mesh force),
+        applied to every state entry through GearTrainModel.state_scales; [1e-12, 1e-5].
+    method : str
+        scipy's solve_ivp method ("DOP853", "Radau", …).
+    initial_pinion_angle : float
+        φp at t = 0, rad (docs/model.md starts at 0; any other angle must give the same run
+        shifted in mesh phase).
+    check_tension : bool
+        Raise IntegrationError wherever a loaded point pulls or a free one penetrates
+        (stepping.ScipyStepper's debug check; it costs a third more time).
+
+    Returns
+    -------
+    Result
+        {"time": …, output name: …} sampled every output_interval, SI units.
+
+    Raises
+    ------
+    ValueError
+        An argument outside arguments.check_reference_run's ranges, before any work
+        (SceneError, a ValueError, for something that is not a Scene).
+    IntegrationError
+        The run cannot go on (it says where and why).
     """
     check_reference_run(scene, stop_time, output_interval, tolerance, method,
                         initial_pinion_angle)

@@ -107,8 +107,24 @@ class Scene:
 
 
 def load_scene(path) -> Scene:
-    """Read and validate a scene file (see the module docstring for its format). A bare name
-    ("reference") that is not a file names a shipped scene (herringbone.shipped)."""
+    """Read and validate a scene file (see the module docstring for its format).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A TOML scene file, or the bare name of a shipped scene ("reference"; a file of that
+        name wins; `herringbone scenes` lists them).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        One line naming the file, the key and what is allowed (and the closest shipped name
+        or parameter for a misspelt one).
+    """
     given, path = path, resolve_scene(path)
     if not path.is_file():
         names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
@@ -123,7 +139,27 @@ def load_scene(path) -> Scene:
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") -> Scene:
-    """Validate a scene given as the tables of a scene file."""
+    """Validate a scene given as the tables of a scene file.
+
+    Parameters
+    ----------
+    data : dict
+        {"parameters": {...}, "components": {...}, "experiment": {...}, "inputs": {...}},
+        any of them left out (their defaults: docs/model.md), SI units.
+    name : str
+        The scene's name.
+    source : str
+        Where it came from, for messages.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        One line naming the key and what is allowed.
+    """
     unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
     if unknown:
         key = sorted(unknown)[0]
