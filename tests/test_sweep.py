@@ -191,7 +191,7 @@ def test_through_fmu_matches_the_compiled_sweep(reference_scene, scene_fmu):
     (["--speeds", "10", "50", "3", "--scheduler", "localhost"], "scheduler"),
     (["--speeds", "10", "50", "3", "--window-periods", "0"], "--window-periods"),
     (["--speeds", "10", "50", "3", "--settle-residual", "2"], "--settle-residual"),
-    (["--speeds", "10", "50", "3", "--through-fmu", "missing.fmu"], "through-fmu"),
+    (["--speeds", "10", "50", "3", "--through-fmu", "missing.fmu"], "--through-fmu"),
 ])
 def test_bad_sweep_arguments_get_one_line_and_exit_code_2(arguments, culprit, capsys):
     code = cli.main(["sweep", str(MODELS / "reference.toml"), "--no-progress", *arguments])

@@ -288,6 +288,16 @@ def output_file(*suffixes: str):
     return checked
 
 
+def existing_fmu(text: str) -> Path:
+    """argparse `type=` for an FMU to read: the Path of an existing .fmu file, or
+    ArgumentTypeError."""
+    path = Path(text)
+    if path.suffix.lower() != ".fmu" or not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text}: no such FMU file; allowed: the path of a "
+                                         "gear FMU (herringbone build-fmu SCENE builds one)")
+    return path
+
+
 def output_path(text: str) -> Path:
     """argparse `type=` for a file to write: the Path, or ArgumentTypeError saying why not."""
     problem = output_path_problem(Path(text))

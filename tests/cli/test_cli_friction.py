@@ -227,3 +227,17 @@ def test_the_console_script_runs_the_package(tmp_path):
     run = subprocess.run([str(Path(sys.executable).parent / "herringbone"), "--version"],
                          capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert run.returncode == 0 and run.stdout.startswith("herringbone ")
+
+
+def test_the_stability_chart_reports_progress_and_keeps_its_numbers():
+    """The chart in batches (for `stability`'s bar) is the chart in one go, to the bit."""
+    from herringbone.analysis.stability import stability_chart
+
+    scene = herringbone.load_scene("reference")
+    speeds = np.linspace(100.0, 3000.0, 12)
+    done = []
+    batched = stability_chart(scene, speeds, on_progress=done.append)
+    whole = stability_chart(scene, speeds)
+    assert sum(done) == len(speeds) and len(done) > 1
+    assert np.array_equal(batched.largest_modulus, whole.largest_modulus)
+    assert batched.unstable_bands == whole.unstable_bands

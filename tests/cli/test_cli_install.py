@@ -5,7 +5,6 @@ that brings it."""
 import subprocess
 import sys
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -184,6 +184,9 @@ def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_P
     return np.abs(multipliers(scene, pinion_speed, substeps, step_phase)[..., 0])
 
 
+PROGRESS_BATCHES = 10  # stability_chart's batches of speeds when it reports its progress
+
+
 @dataclass(frozen=True)
 class StabilityChart:
     """The largest Floquet multiplier |λ|max per mesh period over a range of pinion speeds, and
@@ -209,12 +212,22 @@ def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...
                  for first, last in zip(firsts, lasts))
 
 
-def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> StabilityChart:
+def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
+                    on_progress=None) -> StabilityChart:
     """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them. A
-    speed that is not finite and > 0, or no speed, raises ValueError before any work."""
+    speed that is not finite and > 0, or no speed, raises ValueError before any work.
+    `on_progress(count)`, if given, is called as each of about ten batches of speeds is done
+    (with the batch's size), for a progress bar."""
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
-    largest = largest_multiplier(scene, speeds, substeps, step_phase)
+    batches = np.array_split(speeds, min(len(speeds), PROGRESS_BATCHES)) \
+        if on_progress is not None else [speeds]
+    parts = []
+    for batch in batches:
+        parts.append(largest_multiplier(scene, batch, substeps, step_phase))
+        if on_progress is not None:
+            on_progress(len(batch))
+    largest = np.concatenate(parts)
     return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
                           scene.parameters["z_pinion"])
 

@@ -2,12 +2,13 @@
 speed, with its unstable bands."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from ..model.parameters import RPM_PER_RAD_S
 from ..model.scene import load_scene
 from ..optional import require
-from .common import add_output, add_scene, add_speeds, default_output
+from .common import add_output, add_progress, add_scene, add_speeds, default_output
 
 NAME = "stability"
 HELP = ("Floquet chart: the largest multiplier of the linear mesh against pinion speed, with "
@@ -21,6 +22,7 @@ def declare(parser) -> None:
     add_speeds(parser, (50.0, 3000.0, 300), "the chart's speeds")
     add_output(parser, "the chart; an existing file is replaced",
                "results/<scene>_stability.png", PICTURES)
+    add_progress(parser)
 
 
 def execute(args, parser) -> int:
@@ -32,8 +34,11 @@ def execute(args, parser) -> int:
     output = default_output(parser, args.output,
                             Path("results") / f"{scene.name}_stability.png", PICTURES)
     require("matplotlib", "the stability chart")
+    tqdm = require("tqdm", "the progress bar (or give --no-progress)").tqdm
     speeds = sweep.speeds()
-    chart = stability_chart(scene, speeds)
+    with tqdm(total=len(speeds), unit="speed", desc=f"stability {scene.name}",
+              file=sys.stderr, disable=args.no_progress) as bar:
+        chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)
     plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
     print(f"largest multiplier |λ|max from {chart.largest_modulus.min():.6g} to "

@@ -17,6 +17,7 @@ from ..arguments import (
     SETTLE_TIME,
     SPEED_COUNT,
     WINDOW_PERIODS,
+    existing_fmu,
     number,
 )
 from ..integrate.compiled_stepper import DEFAULT_TOLERANCE
@@ -80,7 +81,7 @@ def declare(parser) -> None:
                         "(default: one per core; 0: no Dask, run here one after the other)")
     parser.add_argument("--scheduler", help="run on an existing Dask cluster, "
                         "e.g. tcp://HOST:8786 (its workers need herringbone installed)")
-    parser.add_argument("--through-fmu", type=Path, metavar="FMU",
+    parser.add_argument("--through-fmu", type=existing_fmu, metavar="FMU",
                         help="run each point through this gear FMU with fmpy")
     add_progress(parser)
     add_output(parser, "the table <scene>_sweep_<swept>.csv and its pictures; files of those "
