@@ -1,4 +1,4 @@
-"""Issue 5, bad input: every way to hand the train something it cannot run gets ONE clear message
+"""Bad input: every way to hand the train something it cannot run gets ONE clear message
 that names the culprit (and, for a value, what is allowed), through the Python API, through the
 FMU and through the command line; nothing crashes and nothing prints a traceback.
 
@@ -17,10 +17,10 @@ Routes (a row takes every route that can carry its value):
         into an Integer one, so strings, booleans, fractions and NaN of integers go by the api;
 - cli:  `herringbone run FILE` (and for some rows `herringbone info FILE` and
         `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback;
-- call: (issue 13) a run argument handed to the API functions the row names (simulate,
+- call: a run argument handed to the API functions the row names (simulate,
         reference_simulate, simulate_with, stability_chart, monodromy) raises ValueError
         (SceneError for the scene) with a one-line message, before any model is built;
-- argv: (issue 13) a command line with a bad option or argument (`herringbone run|info|
+- argv: a command line with a bad option or argument (`herringbone run|info|
         stability|benchmark`, `python build_fmu.py`) exits with code 2, nothing on stdout,
         one line on stderr naming the option and what is allowed, and writes nothing.
 """
@@ -210,7 +210,7 @@ FILE_CASES = [
 ]
 
 
-# Run arguments (issue 13): "call" rows hand `value` (keyword arguments) to each API function in
+# Run arguments: "call" rows hand `value` (keyword arguments) to each API function in
 # `commands`, which must raise ValueError (SceneError for the scene) before any work; "argv"
 # rows run a command line, `value` its arguments ({scene}: models/reference.toml, {file}: a
 # plain file, so "{file}/x" lies in no folder), `commands` the program: herringbone or build_fmu.
@@ -624,7 +624,7 @@ def test_command_line_exits_2_with_one_line(which, case, tmp_path):
     assert not (tmp_path / "x.fmu").exists()
 
 
-# --- run arguments through the API and the command line (issue 13) ------------------------------
+# --- run arguments through the API and the command line ----------------------------------------
 
 class Untouchable:
     """A stepper for simulate_with that fails the test if the run begins."""

@@ -1,4 +1,4 @@
-"""The package's layout (issue 17) and the installed package as the product (issue 14): the
+"""The package's layout and the installed package as the product: the
 stepping contract both integrators keep, no import cycles, an FMU runtime guard that imports
 nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`. The install
 itself (non-editable, commands run from a temporary folder) is .ci/installed_package's."""

@@ -1,5 +1,5 @@
-"""The command line as a newcomer meets it (issue 22): every friction point seen there, one
-test each. In-process (`main([...])`, capsys) where possible: a process start costs a second
+"""The command line as a newcomer meets it: every friction point a first hour with it showed,
+one test each. In-process (`main([...])`, capsys) where possible: a process start costs a second
 or two of imports."""
 import re
 import subprocess

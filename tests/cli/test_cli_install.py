@@ -1,4 +1,4 @@
-"""What a user who installs the package meets (issue 22): the examples run as modules of the
+"""What a user who installs the package meets: the examples run as modules of the
 installed package, the FMU's runtime needs stay numpy, scipy, numba (and the FMI tools), the
 analysis and co-simulation packages come as extras, and a missing one is named with the extra
 that brings it."""

@@ -7,11 +7,11 @@ The model has no speed-dependent stiffness or gyroscopic terms, so each natural 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..arguments import speed_sweep_problem
 from ..model.assembly import natural_modes
 from ..model.parameters import RPM_PER_RAD_S
 from .plots import _pyplot, _save
@@ -42,9 +42,11 @@ def crossings(scene, low: float, high: float) -> list[Crossing]:
 
 
 def check_speed_range(low: float, high: float) -> None:
-    """ValueError unless 0 < low < high are finite pinion speeds (rad/s)."""
-    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
-        raise ValueError(f"--speeds {low:g} {high:g}; allowed: 0 < LO < HI, finite")
+    """ValueError unless 0 < low < high are finite pinion speeds (rad/s), checked as every
+    speed range is (arguments.speed_sweep_problem)."""
+    problem = speed_sweep_problem(low, high, 2)
+    if problem is not None:
+        raise ValueError(f"speeds {low:g} to {high:g} rad/s: {problem}; allowed: 0 < low < high")
 
 
 def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Crossing]:

@@ -1,4 +1,4 @@
-"""Parametric stability of the linear mesh at constant speed: Floquet multipliers (issue 5).
+"""Parametric stability of the linear mesh at constant speed: Floquet multipliers.
 
 At a constant pinion speed ω the contact points move with φp = ω·t, so the stiffness K(φp) and
 damping C(φp) of the linear model (every point of each contact set loaded: no contact loss) repeat
