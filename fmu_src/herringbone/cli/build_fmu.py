@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..arguments import output_file, output_file_problem, output_folder
 from ..fmu.builder import DEFAULT_SCENE, FMI_VERSIONS, default_fmu_name
-from .common import CommandParser, add_scene, fail
+from .common import CommandParser, add_scene, fail, say
 from .common import execute as run_command
 
 NAME = "build-fmu"
@@ -70,6 +70,8 @@ def execute(args, parser) -> int:
     if problem is not None:
         fail(parser, f"cannot write {output}: {problem}; give -o FILE.fmu in a folder you can "
                      "write in")
+    say(f"building {output}: the scene {scene.name} as an FMI {args.fmi}.0 FMU (the integrator "
+        "compiled or loaded first, then packed and validated)")
     print(f"built {builder.build_gear_fmu(scene=args.scene, output=output, fmi_version=args.fmi)}")
     if args.simulate:
         simulate(output, scene, results)
