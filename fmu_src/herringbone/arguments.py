@@ -23,7 +23,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from .model.parameters import FINITE, NON_NEGATIVE, POSITIVE, RPM_PER_RAD_S, Range
+from .model.parameters import (
+    FINITE,
+    NON_NEGATIVE,
+    POSITIVE,
+    RPM_PER_RAD_S,
+    Range,
+    number_problem,
+)
 from .model.scene import Scene, SceneError
 from .suggest import did_you_mean
 
@@ -69,15 +76,10 @@ class Argument:
         """Why `value` is not allowed ("is -1.0; allowed: …"), or None if it is."""
         if self.choices is not None:
             return None if isinstance(value, str) and value in self.choices \
-                else f"is {value!r}; allowed: {self.describe()}"
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            return f"must be a number, got {type(value).__name__} {value!r}; " \
-                   f"allowed: {self.describe()}"
-        value = float(value)
-        fits = (self.infinite and value == math.inf) or self.allowed.contains(value)
-        if not fits or (self.whole and value != int(value)):
-            return f"is {value!r}; allowed: {self.describe()}"
-        return None
+                else f"is {value!r}; allowed: {self.describe()}{did_you_mean(value, self.choices)}"
+        return number_problem(float(value) if isinstance(value, numbers.Real)
+                              and not isinstance(value, bool) else value, self.allowed,
+                              whole=self.whole, infinite=self.infinite, meaning=self.meaning)
 
     def check(self, value):
         """`value` itself if it is allowed; else ValueError("<name> is …; allowed: …")."""
