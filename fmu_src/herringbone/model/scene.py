@@ -21,7 +21,15 @@ from typing import cast
 from ..shipped import is_scene_name, resolve_scene, scene_files
 from ..suggest import did_you_mean
 from .geometry import solid_cylinder_transverse_inertia
-from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_of
+from .parameters import (
+    COMPONENTS,
+    INPUTS,
+    PARAMETERS,
+    POSITIVE,
+    check_value,
+    number_problem,
+    parameters_of,
+)
 
 
 class SceneError(ValueError):
@@ -227,9 +235,9 @@ def _experiment(table, source):
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
             raise SceneError(f"unknown key '{key}'{hint}; allowed: stop_time, output_interval",
                              source, "experiment", key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value) or value <= 0:
-            raise SceneError(f"{key} is {value!r}; allowed: > 0", source, "experiment", key)
+        problem = number_problem(value, POSITIVE, "s")
+        if problem is not None:
+            raise SceneError(f"{key} {problem}", source, "experiment", key)
         values[key] = float(value)
     experiment = Experiment(**values)
     if experiment.output_interval > experiment.stop_time:
