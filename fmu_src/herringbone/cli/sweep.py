@@ -74,8 +74,10 @@ def declare(parser) -> None:
                               (WINDOW_PERIODS, 50), (SAMPLES_PER_PERIOD, 64),
                               (COMPILED_TOLERANCE_ARGUMENT, DEFAULT_TOLERANCE)):
         shown = "" if default is None else f"; default {default:g}"
+        whole = "a whole number " if argument.whole else ""
         parser.add_argument(argument.option, type=argument.option_type, default=default,
-                            help=f"{argument.meaning}: {argument.allowed.describe()}{shown}")
+                            help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
+                                 f"{shown}")
     parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
     parser.add_argument("--workers", type=number, help="Dask LocalCluster worker processes "
                         "(default: one per core; 0: no Dask, run here one after the other)")
