@@ -90,7 +90,7 @@ def test_fmi3_bad_parameter_error_names_it(fmus, capfd):
         fmpy.simulate_fmu(str(fmus["reference", 3]), stop_time=1e-3,
                           start_values={"m_pinion": -1.0})
     printed = capfd.readouterr().out  # fmpy prints every message pythonfmu3 passes on
-    assert "[ERROR] " in printed and "parameter m_pinion is -1.0; allowed: > 0" in printed
+    assert "[ERROR] " in printed and "parameter m_pinion is -1.0 kg; allowed: > 0 kg" in printed
 
 
 @pytest.fixture

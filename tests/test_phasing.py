@@ -15,7 +15,8 @@ from herringbone.analysis.phasing import (
     scene_phasing,
     spur_contact_ratio,
 )
-from herringbone.analysis.report import info_main, scene_report
+from herringbone.analysis.report import scene_report
+from herringbone.cli import main as herringbone_main
 from herringbone.model.geometry import GearGeometry
 from herringbone.model.mesh import Mesh
 
@@ -230,16 +231,16 @@ def test_info_prints_the_report(tmp_path, capsys, monkeypatch):
     use_stand_in_modes(monkeypatch)
     path = tmp_path / "staggered.toml"
     path.write_text("[parameters]\nstagger = 0.5\n")
-    assert info_main([str(path)]) == 0
+    assert herringbone_main(["info", str(path)]) == 0
     assert "5-4-5-4-5-4-5-4" in capsys.readouterr().out
 
 
 def test_info_reports_a_bad_scene_in_one_line(tmp_path, capsys):
     path = tmp_path / "bad.toml"
     path.write_text("[parameters]\neps_q = 1.5\n")
-    assert info_main([str(path)]) == 2
+    assert herringbone_main(["info", str(path)]) == 2
     captured = capsys.readouterr()
     assert captured.out == ""
     assert captured.err.count("\n") == 1 and "eps_q" in captured.err
-    assert info_main([str(tmp_path / "missing.toml")]) == 2
+    assert herringbone_main(["info", str(tmp_path / "missing.toml")]) == 2
     assert "no such scene file" in capsys.readouterr().err

@@ -88,7 +88,7 @@ def test_scene_error_carries_its_fields():
         herringbone.scene_from_dict({"parameters": {"z_pinion": 0}}, source="x.toml")
     error = raised.value
     assert (error.source, error.table, error.key) == ("x.toml", "parameters", "z_pinion")
-    assert error.problem == "z_pinion is 0; allowed: >= 1"
-    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: >= 1"
+    assert error.problem == "z_pinion is 0; allowed: a whole number >= 1"
+    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: a whole number >= 1"
     again = pickle.loads(pickle.dumps(error))
     assert (str(again), again.key) == (str(error), "z_pinion")

@@ -1,5 +1,5 @@
 """What is computed from the model and its runs: `stability` (Floquet), `phasing` and `report`
 (mesh-phase theory, `herringbone info`), `campbell`, `plots`, `run_progress`; sweeps:
 `sweep` (grids, the API), `sweep_point` (one point's protocol and figures), `distributed_run`
-(serial or Dask), `sweep_fmu` (a point through the FMU), `sweep_report`, `sweep_plots`,
-`sweep_cli`."""
+(serial or Dask), `sweep_fmu` (a point through the FMU), `sweep_report`, `sweep_plots`;
+`run_report` (what `herringbone run` writes). The command line is herringbone.cli."""

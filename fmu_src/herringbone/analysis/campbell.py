@@ -9,13 +9,14 @@ angles φ), lateral (the displacements x along the mesh force) or tilt (the tilt
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..arguments import speed_sweep_problem
 from ..model.assembly import GearTrainModel, natural_modes
-from .plots import RPM_PER_RAD_S, _pyplot, _save
+from ..model.parameters import RPM_PER_RAD_S
+from .plots import _pyplot, _save
 from .report import HARMONICS, resonance_speeds
 
 
@@ -87,9 +88,11 @@ def crossings(scene, low: float, high: float) -> list[Crossing]:
 
 
 def check_speed_range(low: float, high: float) -> None:
-    """ValueError unless 0 < low < high are finite pinion speeds (rad/s)."""
-    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
-        raise ValueError(f"--speeds {low:g} {high:g}; allowed: 0 < LO < HI, finite")
+    """ValueError unless 0 < low < high are finite pinion speeds (rad/s), checked as every
+    speed range is (arguments.speed_sweep_problem)."""
+    problem = speed_sweep_problem(low, high, 2)
+    if problem is not None:
+        raise ValueError(f"speeds {low:g} to {high:g} rad/s: {problem}; allowed: 0 < low < high")
 
 
 def _spread(values, gap, ceiling):

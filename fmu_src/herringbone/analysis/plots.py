@@ -4,19 +4,18 @@ input was in rad/s), frequencies in Hz, forces in kN, dte in µm. Each function 
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-RPM_PER_RAD_S = 30.0 / math.pi
+from ..optional import require
+
 HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
 
 
 def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+    """matplotlib.pyplot drawing to files (Agg); MissingDependency naming the extra to install
+    if matplotlib is not."""
+    require("matplotlib", "the pictures").use("Agg")
+    return require("matplotlib.pyplot", "the pictures")
 
 
 def _save(figure, path):

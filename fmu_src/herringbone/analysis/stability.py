@@ -1,4 +1,4 @@
-"""Parametric stability of the linear mesh at constant speed: Floquet multipliers (issue 5).
+"""Parametric stability of the linear mesh at constant speed: Floquet multipliers.
 
 At a constant pinion speed ω the contact points move with φp = ω·t, so the stiffness K(φp) and
 damping C(φp) of the linear model (every point of each contact set loaded: no contact loss) repeat
@@ -41,6 +41,7 @@ import scipy.linalg
 
 from ..arguments import check_scene, check_speeds
 from ..model.assembly import GearTrainModel
+from ..model.parameters import RPM_PER_RAD_S
 
 SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
@@ -183,6 +184,9 @@ def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_P
     return np.abs(multipliers(scene, pinion_speed, substeps, step_phase)[..., 0])
 
 
+PROGRESS_BATCHES = 10  # stability_chart's batches of speeds when it reports its progress
+
+
 @dataclass(frozen=True)
 class StabilityChart:
     """The largest Floquet multiplier |λ|max per mesh period over a range of pinion speeds, and
@@ -208,12 +212,22 @@ def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...
                  for first, last in zip(firsts, lasts))
 
 
-def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> StabilityChart:
+def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
+                    on_progress=None) -> StabilityChart:
     """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them. A
-    speed that is not finite and > 0, or no speed, raises ValueError before any work."""
+    speed that is not finite and > 0, or no speed, raises ValueError before any work.
+    `on_progress(count)`, if given, is called as each of about ten batches of speeds is done
+    (with the batch's size), for a progress bar."""
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
-    largest = largest_multiplier(scene, speeds, substeps, step_phase)
+    batches = np.array_split(speeds, min(len(speeds), PROGRESS_BATCHES)) \
+        if on_progress is not None else [speeds]
+    parts = []
+    for batch in batches:
+        parts.append(largest_multiplier(scene, batch, substeps, step_phase))
+        if on_progress is not None:
+            on_progress(len(batch))
+    largest = np.concatenate(parts)
     return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
                           scene.parameters["z_pinion"])
 
@@ -221,11 +235,10 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE) -> 
 def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of |λ|max against pinion speed (rpm; mesh frequency in Hz on the top axis),
     with the line |λ| = 1 and the unstable bands shaded."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import _pyplot
 
-    rpm = 60.0 / (2.0 * math.pi)
+    plt = _pyplot()
+    rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
     figure, axes = plt.subplots(figsize=(9, 4.5))
     axes.plot(chart.speeds * rpm, chart.largest_modulus, color="C0", lw=1.2,

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plots import RPM_PER_RAD_S, _pyplot, _save, amplitude_spectrum
+from ..model.parameters import RPM_PER_RAD_S
+from .plots import _pyplot, _save, amplitude_spectrum
 from .report import HARMONICS, resonance_speeds
 
 

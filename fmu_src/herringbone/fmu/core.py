@@ -146,7 +146,7 @@ class GearCore:
         self.output_values = np.zeros(scene_model.output_layout_size)
         self.problem = None  # what stops the run for good (parameters, solver), logged once
         self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
-        self.run = None  # integrator.Run, advanced in place by every doStep
+        self.run = None  # compiled_stepper.Run, advanced in place by every doStep
         self.stepper = None
         self.stepper_values = None  # the values self.stepper was built from
         self.declared = {}  # value reference -> Declaration
