@@ -108,8 +108,8 @@ STOP_TIME = Argument("stop_time", "--stop-time", "simulated seconds", POSITIVE)
 OUTPUT_INTERVAL = Argument("output_interval", "--output-interval",
                            "seconds between output samples, at most the stop time", POSITIVE)
 REFERENCE_TOLERANCE_ARGUMENT = Argument(
-    "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
-    "scipy reference", REFERENCE_TOLERANCE)
+    "tolerance", "--tolerance", "error in the forces over the run relative to the static mesh "
+    "force, for the scipy reference", REFERENCE_TOLERANCE)
 COMPILED_TOLERANCE_ARGUMENT = Argument(
     "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
     "compiled integrator", COMPILED_TOLERANCE)

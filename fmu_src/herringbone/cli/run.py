@@ -38,10 +38,10 @@ def declare(parser) -> None:
                              "second at its default tolerance")
     compiled, reference = COMPILED_TOLERANCE_ARGUMENT.allowed, REFERENCE_TOLERANCE_ARGUMENT.allowed
     parser.add_argument("--tolerance", type=number,
-                        help="error per step relative to the static mesh force: "
+                        help="relative to the static mesh force: the error per step "
                              f"{compiled.describe()} (default {DEFAULT_TOLERANCE:g}); with "
-                             f"--reference {reference.describe()} (default "
-                             f"{REFERENCE_DEFAULT_TOLERANCE:g})")
+                             f"--reference the error over the run {reference.describe()} "
+                             f"(default {REFERENCE_DEFAULT_TOLERANCE:g})")
     add_output(parser, "the outputs, one column per output with its unit; an existing file is "
                "replaced", "results/<scene>.csv", SUFFIXES)
     parser.add_argument("--plot", action="store_true",
