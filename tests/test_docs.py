@@ -79,7 +79,8 @@ INLINE = re.compile(r"`((?:herringbone|python3?) [^`]+)`")  # a command in runni
 
 
 def code_blocks(text: str) -> list[list[str]]:
-    """The lines of each code block: fenced (any language but toml and python) or indented."""
+    """The lines of each code block: fenced (any language but toml, python, yaml, cpp and
+    text, which hold no commands) or indented."""
     blocks: list[list[str]] = []
     fenced: list[str] | None = None
     language = ""
@@ -89,7 +90,7 @@ def code_blocks(text: str) -> list[list[str]]:
             if fenced is None:
                 fenced, language = [], line.strip("`").strip()
             else:
-                if language not in ("toml", "python", "yaml"):
+                if language not in ("toml", "python", "yaml", "cpp", "text"):
                     blocks.append(fenced)
                 fenced = None
             continue
@@ -171,7 +172,20 @@ def _identifier(entry) -> str:
     return f"{entry[0]}: {shlex.join(entry[1])}"[:90]
 
 
-HERRINGBONE_COMMANDS = documented("herringbone")
+
+
+def _parses_alone(argv: list[str]) -> bool:
+    """Whether `argv` is a command that `--help` appended can check: not a synopsis naming no
+    command (`herringbone COMMAND ...`), not a quoted message (`herringbone sweep: ...`), not
+    --version (which answers before --help), and not one that names an FMU to build first
+    (--through-fmu is checked as it is parsed: tests/cli has it)."""
+    if len(argv) < 2:
+        return True
+    return not (argv[1].isupper() or argv[1].endswith(":") or "--version" in argv
+                or "--through-fmu" in argv)
+
+
+HERRINGBONE_COMMANDS = [entry for entry in documented("herringbone") if _parses_alone(entry[1])]
 PYTHON_COMMANDS = documented("python")
 
 
