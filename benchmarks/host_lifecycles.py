@@ -7,7 +7,7 @@ non-zero exits per case; tests/fmu/test_host_lifecycles.py runs a few of each on
 
     python benchmarks/host_lifecycles.py --runs 200 [--plain-runs 1000] [--cases plain fatal …]
 
-Each case is a small Python program (or, for `c_host`, the C host of tests/c_host) that checks
+Each case is a small Python program (or, for `c_host`, the C host of tests/fmu/c_host) that checks
 its own results and exits 0; a non-zero exit is a failure whether the results were right or
 not. The FMUs are built once into a temporary folder (or `--fmu-dir`).
 """

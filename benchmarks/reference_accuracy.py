@@ -4,7 +4,8 @@ random-scene distribution, undamped trains included (issue 25).
     PYTHONPATH=fmu_src python3 benchmarks/reference_accuracy.py --count 10 --seed 0 [--undamped]
     PYTHONPATH=fmu_src python3 benchmarks/reference_accuracy.py --seeds 1202 1028 [--undamped]
 
-Scene k is the one tests/scene_distribution.py draws from seed S + k; with --undamped each is run
+Scene k is the one tests/helpers/scene_distribution.py draws from seed S + k; with --undamped
+each is run
 a second time with every damping set to zero (mesh, shafts, bearings), the trains whose step
 errors ring for the whole run. Each runs over its own experiment (5-20 ms) with
 reference_simulate at 1e-10 and at 1e-12; the figure is max |F(1e-10) − F(1e-12)| over F_mesh and
@@ -24,10 +25,11 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))  # scene_distribution: the one home of the distribution
+# helpers.scene_distribution: the one home of the distribution
+sys.path.insert(0, str(ROOT / "tests"))
 
 import numpy as np  # noqa: E402
-from scene_distribution import random_scene  # noqa: E402
+from helpers.scene_distribution import random_scene  # noqa: E402
 
 import herringbone  # noqa: E402
 from herringbone.model.assembly import GearTrainModel  # noqa: E402

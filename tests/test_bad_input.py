@@ -10,7 +10,8 @@ integers, a number for the flags), so a parameter added there is tested here.
 Routes (a row takes every route that can carry its value):
 - api:  scene_from_dict, Scene.with_parameters / Scene.with_inputs and load_scene of a file
         holding the row must raise herringbone.SceneError with a one-line message;
-- fmu:  the value set on the reference FMU (tests/fmu_host.py, FMU2Slave in this process) as a
+- fmu:  the value set on the reference FMU (tests/helpers/fmu_host.py, FMU2Slave in this
+  process) as a
         start value, or for an input also before a later doStep: an error-status log message
         naming the culprit, the same message every time, and doStep ends in fmi2Discard (the
         host lives on). FMI can carry only Real values into a Real variable and whole numbers
@@ -32,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS
 from fmpy.fmi1 import FMICallException
-from fmu_host import Instance
+from helpers import MODELS
+from helpers.fmu_host import Instance
 
 import herringbone
 from herringbone import SceneError, arguments
@@ -542,7 +543,7 @@ def test_fmu_input_set_mid_run_is_discarded_with_one_message(scene_fmu, case):
 # FMI calls a master may get wrong, after initialization (each through the FMU, in this
 # process): (id, the call on a Gear, the words its one message must contain). pythonfmu has no
 # fmi2Error to answer with, so each is refused with a message and answered fmi2OK, and the
-# instance steps on as if the call had not been made (tests/test_fmi_contract.py checks the
+# instance steps on as if the call had not been made (tests/fmu/test_fmi_contract.py checks the
 # values such calls return).
 FMI_CALL_CASES = [
     ("set-an-output", lambda g: g.slave.setReal([g.variables["F_mesh"].valueReference], [5.0]),

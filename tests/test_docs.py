@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 from herringbone.model.document import with_generated_tables
 

@@ -9,7 +9,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 import herringbone
 from herringbone import cli, shipped

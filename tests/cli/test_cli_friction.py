@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 import herringbone
 from herringbone.cli import main

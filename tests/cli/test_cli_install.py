@@ -8,7 +8,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 import herringbone
 

@@ -43,7 +43,7 @@ from ..arguments import check_scene, check_speeds
 from ..model.assembly import GearTrainModel
 from ..model.parameters import RPM_PER_RAD_S
 
-SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
+SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/analysis/test_stability.py)
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
 _GAUSS_POINTS = np.array([0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0])
 _MATRICES_AT_ONCE = 8192  # exponentials evaluated in one batch (memory)

@@ -11,8 +11,8 @@ CI runs a few dozen examples, derandomized (the same scenes on every run) and wi
 (a failure is reported as drawn, so a failing CI run stays within its few minutes). The `slow`
 tests draw many more, at random, and shrink what fails:
 
-    pytest -m slow tests/test_properties.py                         # 300 examples each
-    HERRINGBONE_PROPERTY_EXAMPLES=2000 pytest -m slow tests/test_properties.py
+    pytest -m slow tests/integrate/test_properties.py                         # 300 examples each
+    HERRINGBONE_PROPERTY_EXAMPLES=2000 pytest -m slow tests/integrate/test_properties.py
 
 A scene that fails is written to tests/regression/found_<digest>.toml (its header says what failed
 and by how much; property_checks.save_if_final): commit it, and the regression test runs it from
@@ -21,12 +21,12 @@ then on.
 import dataclasses
 import os
 
+import helpers.property_checks as checks
 import numpy as np
-import property_checks as checks
 import pytest
+from helpers.random_scenes import random_scene, scenes
+from helpers.scene_distribution import LOW_SPEED
 from hypothesis import HealthCheck, Phase, given, settings
-from random_scenes import random_scene, scenes
-from scene_distribution import LOW_SPEED
 
 import herringbone
 
@@ -88,14 +88,14 @@ def test_a_saved_scene_loads_back_to_the_same_scene(seed, tmp_path):
     scene = random_scene(seed)
     path = checks.save_regression_scene(scene, "a test: nothing failed", tmp_path)
     loaded = herringbone.load_scene(path)
-    assert path.read_text().startswith("# Found by tests/test_properties.py: a test")
+    assert path.read_text().startswith("# Found by tests/integrate/test_properties.py: a test")
     assert loaded.parameters == scene.parameters
     assert loaded.components == scene.components
     assert loaded.experiment == scene.experiment and loaded.inputs == scene.inputs
     assert checks.save_regression_scene(scene, "again", tmp_path) == path  # one file a scene
     assert checks.save_regression_scene(scene, "again", tmp_path) == path
     header = [line for line in path.read_text().splitlines() if line.startswith("#")]
-    assert header == ["# Found by tests/test_properties.py: a test: nothing failed",
+    assert header == ["# Found by tests/integrate/test_properties.py: a test: nothing failed",
                       "# Also: again"]
     assert herringbone.load_scene(path).parameters == scene.parameters
 

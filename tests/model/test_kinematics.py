@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from independent_model import contact_points
+from helpers.independent_model import contact_points
 
 import herringbone
 from herringbone.analysis.phasing import alternation_law, scene_phasing

@@ -4,9 +4,9 @@ import math
 import fmpy
 import numpy as np
 import pytest
-from conftest import FORCES, MODELS, force_error
 from fmpy.fmi1 import FMICallException
-from fmu_host import Instance, structured_inputs
+from helpers import FORCES, MODELS, force_error
+from helpers.fmu_host import Instance, structured_inputs
 
 import herringbone
 from herringbone.fmu import builder

@@ -1,10 +1,12 @@
-"""The one home of the random-scene distribution: what tests/random_scenes.py (hypothesis) and
+"""The one home of the random-scene distribution: what tests/helpers/random_scenes.py
+(hypothesis) and
 benchmarks/random_scenes.py (seeded, numpy only) both draw from.
 
 `draw_scene_data(sampler)` builds a scene (as the tables of a scene file, for
 herringbone.scene_from_dict) from a handful of sampler calls; where the numbers come from is the
 sampler's business: `SeededSampler` (numpy's generator, reproducible from one seed) here, a
-hypothesis-backed one in tests/random_scenes.py, so that hypothesis can shrink a failing scene.
+hypothesis-backed one in tests/helpers/random_scenes.py, so that hypothesis can shrink a
+failing scene.
 
 The spans are those of issue 15's independent check: 8-60 teeth, helix 5°-40°, bearings 1e8-1e11
 N/m, damping down to exactly zero, speeds 1-2500 rad/s, light loads, torque steps, lead errors of

@@ -29,10 +29,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import extract, read_model_description
+from helpers import ROOT
 
 TESTS_DIR = Path(__file__).resolve().parent
-SOURCE_PACKAGE = TESTS_DIR.parent / "fmu_src" / "herringbone"
-sys.path.insert(0, str(TESTS_DIR.parent / "examples"))
+SOURCE_PACKAGE = ROOT / "fmu_src" / "herringbone"
+sys.path.insert(0, str(ROOT / "examples"))
 from drivetrain_operating_point import operating_point  # noqa: E402  (scipy only)
 
 # Communication step.  The coupling is explicit (the gear integrates with the motor torque held
@@ -221,7 +222,7 @@ def run_in_child(host, fmus, folder, **arguments):
     fmu_paths = {name: str(fmus[name]) for name in ("reference", "motor", "fan")}
     fmu_paths["gear"] = fmu_paths.pop("reference")
     code = ("import json, sys\n"
-            f"sys.path.insert(0, {str(TESTS_DIR)!r})\n"
+            f"sys.path[:0] = [{str(TESTS_DIR)!r}, {str(TESTS_DIR.parent)!r}]\n"
             "import test_cosimulation as this\n"
             f"result = this.{host}(json.loads(sys.argv[1]), **json.loads(sys.argv[2]))\n"
             "print('\\nRESULT ' + json.dumps(result))\n")

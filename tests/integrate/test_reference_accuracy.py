@@ -1,17 +1,16 @@
 """The reference holds its tolerance over a whole run where the train rings long (issue 25):
 lightly damped and undamped trains, whose step errors add up over the radians the modes ring."""
 import math
-from pathlib import Path
 
 import pytest
-from conftest import MODELS, force_error
-from scene_distribution import random_scene
+from helpers import MODELS, REGRESSION, force_error
+from helpers.scene_distribution import random_scene
 
 import herringbone
 from herringbone.integrate import stepping
 from herringbone.model.assembly import GearTrainModel, natural_modes
 
-SCENES = Path(__file__).resolve().parent / "regression" / "reference_accuracy"
+SCENES = REGRESSION / "reference_accuracy"
 
 
 @pytest.mark.parametrize("name, stop_time", [
@@ -58,7 +57,7 @@ def test_the_step_tolerance_stops_at_scipys_finest():
 @pytest.mark.xfail(strict=True, reason="issue 25 open on rattling trains: the reference at 1e-10 "
                    "is 3.2e-7 of the force scale off itself at 1e-12 on random scene 1029")
 def test_a_rattling_train_agrees_with_a_hundred_times_tighter():
-    """Random scene 1029 (tests/scene_distribution.py): a light load with contact loss that
+    """Random scene 1029 (tests/helpers/scene_distribution.py): a light load with contact loss that
     rattles through about 400 losses and regains in 9 ms. Measured 3.2e-7 (before the reference
     held its tolerance over the run, 2.3e-5); the worst of seeds 1000-1299 are 1202 (5.8e-5),
     1028 (1.3e-5), 1072 (8.8e-7), 1200 (7.4e-7). Moving each event from the dense output onto

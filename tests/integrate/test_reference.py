@@ -5,15 +5,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS, force_error
-from independent_model import radii
+from helpers import MODELS, REGRESSION, force_error
+from helpers.independent_model import radii
 
 import herringbone
 from herringbone.integrate import contract, stepping
 from herringbone.integrate.compiled import walk
 from herringbone.model.assembly import GearTrainModel
 
-REGRESSION = Path(__file__).resolve().parent / "regression"
+REGRESSION = REGRESSION
 
 
 

@@ -12,9 +12,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import ROOT
 
 RUNS = 3
-HARNESS = Path(__file__).resolve().parent.parent / "benchmarks" / "host_lifecycles.py"
+HARNESS = ROOT / "benchmarks" / "host_lifecycles.py"
 
 
 def _harness():

@@ -1,11 +1,10 @@
 """The compiled integrator (herringbone.integrator): agreement with the reference, convergence
 order across the switches, exact re-runs, and the implicit method on a stiff scene."""
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS, force_error
+from helpers import MODELS, REGRESSION, force_error
 
 import herringbone
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
@@ -231,7 +230,7 @@ def test_phase_event_prediction_is_the_quadratic_root(reference_model, speed, ac
 
 # --- issue 15: separation and re-engagement, undamped stiff modes -------------------------------
 
-REGRESSION = Path(__file__).resolve().parent / "regression"
+REGRESSION = REGRESSION
 
 
 def scene_run(scene, tolerance, stop_time=None):

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 import herringbone
 from herringbone.integrate import first_start

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from conftest import MODELS, force_errors
+from helpers import MODELS, force_errors
 
 import herringbone
 from herringbone.analysis.phasing import contact_count, count_intervals, scene_phasing

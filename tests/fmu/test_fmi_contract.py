@@ -1,5 +1,6 @@
 """Issue 13: the FMU's contract with its hosts (FMI 2.0), point by point, through real hosts:
-fmpy's FMU2Slave in this process (tests/fmu_host.py, logging on), `fmpy.simulate_fmu` and the
+fmpy's FMU2Slave in this process (tests/helpers/fmu_host.py, logging on), `fmpy.simulate_fmu`
+and the
 `fmpy simulate` command line and libcosimpy in child processes, so that a crash or an abort
 fails a test instead of the suite.
 
@@ -19,9 +20,9 @@ import zipfile
 import fmpy
 import numpy as np
 import pytest
-from conftest import FORCES, MODELS
 from fmpy.fmi1 import FMICallException
-from fmu_host import Instance
+from helpers import FORCES, MODELS
+from helpers.fmu_host import Instance
 
 from herringbone.fmu import builder
 from herringbone.model.parameters import INPUTS, PARAMETERS

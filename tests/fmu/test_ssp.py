@@ -4,7 +4,7 @@
 fresh interpreter (a host that aborts fails its test, not the session, and the gear FMU loads
 the herringbone it carries, not this source tree's), and must bring the train to the
 intersection of the motor's Kloss curve and the fan curve through the gear ratio, judged as in
-tests/test_cosimulation.py (same step, stop time, windows and tolerances).  The example script
+tests/fmu/test_cosimulation.py (same step, stop time, windows and tolerances).  The example script
 is run as a user runs it, and its printed numbers are checked.
 """
 import json
@@ -14,16 +14,15 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 import test_cosimulation as cosim
 from fmpy import read_model_description
+from helpers import ROOT
 
 from herringbone.fmu import ssp
 
-ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 sys.path.insert(0, str(EXAMPLES))
 from drivetrain_operating_point import operating_point  # noqa: E402
@@ -119,7 +118,7 @@ def test_unknown_parameter_is_refused_by_name(drivetrain, tmp_path):
 
 def test_libcosim_runs_the_ssp_to_the_operating_point(drivetrain, tmp_path):
     """libcosimpy loads the .ssp in one call and, at the SSD's own 1e-4 s step, settles at
-    the curves' intersection (the checks of tests/test_cosimulation.py)."""
+    the curves' intersection (the checks of tests/fmu/test_cosimulation.py)."""
     code = (f"import json, sys; sys.path.insert(0, {str(EXAMPLES)!r})\n"
             "import cosimulate_drivetrain as example\n"
             f"done, end, samples, _ = example.cosimulate({str(drivetrain['ssp'])!r}, "

@@ -10,10 +10,10 @@ import zipfile
 import fmpy
 import numpy as np
 import pytest
-from conftest import MODELS
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
+from helpers import MODELS
 
 import herringbone
 from herringbone.fmu import builder

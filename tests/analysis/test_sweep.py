@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import MODELS
 
 import herringbone
 from herringbone import cli
@@ -21,7 +22,7 @@ from herringbone.analysis.sweep_point import Protocol, timing, window_figures
 from herringbone.integrate.compiled_stepper import eigenvalues
 from herringbone.model.assembly import GearTrainModel, natural_modes
 
-MODELS = Path(__file__).resolve().parent.parent / "models"
+MODELS = MODELS
 SHORT = Protocol(settle_time=0.02, window_periods=8, samples_per_period=32)
 SPEEDS = [157.08, 400.0, 1000.0]
 

@@ -1,6 +1,6 @@
 """Static equilibrium at t = 0 (docs/model.md sections 6-7): every output of the first sample."""
 import pytest
-from independent_model import bearing_positions, radii, static_state
+from helpers.independent_model import bearing_positions, radii, static_state
 
 import herringbone
 

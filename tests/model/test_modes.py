@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
-from independent_model import ORDER, mass_matrix, stiffness_matrix
+from helpers.independent_model import ORDER, mass_matrix, stiffness_matrix
 
 import herringbone.model.assembly
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 import math
 
 from hypothesis import strategies as st
-from scene_distribution import draw_scene_data, random_scene  # noqa: F401 (re-exported)
 
 import herringbone
+from helpers.scene_distribution import draw_scene_data, random_scene  # noqa: F401 (re-exported)
 
 
 class HypothesisSampler:

@@ -8,7 +8,8 @@ import pytest
 import scipy.integrate
 import scipy.linalg
 import scipy.optimize
-from independent_model import bearing_positions, contact_points, contact_row, radii, unit
+from helpers import ROOT
+from helpers.independent_model import bearing_positions, contact_points, contact_row, radii, unit
 
 import herringbone
 from herringbone.analysis import stability
@@ -305,11 +306,10 @@ def test_simulation_grows_at_the_rate_of_the_largest_multiplier(resonance_scene)
 def test_command_line_lists_the_bands_of_the_example(tmp_path, capsys):
     """`herringbone stability` on the shipped example: the k = 5 band around 2080 rad/s is
     found, and the chart is written."""
-    from pathlib import Path
 
     from herringbone.cli import main
 
-    example = Path(__file__).resolve().parent.parent / "examples" / "parametric_resonance.toml"
+    example = ROOT / "examples" / "parametric_resonance.toml"
     chart = tmp_path / "chart.png"
     assert main(["stability", str(example), "--speeds", "1900", "2300", "81",
                  "-o", str(chart)]) == 0
