@@ -3,7 +3,7 @@
     PYTHONPATH=fmu_src python3 benchmarks/random_scenes.py --count 200 --seed 0 --workers 16 \\
         [--output results/random_scenes.csv] [--time-limit 300]
 
-Scene k is the one tests/scene_distribution.py draws from seed S + k (the distribution the
+Scene k is the one tests/helpers/scene_distribution.py draws from seed S + k (the distribution the
 property tests draw from). Each runs, over its own experiment (5-20 ms, 100-300 samples):
 the scipy reference at 1e-10 and at 1e-12 (the truth), the compiled integrator at 1e-7 (the
 FMU's default) and at 1e-9. Errors are max |F − F(reference at 1e-12)| over F_mesh and the bearing
@@ -31,10 +31,11 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one scene per core; BLAS threads only fight
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))  # scene_distribution: the one home of the distribution
+# helpers.scene_distribution: the one home of the distribution
+sys.path.insert(0, str(ROOT / "tests"))
 
 import numpy as np  # noqa: E402
-from scene_distribution import random_scene  # noqa: E402
+from helpers.scene_distribution import random_scene  # noqa: E402
 
 import herringbone  # noqa: E402
 from herringbone.model.assembly import GearTrainModel  # noqa: E402

@@ -1,8 +1,10 @@
 """Co-simulate the drive train of `drivetrain.ssp` with libcosim and print its operating point.
 
-    python examples/cosimulate_drivetrain.py [SSP] [--stop-time T] [--step H]
+    python -m herringbone.examples.cosimulate_drivetrain [SSP] [--stop-time T] [--step H]
+    python examples/cosimulate_drivetrain.py [SSP] ...          (in a checkout)
 
-Without SSP it first builds `dist/drivetrain.ssp` from `--scene` (`python build_fmu.py --ssp`).
+Without SSP it first builds `dist/drivetrain.ssp` from `--scene` (`herringbone build-fmu --ssp`,
+in a separate process).
 libcosim (libcosimpy) loads the whole system, connections and parameter set included, in one
 call (`CosimExecution.from_ssp_file`) and runs it at the SSD's fixed step (or `--step`) to its
 stop time (or `--stop-time`), logging warnings and errors only.  The speeds and torques are
@@ -11,7 +13,7 @@ whole mesh periods, and printed beside the intersection of the motor's Kloss cur
 fan curve through the gear ratio, computed from the parameters the SSP sets (the FMUs' start
 values where it sets none).  Exit code 0; 1 if the co-simulation stopped early; 2 for an SSP
 that cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
-(`pip install -e ".[test]"` in the repository).
+and libcosimpy (`pip install "herringbone[cosim]"`).
 """
 import argparse
 import io
@@ -23,9 +25,11 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from drivetrain_operating_point import operating_point
+if __package__:  # python -m herringbone.examples.cosimulate_drivetrain
+    from .drivetrain_operating_point import operating_point
+else:  # python examples/cosimulate_drivetrain.py: this folder is on sys.path
+    from drivetrain_operating_point import operating_point
 
-ROOT = Path(__file__).resolve().parent.parent
 SIGNALS = {"w_motor": ("gear", "rad/s"), "w_load": ("gear", "rad/s"),
            "M_motor": ("motor", "N.m"), "M_load": ("fan", "N.m")}
 WINDOW_MESH_PERIODS = 5  # the mesh ripples the speeds at z_pinion·w/2π: average it out
@@ -126,8 +130,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("ssp", nargs="?", type=Path,
                         help="the .ssp to run (default: build dist/drivetrain.ssp first)")
-    parser.add_argument("--scene", type=Path, default=ROOT / "models" / "reference.toml",
-                        help="scene of the gear FMU when building (default models/reference.toml)")
+    parser.add_argument("--scene", default="reference",
+                        help="scene of the gear FMU when building: a file or a shipped scene's "
+                             "name (default: reference)")
     parser.add_argument("--stop-time", type=float, help="s (default: the SSD's stopTime)")
     parser.add_argument("--step", type=float, help="s (default: the SSD's baseStepSize)")
     args = parser.parse_args(argv)
@@ -137,8 +142,9 @@ def main(argv=None):
             parser.error(f"--{name.replace('_', '-')} {value}: allowed: finite and > 0")
     ssp = args.ssp
     if ssp is None:
-        ssp = ROOT / "dist" / "drivetrain.ssp"
-        subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--ssp", str(ssp),
+        ssp = Path("dist") / "drivetrain.ssp"
+        # another process: this one must not import herringbone (the gear FMU imports its own)
+        subprocess.run([sys.executable, "-m", "herringbone.cli", "build-fmu", "--ssp", str(ssp),
                         str(args.scene)], check=True)
     try:
         experiment = read_ssp(ssp)

@@ -1,6 +1,6 @@
 """Where the example drive train settles: the motor's Kloss curve meets the fan curve through
-the gear ratio.  One home for the formula: examples/cosimulate_drivetrain.py, tests/test_ssp.py
-and tests/test_cosimulation.py all use it.
+the gear ratio.  One home for the formula: examples/cosimulate_drivetrain.py, tests/fmu/test_ssp.py
+and tests/fmu/test_cosimulation.py all use it.
 
 In steady running the gear is a lossless ratio u = z_wheel/z_pinion (M_load = u·M_motor,
 w_load = w_motor/u), so the train runs where Kloss(w) = k_fan·(w/u)²/u.  Needs only scipy; it

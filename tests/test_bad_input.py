@@ -1,4 +1,4 @@
-"""Issue 5, bad input: every way to hand the train something it cannot run gets ONE clear message
+"""Bad input: every way to hand the train something it cannot run gets ONE clear message
 that names the culprit (and, for a value, what is allowed), through the Python API, through the
 FMU and through the command line; nothing crashes and nothing prints a traceback.
 
@@ -10,17 +10,18 @@ integers, a number for the flags), so a parameter added there is tested here.
 Routes (a row takes every route that can carry its value):
 - api:  scene_from_dict, Scene.with_parameters / Scene.with_inputs and load_scene of a file
         holding the row must raise herringbone.SceneError with a one-line message;
-- fmu:  the value set on the reference FMU (tests/fmu_host.py, FMU2Slave in this process) as a
+- fmu:  the value set on the reference FMU (tests/helpers/fmu_host.py, FMU2Slave in this
+  process) as a
         start value, or for an input also before a later doStep: an error-status log message
         naming the culprit, the same message every time, and doStep ends in fmi2Discard (the
         host lives on). FMI can carry only Real values into a Real variable and whole numbers
         into an Integer one, so strings, booleans, fractions and NaN of integers go by the api;
 - cli:  `herringbone run FILE` (and for some rows `herringbone info FILE` and
         `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback;
-- call: (issue 13) a run argument handed to the API functions the row names (simulate,
+- call: a run argument handed to the API functions the row names (simulate,
         reference_simulate, simulate_with, stability_chart, monodromy) raises ValueError
         (SceneError for the scene) with a one-line message, before any model is built;
-- argv: (issue 13) a command line with a bad option or argument (`herringbone run|info|
+- argv: a command line with a bad option or argument (`herringbone run|info|
         stability|benchmark`, `python build_fmu.py`) exits with code 2, nothing on stdout,
         one line on stderr naming the option and what is allowed, and writes nothing.
 """
@@ -32,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MODELS
 from fmpy.fmi1 import FMICallException
-from fmu_host import Instance
+from helpers import MODELS
+from helpers.fmu_host import Instance
 
 import herringbone
 from herringbone import SceneError, arguments
@@ -210,7 +211,7 @@ FILE_CASES = [
 ]
 
 
-# Run arguments (issue 13): "call" rows hand `value` (keyword arguments) to each API function in
+# Run arguments: "call" rows hand `value` (keyword arguments) to each API function in
 # `commands`, which must raise ValueError (SceneError for the scene) before any work; "argv"
 # rows run a command line, `value` its arguments ({scene}: models/reference.toml, {file}: a
 # plain file, so "{file}/x" lies in no folder), `commands` the program: herringbone or build_fmu.
@@ -266,13 +267,20 @@ def _call_cases():
                          ("string", "fast")):
         rows.append((f"pinion_speed-{label}", "pinion_speed", {"pinion_speed": value},
                      ("pinion_speed", "> 0"), ("monodromy",)))
+    for name, value, words in (("settle_residual", 1.0, ("(0, 1)",)),
+                               ("settle_time", -1.0, (">= 0",)),
+                               ("window_periods", 2.5, ("whole number >= 1",)),
+                               ("samples_per_period", 3, ("whole number >= 4",)),
+                               ("tolerance", 0.5, COMPILED_TOL[1:])):
+        rows.append((f"protocol-{name}", name, {name: value}, (name, *words), ("Protocol",)))
     return [Case(f"call-{id}", "argument", name, kwargs, words, ("call",), functions)
             for id, name, kwargs, words, functions in rows]
 
 
 RUN = ("run", "{scene}")
 STABILITY = ("stability", "{scene}")
-RUN_TOL = ("--tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT))
+RUN_TOL = ("--tolerance", *allowed_words(arguments.COMPILED_TOLERANCE_ARGUMENT))
+SWEEP_RUN = ("sweep", "{scene}", "--speeds", "100", "200", "2")
 SWEEP = ("--speeds", "0 < FROM < TO")
 OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("run-stop-time-negative", "--stop-time", RUN + ("--stop-time", "-1"),
@@ -295,6 +303,9 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("run-tolerance-one", "--tolerance", RUN + ("--tolerance", "1"), RUN_TOL, "herringbone"),
     ("run-tolerance-too-tight", "--tolerance", RUN + ("--tolerance", "1e-13"), RUN_TOL,
      "herringbone"),
+    ("run-reference-tolerance-above-maximum", "--tolerance",
+     RUN + ("--reference", "--tolerance", "1e-4"),
+     ("--tolerance", *allowed_words(arguments.REFERENCE_TOLERANCE_ARGUMENT)), "herringbone"),
     ("run-unknown-option", "--bogus", RUN + ("--bogus",), ("--bogus", "--help"), "herringbone"),
     ("run-missing-scene", "SCENE", ("run",), ("SCENE", "required"), "herringbone"),
     ("run-output-in-no-folder", "--output", RUN + ("-o", "{file}/out.csv"),
@@ -321,6 +332,30 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      ("--speeds", "3 arguments"), "herringbone"),
     ("stability-output-in-no-folder", "--output", STABILITY + ("-o", "{file}/chart.png"),
      ("--output", "is a file, not a folder"), "herringbone"),
+    ("sweep-settle-residual-one", "--settle-residual", SWEEP_RUN + ("--settle-residual", "1"),
+     ("--settle-residual 1", *allowed_words(arguments.SETTLE_RESIDUAL)), "herringbone"),
+    ("sweep-settle-time-negative", "--settle-time", SWEEP_RUN + ("--settle-time", "-1"),
+     ("--settle-time -1", ">= 0"), "herringbone"),
+    ("sweep-window-periods-fraction", "--window-periods",
+     SWEEP_RUN + ("--window-periods", "2.5"), ("--window-periods 2.5", "whole number >= 1"),
+     "herringbone"),
+    ("sweep-samples-per-period-two", "--samples-per-period",
+     SWEEP_RUN + ("--samples-per-period", "2"), ("--samples-per-period 2", "whole number >= 4"),
+     "herringbone"),
+    ("sweep-tolerance-one", "--tolerance", SWEEP_RUN + ("--tolerance", "1"), RUN_TOL,
+     "herringbone"),
+    ("sweep-workers-negative", "--workers", SWEEP_RUN + ("--workers", "-1"),
+     ("--workers -1", "whole number >= 0"), "herringbone"),
+    ("sweep-through-fmu-missing", "--through-fmu",
+     SWEEP_RUN + ("--through-fmu", "{tmp}/missing.fmu"), ("--through-fmu", "no such FMU file"),
+     "herringbone"),
+    ("sweep-output-a-file", "--output", SWEEP_RUN + ("-o", "{file}"),
+     ("--output", "is a file", "folder"), "herringbone"),
+    ("campbell-speeds-descending", "--speeds", ("campbell", "{scene}", "--speeds", "500", "400",
+                                                "2"), SWEEP + ("FROM 500 is not below TO 400",),
+     "herringbone"),
+    ("campbell-output-not-a-picture", "--output", ("campbell", "{scene}", "-o", "{tmp}/c.csv"),
+     ("--output", "not a .png"), "herringbone"),
     ("unknown-command", "COMMAND", ("frob",), ("COMMAND 'frob'", "'run'", "'stability'"),
      "herringbone"),
     ("no-command", "COMMAND", (), ("COMMAND", "required"), "herringbone"),
@@ -508,7 +543,7 @@ def test_fmu_input_set_mid_run_is_discarded_with_one_message(scene_fmu, case):
 # FMI calls a master may get wrong, after initialization (each through the FMU, in this
 # process): (id, the call on a Gear, the words its one message must contain). pythonfmu has no
 # fmi2Error to answer with, so each is refused with a message and answered fmi2OK, and the
-# instance steps on as if the call had not been made (tests/test_fmi_contract.py checks the
+# instance steps on as if the call had not been made (tests/fmu/test_fmi_contract.py checks the
 # values such calls return).
 FMI_CALL_CASES = [
     ("set-an-output", lambda g: g.slave.setReal([g.variables["F_mesh"].valueReference], [5.0]),
@@ -590,7 +625,7 @@ def test_command_line_exits_2_with_one_line(which, case, tmp_path):
     assert not (tmp_path / "x.fmu").exists()
 
 
-# --- run arguments through the API and the command line (issue 13) ------------------------------
+# --- run arguments through the API and the command line ----------------------------------------
 
 class Untouchable:
     """A stepper for simulate_with that fails the test if the run begins."""
@@ -615,12 +650,14 @@ def no_work(monkeypatch):
 
 def _api_function(name):
     from herringbone.analysis.stability import monodromy, stability_chart
+    from herringbone.analysis.sweep_point import Protocol
     from herringbone.integrate.contract import simulate_with
 
     return {"simulate": herringbone.simulate,
             "reference_simulate": herringbone.reference_simulate,
             "simulate_with": lambda scene, **kwargs: simulate_with(Untouchable(), scene, **kwargs),
-            "stability_chart": stability_chart, "monodromy": monodromy}[name]
+            "stability_chart": stability_chart, "monodromy": monodromy,
+            "Protocol": lambda scene, **kwargs: Protocol(**kwargs)}[name]
 
 
 @pytest.mark.parametrize("function, case", [
@@ -686,13 +723,14 @@ def test_a_bad_command_line_argument_exits_2_with_one_line(case, command_line_ru
 def test_the_table_covers_every_option_and_run_argument():
     """A checked option or API argument added without a row here fails this test."""
     from herringbone import arguments
-    from herringbone.cli import _parser
+    from herringbone.cli import parser
 
-    _, commands, _ = _parser()
+    _, commands = parser()
     options = {action.option_strings[-1] for parser in commands.values()
                for action in parser._actions if action.option_strings and action.type}
     assert options <= {case.name for case in CASES if "argv" in case.routes}
     names = {value.name for value in vars(arguments).values()
              if isinstance(value, arguments.Argument)}
-    # COUNT: by the --speeds rows; the FMU's solver settings: by the "solver" rows
+    # COUNT: by the --speeds rows; the FMU's solver settings: by the "solver" rows; the sweep's
+    # protocol: by the "call" rows of Protocol
     assert names - {"COUNT"} <= {case.name for case in CASES}

@@ -1,8 +1,29 @@
-"""The project's own description: docs/model.md is current, and nothing points outside the
-repository (a clone has nothing beside it)."""
-import subprocess
+"""The project's own description: docs/model.md is current, nothing points outside the
+repository (a clone has nothing beside it), and every shell command the README and docs/ show
+still runs.
 
-from conftest import MODELS
+Commands are read from the documents' code blocks (fenced, or indented by four spaces); a line
+continued with a backslash is one command, and `a && b` is two. Checked:
+
+- every `herringbone ...` command parses: it is run with `--help` appended, which argparse
+  answers (exit 0) only once every option before it has been read and converted;
+- every `python SCRIPT.py ...` of the repository answers `--help`;
+- a command shown after a `$ ` prompt with the lines it prints is run for real, and prints
+  them; so is every command of CHEAP with arguments (running text names a command by its two
+  words) and no placeholder (an upper-case word).
+
+The command line's own parser decides what a command means, so this file names no option.
+"""
+from __future__ import annotations
+
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from helpers import MODELS
 
 from herringbone.model.document import with_generated_tables
 
@@ -31,3 +52,187 @@ def test_nothing_points_outside_the_repository():
             if any(mark in text for mark in OUTSIDE):
                 offenders.append(name)
     assert not offenders, f"these files point outside the repository: {offenders}"
+
+
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _herringbone() -> list[str]:
+    """The installed `herringbone` command: its console script beside this Python, or else
+    its entry point called by this Python."""
+    script = Path(sys.executable).with_name("herringbone")
+    if script.is_file():
+        return [str(script)]
+    from importlib.metadata import entry_points
+
+    (entry,) = entry_points(group="console_scripts", name="herringbone")
+    module, function = entry.value.split(":")
+    return [sys.executable, "-c", f"import sys; from {module} import {function}; "
+            f"sys.argv[0] = 'herringbone'; sys.exit({function}())"]
+
+
+HERRINGBONE = _herringbone()
+CHEAP = {"scenes", "info", "campbell"}  # subcommands that finish within seconds
+PLACEHOLDER = re.compile(r"\b[A-Z][A-Z_0-9.]*[A-Z]\b")  # SCENE, OUT.fmu's OUT, HOST, ...
+FENCE = re.compile(r"^```")
+INLINE = re.compile(r"`((?:herringbone|python3?) [^`]+)`")  # a command in running text
+
+
+def code_blocks(text: str) -> list[list[str]]:
+    """The lines of each code block: fenced (any language but toml, python, yaml, cpp and
+    text, which hold no commands) or indented."""
+    blocks: list[list[str]] = []
+    fenced: list[str] | None = None
+    language = ""
+    indented: list[str] = []
+    for line in text.splitlines():
+        if FENCE.match(line):
+            if fenced is None:
+                fenced, language = [], line.strip("`").strip()
+            else:
+                if language not in ("toml", "python", "yaml", "cpp", "text"):
+                    blocks.append(fenced)
+                fenced = None
+            continue
+        if fenced is not None:
+            fenced.append(line)
+        elif line.startswith("    ") and line.strip():
+            indented.append(line[4:])
+        elif indented and line.strip():
+            blocks.append(indented)
+            indented = []
+    if indented:
+        blocks.append(indented)
+    return blocks
+
+
+def commands(document: Path) -> list[tuple[list[str], list[str]]]:
+    """(argv, the lines shown after it) for each command of the document's code blocks and
+    running text; the lines shown only where the command follows a `$ ` prompt."""
+    text = document.read_text(encoding="utf-8")
+    found = [(shlex.split(span, comments=True), []) for span in INLINE.findall(text)]
+    for block in code_blocks(text):
+        joined: list[str] = []
+        for line in block:
+            if joined and joined[-1].endswith("\\"):
+                joined[-1] = joined[-1][:-1] + " " + line.strip()
+            else:
+                joined.append(line)
+        prompted = any(line.startswith("$ ") for line in joined)
+        for number, line in enumerate(joined):
+            if prompted and not line.startswith("$ "):
+                continue
+            shown = []
+            if prompted:
+                following = joined[number + 1:]
+                ends = [i for i, next_line in enumerate(following) if next_line.startswith("$ ")]
+                shown = following[:ends[0] if ends else len(following)]
+            for part in line.removeprefix("$ ").split("&&"):
+                argv = shlex.split(part, comments=True)
+                if argv:
+                    found.append((argv, shown))
+    return found
+
+
+def documented(kind: str) -> list[tuple[str, list[str], list[str]]]:
+    """(where, argv, shown) for the documented commands of a kind, `herringbone` or `python`,
+    each once."""
+    found = []
+    seen = set()
+    for document in DOCUMENTS:
+        for argv, shown in commands(document):
+            if (tuple(argv), tuple(shown)) in seen:
+                continue
+            seen.add((tuple(argv), tuple(shown)))
+            program = Path(argv[0]).name
+            if kind == "herringbone" and program == "herringbone":
+                found.append((document.name, ["herringbone", *argv[1:]], shown))
+            elif kind == "python" and program.startswith("python") and len(argv) > 1 \
+                    and argv[1].endswith(".py") and (ROOT / argv[1]).is_file():
+                found.append((document.name, argv, shown))
+    return found
+
+
+def unbracketed(arguments: list[str]) -> list[str]:
+    """The arguments without the optional ones a synopsis shows in brackets."""
+    kept, depth = [], 0
+    for argument in arguments:
+        depth += argument.count("[")
+        if depth == 0:
+            kept.append(argument)
+        depth -= argument.count("]")
+    return kept
+
+
+def run(argv: list[str], cwd: Path, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    return subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def _identifier(entry) -> str:
+    return f"{entry[0]}: {shlex.join(entry[1])}"[:90]
+
+
+
+
+def _parses_alone(argv: list[str]) -> bool:
+    """Whether `argv` is a command that `--help` appended can check: not a synopsis naming no
+    command (`herringbone COMMAND ...`), not a quoted message (`herringbone sweep: ...`), not
+    --version (which answers before --help), and not one that names an FMU to build first
+    (--through-fmu is checked as it is parsed: tests/cli has it)."""
+    if len(argv) < 2:
+        return True
+    return not (argv[1].isupper() or argv[1].endswith(":") or "--version" in argv
+                or "--through-fmu" in argv)
+
+
+HERRINGBONE_COMMANDS = [entry for entry in documented("herringbone") if _parses_alone(entry[1])]
+PYTHON_COMMANDS = documented("python")
+
+
+def test_the_documents_show_commands_of_every_kind():
+    subcommands = {argv[1] for _, argv, _ in HERRINGBONE_COMMANDS if len(argv) > 1}
+    assert len(HERRINGBONE_COMMANDS) >= 10 and len(subcommands) >= 5, subcommands
+    assert any(argv[1] == "build_fmu.py" for _, argv, _ in PYTHON_COMMANDS)
+
+
+@pytest.mark.parametrize("entry", [e for e in HERRINGBONE_COMMANDS if not e[2]], ids=_identifier)
+def test_documented_herringbone_command_parses(entry):
+    _, argv, _ = entry
+    completed = run([*HERRINGBONE, *unbracketed(argv[1:]), "--help"], cwd=ROOT)
+    assert completed.returncode == 0, completed.stderr
+    assert completed.stdout.startswith("usage:")
+
+
+@pytest.mark.parametrize("entry", [e for e in HERRINGBONE_COMMANDS if e[2]], ids=_identifier)
+def test_documented_output_is_what_the_command_prints(entry, tmp_path):
+    _, argv, shown = entry
+    completed = run([*HERRINGBONE, *argv[1:]], cwd=tmp_path)
+    printed = (completed.stdout + completed.stderr).splitlines()
+    for line in shown:
+        assert line in printed, f"{line!r} not among {printed}"
+
+
+@pytest.mark.parametrize("entry", [e for e in HERRINGBONE_COMMANDS
+                                   if len(e[1]) > 2 and e[1][1] in CHEAP and not e[2]
+                                   and not any(PLACEHOLDER.search(a) for a in e[1])],
+                         ids=_identifier)
+def test_cheap_documented_command_runs(entry, tmp_path):
+    _, argv, _ = entry
+    completed = run([*HERRINGBONE, *argv[1:]], cwd=tmp_path)
+    assert completed.returncode == 0, completed.stderr
+
+
+@pytest.mark.parametrize("script", sorted({argv[1] for _, argv, _ in PYTHON_COMMANDS}))
+def test_documented_script_answers_help(script):
+    completed = run([sys.executable, script, "--help"], cwd=ROOT)
+    assert completed.returncode == 0, completed.stderr
+    assert "usage" in completed.stdout.lower()
+
+
+def test_readme_links_lead_to_files_of_the_repository():
+    """The README is read outside the site (where mkdocs checks the links): its own check."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text)
+    local = [t for t in targets if "://" not in t]
+    assert len(local) >= 10
+    assert [t for t in local if not (ROOT / t).exists()] == []

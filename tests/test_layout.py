@@ -1,4 +1,4 @@
-"""The package's layout (issue 17) and the installed package as the product (issue 14): the
+"""The package's layout and the installed package as the product: the
 stepping contract both integrators keep, no import cycles, an FMU runtime guard that imports
 nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`. The install
 itself (non-editable, commands run from a temporary folder) is .ci/installed_package's."""
@@ -9,7 +9,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from conftest import MODELS
+from helpers import MODELS
 
 import herringbone
 from herringbone import cli, shipped
@@ -29,9 +29,10 @@ def test_both_steppers_satisfy_the_stepping_contract(reference_scene):
 
 
 def module_imports(path: Path, package: str) -> set[str]:
-    """The herringbone modules a module imports at its top level (not inside functions)."""
+    """The herringbone modules a module imports anywhere: at its top level and inside its
+    functions (a function-level import hides a cycle until the function runs)."""
     found = set()
-    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if isinstance(node, ast.ImportFrom):
             base = package.split(".")[:len(package.split(".")) - node.level + 1] \
                 if node.level else []
@@ -42,7 +43,7 @@ def module_imports(path: Path, package: str) -> set[str]:
     return found
 
 
-def test_no_module_level_import_cycles():
+def test_no_import_cycles_not_even_inside_functions():
     modules = {}
     for path in PACKAGE.rglob("*.py"):
         parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
@@ -55,7 +56,8 @@ def test_no_module_level_import_cycles():
         edges = set()
         for imported in module_imports(path, package):
             while imported:  # importing a.b.c runs a and a.b first
-                if imported in modules and imported != name:
+                # but not the packages that hold this module: their __init__ ran before it
+                if imported in modules and not (name + ".").startswith(imported + "."):
                     edges.add(imported)
                 imported = imported.rpartition(".")[0]
         graph[name] = edges
@@ -75,6 +77,51 @@ def test_no_module_level_import_cycles():
 
     for name in sorted(graph):
         visit(name)
+
+
+# Functions over the size limit that live where this work may not reach yet (the compiled
+# kernels, edited elsewhere): each named, so that the list can only shrink. A function that
+# grows past the limit anywhere else fails the test.
+OVERSIZED = {"integrate/compiled/dop853.py:step", "integrate/compiled/radau.py:step",
+             "integrate/compiled/walk.py:locate_event", "integrate/compiled/walk.py:walk"}
+MOST_LINES, MOST_PARAMETERS = 60, 12
+
+
+def _function_sizes():
+    """(where, lines, parameters) of every function and method of the package."""
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                a = node.args
+                parameters = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
+                              + (a.vararg is not None) + (a.kwarg is not None))
+                yield (f"{path.relative_to(PACKAGE).as_posix()}:{node.name}",
+                       node.end_lineno - node.lineno + 1, parameters)
+
+
+def test_every_function_fits_on_a_screen():
+    """At most 60 lines (decorators aside, docstring included) and 12 parameters."""
+    over = {where: (lines, parameters) for where, lines, parameters in _function_sizes()
+            if lines > MOST_LINES or parameters > MOST_PARAMETERS}
+    assert set(over) - OVERSIZED == set(), f"over {MOST_LINES} lines or {MOST_PARAMETERS} " \
+        f"parameters: {sorted(set(over) - OVERSIZED)}"
+    assert OVERSIZED <= set(over), f"now within the limits: {sorted(OVERSIZED - set(over))}; " \
+        "take them off OVERSIZED"
+
+
+def test_the_library_imports_nothing_of_the_command_line():
+    """herringbone.cli imports the library, never the other way round."""
+    importers = []
+    for path in PACKAGE.rglob("*.py"):
+        relative = path.relative_to(PACKAGE)
+        if relative.parts[0] == "cli":
+            continue
+        parts = list(relative.parent.parts)
+        package = ".".join(["herringbone", *parts])
+        if any(name == "herringbone.cli" or name.startswith("herringbone.cli.")
+               for name in module_imports(path, package)):
+            importers.append(str(relative))
+    assert not importers, importers
 
 
 def _undocumented(tree, path, nested=False):

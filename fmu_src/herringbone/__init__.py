@@ -8,7 +8,14 @@ The package by concept:
 - `analysis/`: Floquet stability, mesh phasing and `info`, sweeps, Campbell diagram, plots;
 - `fmu/`: the FMI 2.0 co-simulation slave, its builder, and running a scene through an FMU;
 - `arguments` (the allowed run arguments), `shipped` (the scenes that come with the package),
-  `cli` (the `herringbone` command).
+  `optional` (the analysis and co-simulation dependencies, imported where used), `suggest`
+  ("did you mean"), `cli` (the `herringbone` command, which the library never imports).
+
+The public API: `load_scene`, `scene_from_dict` and `Scene` (SceneError for a bad scene);
+`simulate` (the compiled integrator, what the FMU runs) and `reference_simulate` (scipy's),
+which give a `Result` and raise ValueError for a bad argument, IntegrationError
+(StepBudgetExceeded among them) for a run that cannot go on; `sweep`; `scene_inputs` (a scene's
+input table for fmpy).
 
 The public API is loaded on first use, so that `import herringbone.fmu.runtime` (which the FMU
 runs before numpy is imported, to name a missing dependency) imports nothing heavy.
@@ -24,10 +31,17 @@ _API = {
     "reference_simulate": ".integrate.reference",
     "simulate": ".integrate.compiled_stepper",
     "sweep": ".analysis.sweep",
+    # what a run gives and what it raises (besides ValueError for a bad argument)
+    "Result": ".integrate.contract", "IntegrationError": ".integrate.contract",
+    "StepBudgetExceeded": ".integrate.compiled_stepper", "MissingDependency": ".optional",
+    # a scene's input table for fmpy, held between its rows
+    "scene_inputs": ".fmu.run",
 }
-_SUBMODULES = ("model", "integrate", "analysis", "fmu", "arguments", "shipped", "cli")
+_SUBMODULES = ("model", "integrate", "analysis", "fmu", "arguments", "shipped", "cli", "optional",
+               "suggest")
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "reference_simulate",
-           "simulate", "sweep", "__version__"]
+           "simulate", "sweep", "Result", "IntegrationError", "StepBudgetExceeded",
+           "MissingDependency", "scene_inputs", "__version__"]
 
 
 def __getattr__(name):

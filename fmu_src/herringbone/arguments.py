@@ -18,24 +18,34 @@ import numbers
 import os
 import re
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
-from .model.parameters import FINITE, POSITIVE, Range
+from .model.parameters import (
+    FINITE,
+    NON_NEGATIVE,
+    POSITIVE,
+    RPM_PER_RAD_S,
+    Range,
+    number_problem,
+)
 from .model.scene import Scene, SceneError
+from .suggest import did_you_mean
 
 # Below this the error control works on rounding noise (the FMU's bound; scipy itself raises
 # an rtol below 100 machine epsilons, 2.2e-14, with a warning).
 TIGHTEST_TOLERANCE = 1e-12
 # The compiled integrator, as the FMU's solver_tolerance: its steps are bounded by stability
-# (integrator.EXPLICIT_STEP_BOUND) and end at every contact switch, so even at 1e-2 it stays
+# (compiled_stepper.EXPLICIT_STEP_BOUND) and end at every contact switch, so even at 1e-2 it stays
 # within 7e-4 of the mesh force (reference scene, 0.01 s, against the reference at 1e-10).
 COMPILED_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-2)
 # The scipy reference: nothing bounds its steps but the tolerance, so coarse ones step over
 # contact switches. Measured on the reference scene over 0.01 s against 1e-10: F_mesh 31 % off
 # at 1e-4 (and n_contacts wrong), 5e-4 at 1e-5, 1e-6 at 1e-6.
 REFERENCE_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-5)
-COMPILED_METHODS = ("auto", "dop853", "radau")  # integrator.METHODS
+COMPILED_METHODS = ("auto", "dop853", "radau")  # compiled_stepper.METHODS
 REFERENCE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")  # scipy's solve_ivp
 
 
@@ -66,15 +76,10 @@ class Argument:
         """Why `value` is not allowed ("is -1.0; allowed: …"), or None if it is."""
         if self.choices is not None:
             return None if isinstance(value, str) and value in self.choices \
-                else f"is {value!r}; allowed: {self.describe()}"
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            return f"must be a number, got {type(value).__name__} {value!r}; " \
-                   f"allowed: {self.describe()}"
-        value = float(value)
-        fits = (self.infinite and value == math.inf) or self.allowed.contains(value)
-        if not fits or (self.whole and value != int(value)):
-            return f"is {value!r}; allowed: {self.describe()}"
-        return None
+                else f"is {value!r}; allowed: {self.describe()}{did_you_mean(value, self.choices)}"
+        return number_problem(float(value) if isinstance(value, numbers.Real)
+                              and not isinstance(value, bool) else value, self.allowed,
+                              whole=self.whole, infinite=self.infinite, meaning=self.meaning)
 
     def check(self, value):
         """`value` itself if it is allowed; else ValueError("<name> is …; allowed: …")."""
@@ -103,8 +108,8 @@ STOP_TIME = Argument("stop_time", "--stop-time", "simulated seconds", POSITIVE)
 OUTPUT_INTERVAL = Argument("output_interval", "--output-interval",
                            "seconds between output samples, at most the stop time", POSITIVE)
 REFERENCE_TOLERANCE_ARGUMENT = Argument(
-    "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
-    "scipy reference", REFERENCE_TOLERANCE)
+    "tolerance", "--tolerance", "error in the forces over the run relative to the static mesh "
+    "force, for the scipy reference", REFERENCE_TOLERANCE)
 COMPILED_TOLERANCE_ARGUMENT = Argument(
     "tolerance", "--tolerance", "error per step relative to the static mesh force, for the "
     "compiled integrator", COMPILED_TOLERANCE)
@@ -126,6 +131,16 @@ FMU_SOLVER_METHOD = Argument("solver_method", None, "the compiled integrator's m
 INITIAL_PINION_ANGLE = Argument("initial_pinion_angle", None, "pinion angle at t = 0, rad")
 PINION_SPEED = Argument("pinion_speed", None, "pinion speed, rad/s", POSITIVE)
 SPEED_COUNT = Argument("COUNT", None, "number of speeds", Range(2.0, None), whole=True)
+# How each point of a sweep is run (analysis.sweep_point.Protocol)
+SETTLE_RESIDUAL = Argument("settle_residual", "--settle-residual", "fraction of the "
+                           "least-damped mode's start-up amplitude left when the window begins",
+                           Range(0.0, 1.0, low_open=True, high_open=True))
+SETTLE_TIME = Argument("settle_time", "--settle-time", "seconds settled before the window, "
+                       "instead of the time derived from --settle-residual", NON_NEGATIVE)
+WINDOW_PERIODS = Argument("window_periods", "--window-periods", "mesh periods recorded per "
+                          "point", Range(1.0, None), whole=True)
+SAMPLES_PER_PERIOD = Argument("samples_per_period", "--samples-per-period", "samples per mesh "
+                              "period", Range(4.0, None), whole=True)
 
 
 def check_scene(scene) -> Scene:
@@ -162,7 +177,7 @@ def check_reference_run(scene, stop_time=None, output_interval=None, tolerance=1
 
 def check_compiled_run(scene, stop_time=None, output_interval=None, tolerance=1e-7,
                        method="auto", max_step=math.inf) -> None:
-    """Every argument of integrator.simulate; ValueError (SceneError for the scene) naming the
+    """Every argument of herringbone.simulate; ValueError (SceneError for the scene) naming the
     first culprit and what is allowed."""
     check_run_times(scene, stop_time, output_interval)
     COMPILED_TOLERANCE_ARGUMENT.check(tolerance)
@@ -186,8 +201,30 @@ def check_speeds(speeds, name="speeds"):
     return values
 
 
+class SpeedSweep(NamedTuple):
+    """`--speeds FROM TO COUNT`: COUNT evenly spaced pinion speeds from FROM to TO, in rad/s
+    (or rpm, `in_rpm`)."""
+
+    low: float
+    high: float
+    size: int
+    in_rpm: bool = False
+
+    def speeds(self):
+        """The speeds, rad/s (numpy array)."""
+        import numpy as np
+
+        scale = 1.0 / RPM_PER_RAD_S if self.in_rpm else 1.0
+        return np.linspace(self.low, self.high, self.size) * scale
+
+
+# what `--speeds FROM TO COUNT` allows, in words (every command's message says it so)
+SPEED_SWEEP_ALLOWED = "0 < FROM < TO (rad/s, or rpm with --rpm), COUNT >= 2 speeds"
+
+
 def speed_sweep_problem(low: float, high: float, count: float) -> str | None:
-    """Why FROM TO COUNT of `herringbone stability --speeds` is not allowed, or None."""
+    """Why FROM TO COUNT of `--speeds` (every command that takes speeds) is not allowed, or
+    None."""
     for label, value in (("FROM", low), ("TO", high)):
         if PINION_SPEED.problem(value) is not None:
             return f"{label} {value:g} is not a finite speed > 0"
@@ -207,8 +244,9 @@ def number(text: str) -> float:
 
 
 def output_path_problem(path: Path) -> str | None:
-    """Why a file cannot be written at `path` (its folder created as needed), or None: the
-    nearest existing ancestor must be a folder we may write in, and `path` no folder."""
+    """Why a file cannot be written at `path`, or None: the nearest existing ancestor must be
+    a folder we may write in, and `path` no folder; the folder of `path` is made here, and a
+    file written in it and removed, so that no long run ends on an output it cannot write."""
     path = Path(path)
     if path.is_dir():
         return f"{path} is a folder"
@@ -219,7 +257,47 @@ def output_path_problem(path: Path) -> str | None:
         return f"{ancestor} is a file, not a folder"
     if not os.access(ancestor, os.W_OK | os.X_OK):
         return f"the folder {ancestor} is not writable"
+    # where access() cannot tell (root, /proc, a read-only mount): make the folder and a file
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path.parent):
+            pass
+    except OSError as error:
+        return f"cannot write in {path.parent}: {error.strerror}"
     return None
+
+
+def output_file_problem(path: Path, suffixes: tuple[str, ...] = ()) -> str | None:
+    """Why the file `path` cannot be written (see output_path_problem) or does not end in one
+    of `suffixes` (any, when empty); None if it can."""
+    if suffixes and not Path(path).is_dir() and Path(path).suffix.lower() not in suffixes:
+        return f"not a {' or '.join(suffixes)} file"
+    return output_path_problem(Path(path))
+
+
+def output_file(*suffixes: str):
+    """argparse `type=` for a file to write ending in one of `suffixes`: returns the check,
+    which gives the Path or raises ArgumentTypeError saying why not and what is allowed."""
+    def checked(text: str) -> Path:
+        problem = output_file_problem(Path(text), suffixes)
+        if problem is not None:
+            kind = f"a {' or '.join(suffixes)} file" if suffixes else "a file"
+            raise argparse.ArgumentTypeError(f"{text}: cannot write there: {problem}; allowed: "
+                                             f"{kind} in a folder that exists or can be made "
+                                             "and that you can write in")
+        return Path(text)
+
+    return checked
+
+
+def existing_fmu(text: str) -> Path:
+    """argparse `type=` for an FMU to read: the Path of an existing .fmu file, or
+    ArgumentTypeError."""
+    path = Path(text)
+    if path.suffix.lower() != ".fmu" or not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text}: no such FMU file; allowed: the path of a "
+                                         "gear FMU (herringbone build-fmu SCENE builds one)")
+    return path
 
 
 def output_path(text: str) -> Path:
@@ -259,7 +337,9 @@ class OneLineParser(argparse.ArgumentParser):
         if message.startswith("argument "):
             option, _, rest = message[len("argument "):].partition(": ")
             choice = re.fullmatch(r"invalid choice: (.*) \(choose from (.*)\)", rest)
-            rest = f"{choice[1]}: allowed: {choice[2]}" if choice else rest
+            if choice:
+                given, allowed = choice[1].strip("'"), re.findall(r"'([^']*)'", choice[2])
+                rest = f"{choice[1]}: allowed: {choice[2]}{did_you_mean(given, allowed)}"
             message = f"{option.split('/')[-1]} {rest}"
         print(f"{self.prog}: {message}; see `{self.help_command}`", file=sys.stderr)
         sys.exit(2)

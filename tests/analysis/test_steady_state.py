@@ -2,10 +2,9 @@
 with long time runs on stable branches, periodicity of unstable orbits checked by the
 independent scipy reference, Floquet multipliers against the linear mesh's, the jump scene's
 folds against up- and down-sweeps by time integration, bad input."""
-from pathlib import Path
-
 import numpy as np
 import pytest
+from helpers import MODELS
 
 import herringbone
 from herringbone.analysis.continuation import continue_in_speed
@@ -21,7 +20,6 @@ from herringbone.analysis.sweep_point import Protocol, run_window, static_mesh_f
 from herringbone.integrate.contract import Position
 from herringbone.integrate.stepping import ScipyStepper
 
-MODELS = Path(__file__).resolve().parents[2] / "models"
 # the time runs the orbits are held to: transients decayed to 1e-8, the integrator at 1e-10
 SETTLED = Protocol(settle_residual=1e-8, tolerance=1e-10, window_periods=2, floquet=False)
 

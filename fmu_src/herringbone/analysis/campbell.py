@@ -4,16 +4,19 @@ excites a mode (the resonance speeds of `herringbone info`).
 
 The model has no speed-dependent stiffness or gyroscopic terms, so each natural frequency
 (at the period-mean mesh stiffness, herringbone.model.assembly.natural_modes) is a horizontal line.
+Each mode is named by the kind of motion that holds most of its kinetic energy: torsional (the
+angles φ), lateral (the displacements x along the mesh force) or tilt (the tilts ψ).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.assembly import natural_modes
-from .plots import RPM_PER_RAD_S, _pyplot, _save
+from ..arguments import speed_sweep_problem
+from ..model.assembly import GearTrainModel, natural_modes
+from ..model.parameters import RPM_PER_RAD_S
+from .plots import _pyplot, _save
 from .report import HARMONICS, resonance_speeds
 
 
@@ -24,6 +27,50 @@ class Crossing:
     speed: float  # pinion speed, rad/s
     order: int  # k: the mesh harmonic
     frequency: float  # natural frequency, Hz
+
+
+# the kind of motion of each coordinate, by the prefix of its name (docs/model.md section 1)
+MOTION_KINDS = {"phi": "torsional", "x": "lateral", "psi": "tilt"}
+SHARE_NAMED = 0.25  # a kind or a body holding this share of a mode's kinetic energy is named
+
+
+@dataclass(frozen=True)
+class Mode:
+    """A natural mode named by what moves in it."""
+    frequency: float  # Hz
+    kind: str  # "torsional", "lateral", "tilt", or kinds joined by "/" (largest share first)
+    bodies: tuple[str, ...]  # motor, pinion, wheel, load: those that hold SHARE_NAMED or more
+
+    @property
+    def label(self) -> str:
+        """For instance "684 Hz torsional (wheel)"."""
+        return f"{self.frequency:.0f} Hz {self.kind} ({', '.join(self.bodies)})"
+
+
+def _named(shares: dict[str, float]) -> list[str]:
+    """The keys holding SHARE_NAMED of the total or more (at least the largest), largest first."""
+    ranked = sorted(shares, key=shares.get, reverse=True)  # type: ignore[arg-type]
+    return [ranked[0]] + [k for k in ranked[1:] if shares[k] >= SHARE_NAMED]
+
+
+def elastic_modes(scene) -> list[Mode]:
+    """The elastic natural modes (ascending frequency, no rigid rotation), each named by the
+    kinetic-energy shares m_i·v_i² of its mass-normalized eigenvector's coordinates, summed by
+    kind of motion and by body."""
+    frequencies, shapes, coordinates = natural_modes(scene)
+    mass = GearTrainModel(scene).mass
+    elastic = frequencies > 1e-6 * max(frequencies.max(), 1.0)
+    modes = []
+    for frequency, shape in zip(frequencies[elastic], shapes.T[elastic]):
+        energy = mass * shape**2 / float(np.sum(mass * shape**2))
+        kinds: dict[str, float] = {}
+        bodies: dict[str, float] = {}
+        for name, share in zip(coordinates, energy):
+            motion, body = name.split("_", 1)
+            kinds[MOTION_KINDS[motion]] = kinds.get(MOTION_KINDS[motion], 0.0) + share
+            bodies[body] = bodies.get(body, 0.0) + share
+        modes.append(Mode(float(frequency), "/".join(_named(kinds)), tuple(_named(bodies))))
+    return modes
 
 
 def elastic_frequencies(scene) -> np.ndarray:
@@ -41,25 +88,52 @@ def crossings(scene, low: float, high: float) -> list[Crossing]:
 
 
 def check_speed_range(low: float, high: float) -> None:
-    """ValueError unless 0 < low < high are finite pinion speeds (rad/s)."""
-    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
-        raise ValueError(f"--speeds {low:g} {high:g}; allowed: 0 < LO < HI, finite")
+    """ValueError unless 0 < low < high are finite pinion speeds (rad/s), checked as every
+    speed range is (arguments.speed_sweep_problem)."""
+    problem = speed_sweep_problem(low, high, 2)
+    if problem is not None:
+        raise ValueError(f"speeds {low:g} to {high:g} rad/s: {problem}; allowed: 0 < low < high")
+
+
+def _spread(values, gap, ceiling):
+    """`values` (ascending) moved apart as little as possible so that neighbours are at least
+    `gap` apart and none is above `ceiling`: where labels go."""
+    placed = list(values)
+    for i in range(1, len(placed)):
+        placed[i] = max(placed[i], placed[i - 1] + gap)
+    if placed and placed[-1] > ceiling:
+        placed[-1] = ceiling
+        for i in range(len(placed) - 2, -1, -1):
+            placed[i] = min(placed[i], placed[i + 1] - gap)
+    return placed
+
+
+def _label_modes(axes, modes, top):
+    """Each mode's frequency line named beside the plot, to the right, labels kept apart."""
+    places = _spread([m.frequency for m in modes], 0.045 * top, top)
+    for mode, place in zip(modes, places):
+        axes.annotate(mode.label, xy=(1.0, mode.frequency), xytext=(1.02, place),
+                      xycoords=("axes fraction", "data"), textcoords=("axes fraction", "data"),
+                      fontsize=8, va="center", ha="left", color="C0",
+                      arrowprops={"arrowstyle": "-", "color": "C0", "lw": 0.6})
 
 
 def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Crossing]:
-    """Write the diagram (rpm below, rad/s above; Hz up) and return its crossings."""
+    """Write the diagram (rpm below, rad/s above; Hz up; each mode named by its type beside
+    it) and return its crossings."""
     check_speed_range(low, high)
     plt = _pyplot()
     z = scene.parameters["z_pinion"]
-    frequencies = elastic_frequencies(scene)
+    modes = elastic_modes(scene)
     found = crossings(scene, low, high)
     rpm = np.linspace(low, high, 200) * RPM_PER_RAD_S
-    top = max(HARMONICS[-1] * z * rpm[-1] / 60.0, frequencies.min()) * 1.1
-    figure, axes = plt.subplots(figsize=(10, 6))
-    for number, f in enumerate(f for f in frequencies if f <= top):
-        axes.axhline(f, color="C0", lw=1.0, label="natural frequency f_n" if number == 0 else None)
-        axes.annotate(f"{f:.0f} Hz", (1.0, f), xycoords=("axes fraction", "data"),
-                      fontsize=7, va="bottom", ha="right", color="C0")
+    top = max(HARMONICS[-1] * z * rpm[-1] / 60.0, modes[0].frequency) * 1.1
+    shown = [m for m in modes if m.frequency <= top]
+    figure, axes = plt.subplots(figsize=(11, 6))
+    for number, mode in enumerate(shown):
+        axes.axhline(mode.frequency, color="C0", lw=1.0,
+                     label="natural frequency f_n" if number == 0 else None)
+    _label_modes(axes, shown, top)
     for k in HARMONICS:
         axes.plot(rpm, k * z * rpm / 60.0, color=f"C{3 + k}", lw=1.0, ls="--",
                   label=f"mesh order k = {k}: k·z·n/60")
@@ -72,7 +146,7 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
     upper = axes.secondary_xaxis("top", functions=(lambda n: n / RPM_PER_RAD_S,
                                                    lambda w: w * RPM_PER_RAD_S))
     upper.set_xlabel("pinion speed, rad/s")
-    axes.legend(loc="upper left", fontsize=8)
+    axes.legend(loc="upper left", fontsize=8, framealpha=1.0)
     axes.grid(True, alpha=0.3)
     axes.set_title(title)
     _save(figure, path)

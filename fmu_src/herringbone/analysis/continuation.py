@@ -138,6 +138,7 @@ class SpeedContinuation:
     # --- v <-> (z, ω) ---------------------------------------------------------------------
 
     def split(self, v):
+        """(z, ω) of the scaled unknowns v."""
         return v[:self.size] * AMPLITUDE_UNIT, float(v[self.size] * self.speed_unit)
 
     def residual(self, v):

@@ -17,6 +17,8 @@ from __future__ import annotations
 import os
 import sys
 
+from ..optional import require
+
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
@@ -34,8 +36,7 @@ def load_integrator(scene) -> bool:
 
 def progress_bar(total: int, enabled: bool):
     """A tqdm bar over `total` sweep points, or a bar that shows nothing when not `enabled`."""
-    from tqdm import tqdm
-
+    tqdm = require("tqdm", "the sweep's progress bar").tqdm
     return tqdm(total=total, unit="point", desc="sweep", file=sys.stderr, disable=not enabled,
                 smoothing=0.0)
 
@@ -68,7 +69,8 @@ class _dask_client:
         self.cluster = None
 
     def __enter__(self):
-        from dask.distributed import Client, LocalCluster
+        distributed = require("dask.distributed", "a sweep on Dask (or give workers=0)")
+        Client, LocalCluster = distributed.Client, distributed.LocalCluster
 
         if self.scheduler is None:
             load_integrator(self.scene)  # fills the cache that the workers then load from

@@ -4,19 +4,18 @@ input was in rad/s), frequencies in Hz, forces in kN, dte in µm. Each function 
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-RPM_PER_RAD_S = 30.0 / math.pi
+from ..optional import require
+
 HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
 
 
 def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+    """matplotlib.pyplot drawing to files (Agg); MissingDependency naming the extra to install
+    if matplotlib is not."""
+    require("matplotlib", "the pictures").use("Agg")
+    return require("matplotlib.pyplot", "the pictures")
 
 
 def _save(figure, path):
@@ -40,30 +39,72 @@ def _shade(axes, time, mask, label):
                      label=label if number == 0 else None)
 
 
+def _legend_beside(axes) -> None:
+    """The legend to the right of the panel, off the data."""
+    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+
+
+def _same(a, b) -> bool:
+    """Whether two force histories are equal to a millionth of their largest magnitude (the
+    halves of a gear whose halves are alike, a shaft's left and right bearings)."""
+    scale = max(float(np.max(np.abs(a))), float(np.max(np.abs(b))), 1e-300)
+    return bool(np.max(np.abs(a - b)) <= 1e-6 * scale)
+
+
+def _plot_halves(axes, time, results) -> None:
+    """Mesh force and its halves (kN); a pair of equal halves drawn once and named so."""
+    axes.plot(time, results["F_mesh"] / 1e3, color="k", lw=1.0, label="F_mesh", zorder=3)
+    left, right = results["F_mesh_left"], results["F_mesh_right"]
+    if _same(left, right):
+        axes.plot(time, left / 1e3, color="C0", lw=0.8,
+                  label="each half\n(left = right: halves alike)")
+    else:
+        axes.plot(time, left / 1e3, color="C0", lw=0.8, label="left half")
+        axes.plot(time, right / 1e3, color="C1", lw=0.8, ls="--", label="right half")
+    axes.set_ylabel("mesh force, kN")
+
+
+def _plot_bearing_ripple(axes, time, results, bearings) -> None:
+    """Each bearing reaction's ripple about its own mean (kN), the mean in the legend: the
+    ripple is a few percent of the mean, lost on a scale from zero. A body's left and right
+    bearings are drawn once where they carry equal forces."""
+    drawn: list[str] = []
+    for name in bearings:
+        body, side = name.removeprefix("F_brg_").rsplit("_", 1)
+        if any(_same(results[other], results[name]) for other in drawn):
+            continue
+        others = [n for n in bearings if n != name and n.startswith(f"F_brg_{body}_")]
+        if others and all(_same(results[n], results[name]) for n in others):
+            label = f"{body}, left = right"
+        else:
+            label = f"{body} {side}"
+        force = results[name] / 1e3
+        axes.plot(time, force - force.mean(), color=f"C{len(drawn)}", lw=0.8,
+                  label=f"{label} (mean {force.mean():+.2f} kN)")
+        drawn.append(name)
+    axes.set_ylabel("bearing reaction\nabout its mean, kN")
+
+
 def plot_time_histories(results: dict, path, title: str) -> None:
-    """Four panels against time (ms): mesh force and its halves, bearing reactions, dte;
-    spans with a half out of contact shaded."""
+    """Panels against time (ms): mesh force and its halves (kN), the bearing reactions' ripple
+    about their means (kN), dte (µm); spans with a half out of contact shaded."""
     plt = _pyplot()
     time = results["time"] * 1e3
     bearings = [n for n in results if n.startswith("F_brg_")]
     panels = 3 if bearings else 2
-    figure, axes = plt.subplots(panels, 1, figsize=(10, 2.6 * panels + 0.6), sharex=True)
+    figure, axes = plt.subplots(panels, 1, figsize=(11, 2.6 * panels + 0.6), sharex=True)
     lost = contact_lost(results)
-    axes[0].plot(time, results["F_mesh"] / 1e3, color="k", lw=1.0, label="F_mesh")
-    axes[0].plot(time, results["F_mesh_left"] / 1e3, color="C0", lw=0.8, label="left half")
-    axes[0].plot(time, results["F_mesh_right"] / 1e3, color="C1", lw=0.8, label="right half")
-    axes[0].set_ylabel("mesh force, kN")
-    for name in bearings:
-        axes[1].plot(time, results[name] / 1e3, lw=0.8, label=name.removeprefix("F_brg_"))
+    _plot_halves(axes[0], time, results)
     if bearings:
-        axes[1].set_ylabel("bearing reaction, kN")
+        _plot_bearing_ripple(axes[1], time, results, bearings)
     axes[-1].plot(time, results["dte"] * 1e6, color="C2", lw=0.9, label="dte")
     axes[-1].set_ylabel("dte, µm")
     axes[-1].set_xlabel("time, ms")
+    axes[-1].set_xlim(time[0], time[-1])
     for panel in axes:
         _shade(panel, time, lost, "a half out of contact")
         panel.grid(True, alpha=0.3)
-        panel.legend(loc="upper right", fontsize=8, ncol=2)
+        _legend_beside(panel)
     axes[0].set_title(title)
     _save(figure, path)
 
@@ -94,7 +135,7 @@ def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) 
     keep = results["time"] >= skip
     interval = float(np.diff(results["time"][keep]).mean())
     top = min(0.5 / interval, max(HARMONICS_SHOWN + 0.5, 1) * mesh_frequency * 1.2)
-    figure, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    figure, axes = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
     for panel, name, scale, unit in ((axes[0], "dte", 1e6, "µm"),
                                      (axes[1], "F_mesh", 1e-3, "kN")):
         frequency, amplitude = amplitude_spectrum(results[name][keep] * scale, interval)
@@ -102,7 +143,7 @@ def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) 
         _mark_frequencies(panel, mesh_frequency, natural, top)
         panel.set_ylabel(f"{name} amplitude, {unit}")
         panel.grid(True, which="both", alpha=0.3)
-        panel.legend(loc="upper right", fontsize=8)
+        _legend_beside(panel)
     axes[1].set_xlim(0, top)
     axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz (record length)",
                      (0.01, 0.02), xycoords="axes fraction", fontsize=8)

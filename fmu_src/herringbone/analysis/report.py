@@ -7,15 +7,13 @@ Output is plain ASCII so that any console shows it.
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 
-from ..arguments import OneLineParser
 from ..model.assembly import mass_matrix, natural_modes
 from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
-from ..model.scene import SceneError, load_scene
+from ..model.parameters import RPM_PER_RAD_S
 from .phasing import scene_phasing
 
 HARMONICS = (1, 2, 3)
@@ -70,7 +68,7 @@ def scene_report(scene) -> str:
     speed = abs(p["w0_pinion"])
     f_mesh = speed * g.z_pinion / (2.0 * math.pi)
     lines += ["", f"Mesh frequency at w0_pinion = {speed:g} rad/s "
-                  f"({speed * 30 / math.pi:.0f} rpm): {f_mesh:.2f} Hz", ""]
+                  f"({speed * RPM_PER_RAD_S:.0f} rpm): {f_mesh:.2f} Hz", ""]
     frequencies, shapes, names = natural_modes(scene, pinion_angle=None)
     masses = np.diag(mass_matrix(scene))
     # a numerically zero eigenvalue gives a frequency ~1e-8 of the largest one
@@ -84,25 +82,8 @@ def scene_report(scene) -> str:
               "  f_n / Hz    " + "".join(f"{f'k = {k}':<22}" for k in HARMONICS)]
     for f in frequencies[frequencies >= rigid_below]:
         speeds = resonance_speeds(f, g.z_pinion)
-        cells = [f"{w * 30 / math.pi:.0f} ({w:.1f})" if w * 30 / math.pi <= MAX_RPM else "-"
+        cells = [f"{w * RPM_PER_RAD_S:.0f} ({w:.1f})" if w * RPM_PER_RAD_S <= MAX_RPM else "-"
                  for w in speeds.values()]
         if any(cell != "-" for cell in cells):
             lines.append(f"  {f:10.2f}  " + "".join(f"{cell:<22}" for cell in cells))
     return "\n".join(lines) + "\n"
-
-
-def info_main(argv: list[str]) -> int:
-    """`herringbone info SCENE`: print the scene report; 0 on success, 2 with one line on
-    stderr for a scene that cannot be loaded or bad usage."""
-    parser = OneLineParser(prog="herringbone info",
-                                     description="Geometry, mesh phasing, natural frequencies "
-                                                 "and resonance speeds of a scene.")
-    parser.add_argument("scene", metavar="SCENE", help="scene file (TOML)")
-    arguments = parser.parse_args(argv)
-    try:
-        scene = load_scene(arguments.scene)
-    except SceneError as error:
-        print(f"herringbone info: {error}", file=sys.stderr)
-        return 2
-    print(scene_report(scene), end="")
-    return 0

@@ -1,11 +1,15 @@
 """A progress bar (tqdm: simulated seconds done, time left) over any stepper's run.
 
-`ProgressStepper` wraps a stepper (stepping.ScipyStepper, integrator.CompiledStepper) and only
+`ProgressStepper` wraps a stepper (stepping.ScipyStepper, compiled_stepper.CompiledStepper) and only
 watches the samples it hands out, so a run with it gives the same numbers to the bit.
 """
 from __future__ import annotations
 
 import sys
+
+from ..arguments import check_compiled_run, check_reference_run
+from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_TOLERANCE
+from ..optional import require
 
 
 class ProgressStepper:
@@ -24,19 +28,63 @@ class ProgressStepper:
         return self._stepper.advance(position, end, torques, sample_times, watched)
 
 
-def reference_simulate_with_progress(scene, stop_time=None, output_interval=None,
-                                     tolerance=1e-10, progress=True):
-    """reference.reference_simulate (DOP853) with a progress bar on stderr."""
-    from tqdm import tqdm
+def progress_bar(total: float, description: str, enabled: bool = True):
+    """A tqdm bar on stderr over `total` simulated seconds (shows nothing unless `enabled`);
+    MissingDependency if tqdm is not installed."""
+    tqdm = require("tqdm", "the progress bar (or give --no-progress)").tqdm
+    return tqdm(total=total, unit="s", unit_scale=False, desc=description, file=sys.stderr,
+                disable=not enabled,
+                bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated "
+                           "[{elapsed}<{remaining}]")
 
-    from ..integrate.contract import simulate_with
-    from ..integrate.stepping import ScipyStepper
+
+def reference_simulate_with_progress(scene, stop_time=None, output_interval=None,
+                                     tolerance=REFERENCE_TOLERANCE, progress=True):
+    """reference.reference_simulate (DOP853) with a progress bar on stderr."""
+    return simulate_with_progress(scene, stop_time, output_interval, tolerance, reference=True,
+                                  progress=progress)
+
+
+def simulate_with_progress(scene, stop_time=None, output_interval=None, tolerance=None,
+                           reference=False, progress=True) -> dict:
+    """herringbone.simulate (or with `reference` reference_simulate) with a progress bar on
+    stderr, and a note there before the integrator is compiled (once per machine).
+
+    Parameters
+    ----------
+    scene : Scene
+    stop_time, output_interval : float or None
+        Seconds; None: the scene's.
+    tolerance : float or None
+        Error per step relative to the static mesh force; None: the integrator's default.
+    reference : bool
+        Run the scipy reference instead of the compiled integrator.
+    progress : bool
+        Show the bar.
+
+    Returns
+    -------
+    dict
+        {"time": …, output name: …}, the same numbers to the bit as without the bar.
+    """
+    from ..integrate.contract import Stepper, simulate_with
     from ..model.assembly import GearTrainModel
 
+    stepper: Stepper
     stop = scene.experiment.stop_time if stop_time is None else stop_time
-    with tqdm(total=stop, unit="s", unit_scale=False, desc=f"run {scene.name}",
-              file=sys.stderr, disable=not progress,
-              bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated "
-                         "[{elapsed}<{remaining}]") as bar:
-        stepper = ProgressStepper(ScipyStepper(GearTrainModel(scene), tolerance), bar)
-        return simulate_with(stepper, scene, stop_time, output_interval)
+    if reference:
+        from ..integrate.stepping import ScipyStepper
+
+        tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
+        check_reference_run(scene, stop_time, output_interval, tolerance)
+        stepper = ScipyStepper(GearTrainModel(scene), tolerance, horizon=stop)
+    else:
+        from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+        from ..integrate.first_start import announce_compiles
+
+        tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
+        check_compiled_run(scene, stop_time, output_interval, tolerance)
+        announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
+        stepper = CompiledStepper(GearTrainModel(scene), tolerance)
+    with progress_bar(stop, f"run {scene.name}", progress) as bar:
+        return simulate_with(ProgressStepper(stepper, bar), scene, stop_time, output_interval)

@@ -1,4 +1,4 @@
-"""Parametric stability of the linear mesh at constant speed: Floquet multipliers (issue 5).
+"""Parametric stability of the linear mesh at constant speed: Floquet multipliers.
 
 At a constant pinion speed ω the contact points move with φp = ω·t, so the stiffness K(φp) and
 damping C(φp) of the linear model (every point of each contact set loaded: no contact loss) repeat
@@ -41,8 +41,9 @@ import scipy.linalg
 
 from ..arguments import check_scene, check_speeds
 from ..model.assembly import GearTrainModel
+from ..model.parameters import RPM_PER_RAD_S
 
-SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/test_stability.py)
+SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/analysis/test_stability.py)
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
 _GAUSS_POINTS = np.array([0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0])
 _MATRICES_AT_ONCE = 8192  # exponentials evaluated in one batch (memory)
@@ -183,6 +184,9 @@ def largest_multiplier(scene, pinion_speed, substeps=SUBSTEPS, step_phase=STEP_P
     return np.abs(multipliers(scene, pinion_speed, substeps, step_phase)[..., 0])
 
 
+PROGRESS_BATCHES = 10  # stability_chart's batches of speeds when it reports its progress
+
+
 @dataclass(frozen=True)
 class StabilityChart:
     """The largest Floquet multiplier over a range of pinion speeds, as |λ|max per mesh period
@@ -218,35 +222,23 @@ def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...
                  for first, last in zip(firsts, lasts))
 
 
-CHART_GROUPS = 25  # a long chart is computed in this many groups of speeds, for its progress
-LONG_CHART = 200  # speeds from which a chart shows its progress (where stderr is a terminal)
-
-
 def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
-                    progress: bool | None = None) -> StabilityChart:
+                    on_progress=None) -> StabilityChart:
     """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them. A
     speed that is not finite and > 0, or no speed, raises ValueError before any work.
-    progress: a bar on stderr (tqdm) over groups of speeds; None: where the chart has at
-    least LONG_CHART speeds and stderr is a terminal. The groups are neighbouring speeds,
-    which share their Magnus step counts, so the work is the same; only the batches of
-    exponentials are smaller (the numbers are the same to 1e-13: tests/test_stability.py)."""
-    import sys
-
-    from tqdm import tqdm
-
+    `on_progress(count)`, if given, is called as each of about ten batches of speeds is done
+    (with the batch's size), for a progress bar."""
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
-    if progress is None:
-        progress = len(speeds) >= LONG_CHART and sys.stderr.isatty()
-    groups = np.array_split(speeds, min(CHART_GROUPS, len(speeds))) if progress else [speeds]
-    largest = []
-    with tqdm(total=len(speeds), unit="speed", desc="stability chart", file=sys.stderr,
-              disable=not progress) as bar:
-        for group in groups:
-            largest.append(largest_multiplier(scene, group, substeps, step_phase))
-            bar.update(len(group))
-    largest_modulus = np.concatenate(largest)
-    return StabilityChart(speeds, largest_modulus, unstable_bands(speeds, largest_modulus),
+    batches = np.array_split(speeds, min(len(speeds), PROGRESS_BATCHES)) \
+        if on_progress is not None else [speeds]
+    parts = []
+    for batch in batches:
+        parts.append(largest_multiplier(scene, batch, substeps, step_phase))
+        if on_progress is not None:
+            on_progress(len(batch))
+    largest = np.concatenate(parts)
+    return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
                           scene.parameters["z_pinion"])
 
 
@@ -254,11 +246,10 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
     frequency in Hz on the top axis), with the line 0 (growth above, decay below) and the
     unstable bands shaded."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import _pyplot
 
-    rpm = 60.0 / (2.0 * math.pi)
+    plt = _pyplot()
+    rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
     figure, axes = plt.subplots(figsize=(9, 4.5))
     axes.plot(chart.speeds * rpm, chart.largest_exponent, color="C0", lw=1.2,

@@ -17,7 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.parameters import INPUTS
+from ..model.parameters import INPUTS, unit_of, with_unit
+from ..optional import require
+from ..suggest import did_you_mean
 from .sweep_point import Protocol, point_row, run_window
 
 SPEED = "w0_pinion"
@@ -43,14 +45,16 @@ def sweep_axes(scene, speeds=None, params=None) -> dict[str, np.ndarray]:
         axes[name] = values
     if not axes:
         raise ValueError("nothing to sweep; allowed: speeds or a parameter "
-                         "(--speeds LO HI N, --param NAME LO HI N)")
+                         "(--speeds FROM TO COUNT, --param NAME FROM TO COUNT)")
     if len(axes) > MOST_AXES:
         raise ValueError(f"{len(axes)} quantities swept ({', '.join(axes)}); allowed: "
                          f"at most {MOST_AXES} (a grid of two)")
     checked = {}
     for name, values in axes.items():
         if name not in scene.parameters and name not in INPUTS:
-            raise ValueError(f"{name} is not a parameter of scene {scene.name}; allowed: "
+            known = [*scene.parameters, *INPUTS]
+            raise ValueError(f"{name} is not a parameter of scene {scene.name}"
+                             f"{did_you_mean(name, known)}; allowed: "
                              f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
         values = np.atleast_1d(np.asarray(values, dtype=float))
         if values.ndim != 1 or not len(values) or not np.all(np.isfinite(values)):
@@ -94,7 +98,7 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     window series (for spectra). workers: 0 runs the points here, one after the other; N >= 1
     starts a LocalCluster of N single-threaded worker processes (None: one per core);
     scheduler: address of a running Dask scheduler (workers is then ignored)."""
-    import pandas as pd
+    pd = require("pandas", "a sweep's table")
 
     from .distributed_run import map_points
 
@@ -132,18 +136,49 @@ def shooting_applies(scene, speeds, params, fmu) -> str | None:
 
 def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), method=None,
           **options):
-    """The sweep's table (pandas DataFrame).
+    """Run a scene over speeds and/or parameters: its periodic steady state directly, or past
+    its start-up transient by time integration.
 
-    method "shooting" (the default where it applies: a speed sweep at balanced constant
-    torques, not through an FMU): the branch of periodic steady states by continuation
-    (continuation.continue_in_speed), a row a point in branch order: a row at each requested
-    speed the branch passes (several where it folds back) and the points between that passing
-    a fold took; columns as the time table's figures plus floquet_exponent_per_s, stability
-    ("stable", "unstable", or "time" where no orbit converged and the point was run by time
-    integration), method, on_grid, event ("fold", "period doubling", "torus"). The protocol
-    serves the time-integration fallback. method "time": `run_sweep`'s table (the protocol of
-    sweep_point, each point from its static start), with method = stability = "time".
-    `options`: workers, scheduler, fmu, progress (workers and scheduler: time only)."""
+    Parameters
+    ----------
+    scene : Scene
+    speeds : array_like or None
+        Pinion speeds w0_pinion, rad/s.
+    params : dict or None
+        {parameter name (or "M_motor", "M_load"): values, in its unit}; with `speeds`, at
+        most two quantities in all (a grid).
+    protocol : Protocol
+        How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
+    method : {"shooting", "time"} or None
+        "shooting" (None's choice where it applies: a sweep of speeds alone at balanced
+        constant torques, not through an FMU): the branch of periodic steady states by
+        continuation (analysis.continuation); elsewhere it is refused with the reason. "time"
+        (None's choice elsewhere): each point from its static start past its transient.
+    **options
+        workers (0: here, one point after the other; None: one Dask process per core),
+        scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU):
+        time only; progress (a bar on stderr).
+
+    Returns
+    -------
+    pandas.DataFrame
+        "time": a row per point in grid order: the swept values, then speed_rpm, K_v, forces
+        (N), dte (µm), contact_lost_share, floquet_max (the columns name their units), method
+        and stability "time". "shooting": a row per branch point in branch order (a row at
+        each requested speed the branch passes, several where it folds back over it, and the
+        points that passing a fold took, on_grid False), the same figures, floquet_max and
+        floquet_exponent_per_s (1/s) of the orbit, stability ("stable", "unstable", or "time"
+        where no orbit converged and the point was run by time integration), method, on_grid,
+        event ("fold", "period doubling", "torus"); attrs["folds"]: the folds' speeds, rad/s.
+
+    Raises
+    ------
+    ValueError
+        A swept name or value that is not allowed, or method "shooting" where it does not
+        apply, before any work.
+    MissingDependency
+        pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
+    """
     if method not in (None, *METHODS):
         raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
     why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
@@ -202,8 +237,9 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
 
 
 def resonation_summary(table) -> str:
-    """Where the largest K_v of a table lies, as 'name = value, …'."""
+    """Where the largest K_v of a table lies, as 'name = value unit, …'
+    ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
     row = table.loc[table["K_v"].idxmax()]
     names = list(table.columns[:list(table.columns).index("speed_rpm")])
-    text = ", ".join(f"{name} = {row[name]:.6g}" for name in names)
+    text = ", ".join(f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}" for name in names)
     return text + (f" ({row['speed_rpm']:.0f} rpm)" if SPEED in names else "")

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plots import RPM_PER_RAD_S, _pyplot, _save, amplitude_spectrum
+from ..model.parameters import RPM_PER_RAD_S
+from .plots import _pyplot, _save, amplitude_spectrum
 from .report import HARMONICS, resonance_speeds
 
 
@@ -128,7 +129,10 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
 
 def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
     """Each point's dte amplitude spectrum as a trace at its speed (rpm, upward), scaled so
-    the largest peak spans two rows; mesh orders k·z·n/60 and natural frequencies drawn."""
+    the largest peak spans two rows, with a scale bar of amplitude beside the plot; mesh orders
+    k·z·n/60 and natural frequencies drawn. The speed axis spans the sweep's speeds."""
+    from matplotlib.transforms import blended_transform_factory
+
     plt = _pyplot()
     order = np.argsort(table["w0_pinion"].to_numpy())
     rpm = table["speed_rpm"].to_numpy()[order]
@@ -138,12 +142,13 @@ def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
         spectra.append(amplitude_spectrum(series[i]["dte"] * 1e6, interval))
     largest = max(s[1:].max() for _, s in spectra)
     row = np.diff(rpm).mean() if len(rpm) > 1 else 1.0
+    per_um = 2.0 * row / largest  # rpm of trace height per µm of amplitude
     top_frequency = HARMONICS[-1] * z_pinion * rpm.max() / 60.0 * 1.15
-    figure, axes = plt.subplots(figsize=(10, 7))
+    figure, axes = plt.subplots(figsize=(11, 7))
     for n, (frequency, amplitude) in zip(rpm, spectra):
         keep = frequency <= top_frequency
-        axes.plot(frequency[keep], n + 2.0 * row * amplitude[keep] / largest, color="k", lw=0.7)
-    speeds = np.linspace(0.0, rpm.max() * 1.05, 50)
+        axes.plot(frequency[keep], n + per_um * amplitude[keep], color="k", lw=0.7)
+    speeds = np.linspace(0.0, rpm.max(), 50)
     for k in HARMONICS:
         axes.plot(k * z_pinion * speeds / 60.0, speeds, color=f"C{3 + k}", lw=0.9, ls="--",
                   label=f"mesh order k = {k} (k·z·n/60)")
@@ -151,10 +156,19 @@ def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
         axes.axvline(f, color="C2", lw=0.8, ls=":",
                      label="natural frequencies" if number == 0 else None)
     axes.set_xlim(0, top_frequency)
-    axes.set_ylim(rpm.min() - row, rpm.max() + 3 * row)
+    axes.set_ylim(rpm.min() - 0.5 * row, rpm.max() + 2.2 * row)  # room for the top trace
+    axes.set_yticks([t for t in axes.get_yticks() if rpm.min() <= t <= rpm.max()])
+    axes.spines["left"].set_bounds(rpm.min(), rpm.max())
+    bar = 10.0 ** np.floor(np.log10(largest))
+    bar *= max(m for m in (1, 2, 5) if m * bar <= largest)
+    beside = blended_transform_factory(axes.transAxes, axes.transData)
+    axes.plot([1.02, 1.02], [rpm.min(), rpm.min() + per_um * bar], color="k", lw=2.0,
+              transform=beside, clip_on=False)
+    axes.text(1.03, rpm.min() + 0.5 * per_um * bar, f"{bar:g} µm\ndte amplitude",
+              transform=beside, va="center", ha="left", fontsize=8)
     axes.set_xlabel("frequency, Hz")
-    axes.set_ylabel(f"pinion speed, rpm (traces: dte amplitude, largest {largest:.2g} µm)")
-    axes.legend(loc="lower right", fontsize=8)
+    axes.set_ylabel("pinion speed, rpm (each trace: the dte amplitude spectrum at that speed)")
+    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     axes.grid(True, alpha=0.3)
     axes.set_title(title)
     _save(figure, path)

@@ -3,7 +3,7 @@ recorded over whole mesh periods, and the figures a drivetrain engineer reads of
 
 The protocol (`Protocol`, `timing`):
 - settle: the least-damped mode of the train (linearized at the period-mean stiffness,
-  integrator.eigenvalues) decays like exp(−σ·t); the start-up transient is run for
+  compiled_stepper.eigenvalues) decays like exp(−σ·t); the start-up transient is run for
   ln(1/settle_residual)/σ, rounded up to whole mesh periods, so it has decayed to
   `settle_residual` of its initial amplitude (or for a given `settle_time`, also rounded up);
 - window: `window_periods` mesh periods T = 2π/(z_pinion·|w0_pinion|), sampled
@@ -21,9 +21,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..arguments import (
+    COMPILED_TOLERANCE_ARGUMENT,
+    SAMPLES_PER_PERIOD,
+    SETTLE_RESIDUAL,
+    SETTLE_TIME,
+    WINDOW_PERIODS,
+)
 from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, eigenvalues
 from ..integrate.contract import Position, start_position
 from ..model.assembly import GearTrainModel
+from ..model.parameters import RPM_PER_RAD_S
 
 RIGID_FRACTION = 1e-6  # eigenvalues below this fraction of the largest are the rigid rotation
 BEARINGS = tuple(f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
@@ -42,20 +50,14 @@ class Protocol:
     floquet: bool = True
 
     def __post_init__(self):
-        checks = [("settle_residual", 0.0 < self.settle_residual < 1.0, "in (0, 1)"),
-                  ("settle_time", self.settle_time is None or (
-                      math.isfinite(self.settle_time) and self.settle_time >= 0.0), ">= 0 s"),
-                  ("window_periods", _whole(self.window_periods, 1), "a whole number >= 1"),
-                  ("samples_per_period", _whole(self.samples_per_period, 4),
-                   "a whole number >= 4"),
-                  ("tolerance", 1e-12 <= self.tolerance <= 1e-2, "in [1e-12, 0.01]")]
-        for name, good, allowed in checks:
-            if not good:
-                raise ValueError(f"{name} is {getattr(self, name)!r}; allowed: {allowed}")
-
-
-def _whole(value, least) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool) and value >= least
+        """ValueError naming the first setting outside its range (arguments.py has them)."""
+        settings = [(SETTLE_RESIDUAL, self.settle_residual), (WINDOW_PERIODS, self.window_periods),
+                    (SAMPLES_PER_PERIOD, self.samples_per_period),
+                    (COMPILED_TOLERANCE_ARGUMENT, self.tolerance)]
+        if self.settle_time is not None:
+            settings.append((SETTLE_TIME, self.settle_time))
+        for argument, value in settings:
+            argument.check(value)
 
 
 @dataclass(frozen=True)
@@ -154,7 +156,7 @@ def at_speed(model: GearTrainModel, position: Position, pinion_speed: float) -> 
 
 def static_mesh_force(scene) -> float:
     """M_motor/Rp: the mesh force of the train at rest under its motor torque, N."""
-    force = scene.inputs.M_motor[0] / GearTrainModel(scene).geometry.radius_pinion
+    force = GearTrainModel(scene).static_mesh_force()
     if force == 0.0:
         raise ValueError("M_motor is 0: the dynamic factor needs a static mesh force "
                          "(allowed: M_motor != 0)")
@@ -195,7 +197,7 @@ def point_row(scene, window: dict, protocol: Protocol) -> dict[str, float]:
     when = timing(scene, protocol)
     speed = scene.parameters["w0_pinion"]
     static_force = static_mesh_force(scene)
-    row = {"speed_rpm": speed * 30.0 / math.pi,
+    row = {"speed_rpm": speed * RPM_PER_RAD_S,
            "mesh_frequency_Hz": 1.0 / when.mesh_period,
            "settle_time_s": when.settle, "window_time_s": when.window,
            "samples": when.samples, "static_mesh_force_N": static_force,

@@ -2,9 +2,9 @@
 sweeps) or parameter plot, the waterfall of dte spectra (one-axis speed sweeps)."""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
+from ..model.parameters import RPM_PER_RAD_S, name_with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
 from .sweep_plots import (
@@ -13,8 +13,6 @@ from .sweep_plots import (
     plot_waterfall,
     resonances_between,
 )
-
-RPM_PER_RAD_S = 30.0 / math.pi
 
 
 def swept_names(table) -> list[str]:
@@ -28,7 +26,9 @@ def write_outputs(scene, table, series, folder: Path) -> list[Path]:
     names = swept_names(table)
     stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
     csv = Path(f"{stem}.csv")
-    table.to_csv(csv, index=False, float_format="%.10g")
+    # the swept columns with their units; the others name theirs (speed_rpm, F_mesh_max_N)
+    table.rename(columns={name: name_with_unit(name) for name in names}).to_csv(
+        csv, index=False, float_format="%.10g")
     written = [csv]
     natural, z = elastic_frequencies(scene), scene.parameters["z_pinion"]
     if names == [SPEED]:

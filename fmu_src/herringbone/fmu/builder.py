@@ -1,10 +1,7 @@
-"""Build pythonfmu co-simulation FMUs that pass `fmpy validate`; CLI for this project's FMUs.
-
-Generic part (importable): `build_slave_fmu`, `fix_model_description`, `validate`,
-`build_example_fmus`.  CLI (`main`): `herringbone build-fmu [SCENE] [-o OUT.fmu]` (or `python
-build_fmu.py` in a checkout) builds the gear FMU of a scene, a file or a shipped scene's name;
-`--examples DIR` builds the drive-train examples into DIR; `--fmi 3` builds the FMI 3.0 FMU
-of the scene (pythonfmu3) instead of the FMI 2.0 one (pythonfmu).
+"""Build pythonfmu co-simulation FMUs that pass `fmpy validate`: `build_gear_fmu` (the FMU of
+a scene, FMI 2.0 or 3.0), `build_example_fmus` (the drive-train examples), and the generic
+`build_slave_fmu`, `fix_model_description`, `validate`. The command is `herringbone build-fmu`
+(herringbone.cli.build_fmu).
 
 pythonfmu builds an FMU from a script, whose module name must be unique in a host process (two
 FMUs whose scripts share a name clash in sys.modules): the slave's source is
@@ -14,7 +11,6 @@ herringbone/fmu/core.py, and the builder hands pythonfmu(3) a copy named `GEAR_S
 """
 from __future__ import annotations
 
-import argparse
 import hashlib
 import os
 import shutil
@@ -41,7 +37,6 @@ UNITS_MODULE_NAME = "fmi_units"
 REFERENCES_MODULE = GEAR_PACKAGE / "fmu" / "pythonfmu_references.py"
 REFERENCES_MODULE_NAME = "pythonfmu_references"
 DEFAULT_SCENE = "reference"  # a shipped scene's name
-DEFAULT_OUTPUT = Path("dist") / "HerringboneGear.fmu"
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -336,89 +331,7 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     return carried.parent
 
 
-def add_arguments(parser: argparse.ArgumentParser, default_output: Path = DEFAULT_OUTPUT) -> None:
-    """The build command's arguments, on `parser` (build_fmu.py's own parser, or the `build-fmu`
-    command of `herringbone`)."""
-    from ..arguments import output_folder, output_path
-
-    parser.add_argument("scene", nargs="?", type=Path, default=Path(DEFAULT_SCENE),
-                        metavar="SCENE", help="scene file, or the name of a shipped scene "
-                        f"(`herringbone scenes` lists them; default: {DEFAULT_SCENE})")
-    # a string default: argparse passes it through `type`, which checks it like a given one
-    parser.add_argument("-o", "--output", type=output_path, default=str(default_output),
-                        help=f"FMU to write (default: {default_output})")
-    parser.add_argument("--simulate", action="store_true",
-                        help="then simulate the scene through the FMU with fmpy: a summary, "
-                             "and the outputs in results/<scene>_fmu.csv")
-    parser.add_argument("--fmi", type=int, choices=FMI_VERSIONS, default=2,
-                        help="FMI version of the FMU: 2 (FMI 2.0, pythonfmu; the default) or 3 "
-                             "(FMI 3.0, pythonfmu3)")
-    parser.add_argument("--examples", type=output_folder, metavar="DIR",
-                        help="build the example drive-train FMUs into DIR instead")
-    parser.add_argument("--ssp", type=output_path, metavar="OUT.ssp",
-                        help="build the drive train (SCENE's gear, the example motor and fan) "
-                             "as an SSP archive into OUT.ssp instead (herringbone.fmu.ssp)")
-
-
-def build_command(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """Run the build command of parsed `args`; returns the process exit code: 2, with one line
-    on stderr naming the culprit and what is allowed, for a bad argument or scene (checked
-    before building)."""
-    from ..arguments import output_path_problem
-    from ..model.scene import SceneError
-
-    results_problem = output_path_problem(Path("results") / "scene_fmu.csv")
-    if args.simulate and results_problem is not None:
-        parser.error(f"--simulate writes results/<scene>_fmu.csv: {results_problem}; run it "
-                     "from a folder you can write in")
-    if args.examples is not None:
-        for path in build_example_fmus(output_dir=args.examples):
-            print(path)
-        return 0
-    try:
-        if args.ssp is not None:
-            from .ssp import build_ssp
-            print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
-            return 0
-        built = build_gear_fmu(scene=args.scene, output=args.output, fmi_version=args.fmi)
-        print(f"built {built}")
-        if args.simulate:
-            simulate(fmu=args.output, scene_path=args.scene)
-    except (SceneError, RuntimeError) as error:
-        print(f"{parser.prog}: {error}", file=sys.stderr)
-        return 2
-    return 0
-
-
-def main(argv: list[str] | None = None, prog: str = "herringbone build-fmu",
-         help_command: str | None = None, default_output: Path = DEFAULT_OUTPUT) -> int:
-    """CLI entry point (build_fmu.py's, with its own name and default output); returns the
-    process exit code (see build_command)."""
-    from ..arguments import OneLineParser
-
-    parser = OneLineParser(prog=prog, description=__doc__.splitlines()[0],
-                           help_command=help_command)
-    add_arguments(parser, default_output)
-    return build_command(parser.parse_args(argv), parser)
-
-
-def simulate(fmu: Path, scene_path: Path) -> None:
-    """The main job's second half: the scene through its FMU, summary and CSV."""
-    import time
-
-    from ..cli import summary, write_csv
-    from ..model.scene import load_scene
-    from .run import simulate_scene_fmu
-
-    scene = load_scene(scene_path)
-    started = time.perf_counter()
-    results = simulate_scene_fmu(fmu_path=fmu, scene=scene)
-    wall = time.perf_counter() - started
-    csv_path = Path("results") / f"{scene.name}_fmu.csv"
-    write_csv(results, csv_path)
-    print(summary(scene, results, wall))
-    print(f"outputs written to {csv_path}")
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+def default_fmu_name(scene_name: str, fmi_version: int) -> str:
+    """The file name of a scene's FMU unless told otherwise, "<scene>-fmi<N>.fmu": each scene
+    and FMI version its own file."""
+    return f"{scene_name}-fmi{fmi_version}.fmu"

@@ -131,7 +131,6 @@ class GearCore:
     def _setup(self, logger_address):
         """Load the scene, declare the variables (through the adapter's `_register`) and
         start the train at t = 0 with the scene's own values."""
-        fmu_runtime.finalize_python_first(self.resources)  # C hosts: no crash at exit
         first_start.prepare(self, logger_address)  # before anything is compiled
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         self.values = dict(self.scene.parameters)
@@ -147,7 +146,7 @@ class GearCore:
         self.output_values = np.zeros(scene_model.output_layout_size)
         self.problem = None  # what stops the run for good (parameters, solver), logged once
         self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
-        self.run = None  # integrator.Run, advanced in place by every doStep
+        self.run = None  # compiled_stepper.Run, advanced in place by every doStep
         self.stepper = None
         self.stepper_values = None  # the values self.stepper was built from
         self.declared = {}  # value reference -> Declaration

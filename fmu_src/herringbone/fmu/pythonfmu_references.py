@@ -1,36 +1,55 @@
-"""The Python references pythonfmu 0.7's C++ side releases once too often, and the balance the
-FMI 2.0 slave restores. Without it a Python host (fmpy) aborted at exit with "corrupted
-double-linked list" in 403 of 1058 runs of the reference scene, 16 at a time on a 16-core
-machine (8 of 174 in another batch; once in CI), and 2 in 27 runs of a process that freed
-three instances after a Fatal call each: memory freed while still in use, and freed again as
-the interpreter tears the slave's module down.
+"""What pythonfmu 0.7's C++ side gets wrong about memory, and the repairs a slave makes from
+Python (docs/known-issues.md has the whole story and a reproducer).
 
-pythonfmu 0.7 (src/pythonfmu/PySlaveInstance.cpp):
+1. **Its teardown at exit releases freed memory** (pythonfmu 0.7, and pythonfmu3 0.3.4 alike,
+   src/pythonfmu/PySlaveInstance.cpp): the library keeps its Python state in a global
+   `std::shared_ptr` and resets that global from an `__attribute__((destructor))` function,
+   `onLibraryUnload`. The library is never unloaded (its std::regex code has GNU-unique
+   symbols, which make dlclose a no-op), so both run at the host's exit(), in this order: the
+   C library runs the global's destructor among the exit handlers, which frees the state's
+   block, and afterwards, from _dl_fini, the destructor function assigns to the destroyed
+   global, releasing the freed block again (valgrind: "Invalid read ... in
+   finalizePythonInterpreter ... inside a block of size 128 free'd ... by __run_exit_handlers").
+   That write into freed memory is harmless while glibc keeps the block in its thread cache and
+   corrupts the heap's lists when it does not: "corrupted double-linked list", exit status 134,
+   in about 1 process in 200 of every host, after all the work is done.
+   **Repair** (`tear_down_state_first`): register the library's own exported teardown,
+   `finalizePythonInterpreter`, with the exit handlers once the library is loaded; handlers
+   run in reverse order of registration, so it runs first and releases the state through the
+   live global, and the destructor and the destructor function then find it empty. In a C host
+   the same call finalizes the Python that pythonfmu started, while the C++ libraries Python
+   loaded (LLVM in llvmlite, scipy's) are still intact, instead of after their destructors.
 
-- `findClass`, run once per fmi2Instantiate, ends with `Py_DECREF(pGlobals)`, where `pGlobals`
-  is the slave module's dictionary as PyModule_GetDict lends it (a borrowed reference). Each
-  instance so takes one reference from that dictionary that nothing had given
-  (`BalancedSlave.__init__`); measured: sys.getrefcount of the module's __dict__ falls one
-  further below the references to it that the garbage collector finds with every instance.
-- `handle_py_exception`, run when a callback raises (fmi2Fatal), releases the class, the
-  instance and its log queue, and leaves the pointers in place; the instance's destructor,
-  run by fmi2FreeInstance, releases the three again (`BalancedSlave._balance_fatal`).
+2. **References released once too often** (pythonfmu 0.7 only), which made a Python host abort
+   at exit in 403 of 1058 runs, 16 at a time:
 
-`BalancedSlave`, first among a slave's bases, takes one reference for each one pythonfmu will
-release without owning it: only under pythonfmu 0.7 and only in an FMU (where pythonfmu's C++
-side passes a logger); a later pythonfmu that no longer over-releases would at worst keep these
-objects until exit. A classmethod that raises (pythonfmu's `_fmu_state_from_bytes` and
-`_fmu_state_to_bytes`, called on the class) is not balanced: it has no instance to name.
+   - `findClass`, run once per fmi2Instantiate, ends with `Py_DECREF(pGlobals)`, where
+     `pGlobals` is the slave module's dictionary as PyModule_GetDict lends it (a borrowed
+     reference). Each instance so takes one reference from that dictionary that nothing had
+     given (`BalancedSlave.__init__`).
+   - `handle_py_exception`, run when a callback raises (fmi2Fatal), releases the class, the
+     instance and its log queue, and leaves the pointers in place; the instance's destructor,
+     run by fmi2FreeInstance, releases the three again (`BalancedSlave._balance_fatal`).
+
+   **Repair** (`BalancedSlave`, first among a slave's bases): take one reference for each one
+   pythonfmu will release without owning it, only under pythonfmu 0.7 and only in an FMU
+   (where pythonfmu's C++ side passes a logger); a later pythonfmu that no longer
+   over-releases would at worst keep these objects until exit. A classmethod that raises
+   (pythonfmu's `_fmu_state_from_bytes` and `_fmu_state_to_bytes`, called on the class) is not
+   balanced: it has no instance to name.
 
 builder.build_slave_fmu ships this module with every FMI 2.0 FMU as the module
-`pythonfmu_references` (the example slaves import it so), as it ships `fmi_units`.
+`pythonfmu_references` (the example slaves import it so), as it ships `fmi_units`; the FMI
+3.0 slave calls `tear_down_state_first` itself.
 """
 from __future__ import annotations
 
 import ctypes
 import functools
+import os
 import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 _incref = ctypes.pythonapi.Py_IncRef
@@ -44,6 +63,33 @@ CALLBACKS = ("setup_experiment", "enter_initialization_mode", "exit_initializati
              "_set_fmu_state")
 
 
+def tear_down_state_first(resources: str | os.PathLike | None) -> bool:
+    """Register the teardown of pythonfmu's library (the FMU's binary beside `resources`) with
+    the C library's exit handlers, so that it runs before the library's static destructors (see
+    the module's docstring). Call it once the libraries the slave needs are loaded (in the
+    slave's __init__); each call registers the handler again, which moves it ahead of
+    libraries loaded since, and the later calls find nothing left to do. Returns whether it is
+    registered: only on Linux, for a library that exports `finalizePythonInterpreter`."""
+    if sys.platform != "linux" or not resources:
+        return False
+    binaries = Path(resources).parent / "binaries"
+    libraries = sorted([*binaries.glob("linux64/*.so"), *binaries.glob("x86_64-linux/*.so")])
+    if len(libraries) != 1:
+        return False
+    try:
+        # pinned: the exit handler points into the library, which must outlive any dlclose
+        library = ctypes.CDLL(str(libraries[0].resolve()),
+                              mode=os.RTLD_NOLOAD | os.RTLD_NODELETE | os.RTLD_NOW)
+    except OSError:  # not the library this process loaded (another copy of the FMU)
+        return False
+    teardown = getattr(library, "finalizePythonInterpreter", None)
+    if teardown is None:
+        return False
+    register = getattr(ctypes.CDLL(None), "__cxa_atexit")
+    register.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    return register(ctypes.cast(teardown, ctypes.c_void_p), None, None) == 0
+
+
 def affected(logger_address: int | None) -> bool:
     """Whether a slave runs under pythonfmu 0.7's C++ side (in an FMU: the `logger` it passes
     is set), whose releases these balance."""
@@ -55,7 +101,8 @@ def affected(logger_address: int | None) -> bool:
 class BalancedSlave:
     """A mixin for a pythonfmu 0.7 Fmi2Slave, listed before Fmi2Slave among its bases: gives
     back the slave module's reference at every instantiation, and those of the class, the
-    instance and its log queue before an exception leaves one of its CALLBACKS."""
+    instance and its log queue before an exception leaves one of its CALLBACKS; has the
+    library's state torn down first at exit (`tear_down_state_first`)."""
 
     def __init__(self, **kwargs: Any) -> None:
         """Balance findClass's release of the module's dictionary (it has run by now), then
@@ -63,6 +110,8 @@ class BalancedSlave:
         self._pythonfmu_affected = affected(kwargs.get("logger"))
         if self._pythonfmu_affected:
             _incref(sys.modules[type(self).__module__].__dict__)
+        if kwargs.get("logger"):  # in an FMU: pythonfmu's library is loaded
+            tear_down_state_first(kwargs.get("resources"))
         super().__init__(**kwargs)
 
     def __init_subclass__(cls, **kwargs: Any) -> None:

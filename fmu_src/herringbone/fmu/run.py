@@ -5,8 +5,26 @@ import numpy as np
 
 
 def scene_inputs(scene, stop_time: float) -> np.ndarray:
-    """The scene's input table as fmpy's structured input: a repeated time marks a step, so
-    each row holds until the next, as a co-simulation master holds inputs."""
+    """The scene's input table as fmpy's `input`, held between rows (not ramped).
+
+    fmpy interpolates a Real input linearly between the rows it is given; at a time stamp
+    given twice it takes the second row from that time on (its Input class, `after_event`).
+    So each change of the table is written as two rows at its time, the old torques and the
+    new, and the torques hold between changes, as a co-simulation master holds inputs over a
+    communication step (and as herringbone.simulate runs the table).
+
+    Parameters
+    ----------
+    scene : Scene
+    stop_time : float
+        Seconds; the last row holds the last torques to here.
+
+    Returns
+    -------
+    numpy.ndarray
+        Structured, fields "time" (s), "M_motor" and "M_load" (N·m): pass it as
+        `fmpy.simulate_fmu(..., input=scene_inputs(scene, stop_time))`.
+    """
     rows = []
     schedule = scene.inputs
     for i, time in enumerate(schedule.times):

@@ -37,6 +37,7 @@ from pythonfmu3.fmi3slave import Fmi3StepResult
 
 # first: the core checks the dependencies before anything imports numpy
 from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
+from herringbone.fmu.pythonfmu_references import tear_down_state_first
 
 
 def _with_range(node, low, high, start=None):
@@ -87,6 +88,8 @@ class HerringboneGear(GearCore, Fmi3Slave):
         super().__init__(**kwargs)
         self.description = DESCRIPTION  # Fmi3SlaveBase.__init__ sets it (to None)
         self.logger_address = kwargs.get("logger")  # cppfmu's Logger (see host_logs)
+        if self.logger_address:  # in an FMU: pythonfmu3's library shares pythonfmu's teardown
+            tear_down_state_first(kwargs.get("resources"))
         # pythonfmu3's logger is not pythonfmu's: no direct line to it while compiling
         self._setup(None)
         # FMI 3.0 wants the independent variable declared: last, so that every other variable

@@ -52,7 +52,7 @@ BASE_UNITS = {
     "rad": {"rad": 1},
     "s": {"s": 1},
 }
-STOP_TIME = 0.1  # s: the train has settled after about 0.05 s (tests/test_cosimulation.py)
+STOP_TIME = 0.1  # s: the train has settled after about 0.05 s (tests/fmu/test_cosimulation.py)
 # s: the explicit coupling of the Kloss curve's slope to the motor inertia is stable for
 # h < 2·I/|dM/dw| ≈ 8e-4 s; 1e-4 s keeps the hold of the inputs far inside that.
 STEP = 1e-4

@@ -7,7 +7,8 @@ run loop that drives them.
   stopping on every contact switch, and depends on nothing but the position passed in. The scipy
   reference (stepping.ScipyStepper) and the compiled integrator
   (compiled_stepper.CompiledStepper) both satisfy it;
-- `IntegrationError`: an integrator could not advance (it says where and why);
+- `IntegrationError`: an integrator could not advance (it says where and why); `Result`: the
+  outputs of a run;
 - `start_position`: the initial condition every integrator starts from;
 - `output_times`, `simulate_with`: the output grid and the run loop (a scene's input table,
   sampled every output interval) that herringbone.reference_simulate, herringbone.simulate, the
@@ -23,11 +24,28 @@ import numpy as np
 
 from ..arguments import check_run_times
 from ..model.assembly import GearTrainModel
+from ..model.parameters import unit_of
 from . import segments
 
 
 class IntegrationError(RuntimeError):
     """The integrator could not advance (it says where and why)."""
+
+
+class Result(dict):
+    """A run's outputs: {"time": sample times, s; output name: samples}, numpy arrays of one
+    length, in SI units (`units`); a dict, so `result["F_mesh"]` and `list(result)` work as
+    they always have."""
+
+    @property
+    def time(self) -> np.ndarray:
+        """The sample times, s."""
+        return self["time"]
+
+    @property
+    def units(self) -> dict[str, str]:
+        """The unit of each column ("time": "s", "F_mesh": "N", "dte": "m", …)."""
+        return {name: unit_of(name) for name in self}
 
 
 @dataclass(frozen=True)
@@ -104,4 +122,4 @@ def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
     # the stop time itself, with the segment that holds from there on
     store(times[-1], model.outputs(position.state, position.segment.contact_set,
                                    position.segment.loaded))
-    return {"time": times, **results}
+    return Result(time=times, **results)

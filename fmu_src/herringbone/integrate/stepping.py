@@ -12,6 +12,14 @@ INTERIOR_NODES points inside it, so that a function that crosses zero and return
 step is seen unless it does so between two nodes; there the cubic through the values and slopes
 at the two nodes shows the bump, whose top is then found on the dense output. The earliest
 crossing in the event's direction is located by brentq to rounding, and the segment ends there.
+The state there, and at every sample time, is then computed by steps of the method from the
+start of the step that holds it: the dense output only says when.
+
+Error control (with a `horizon`, as reference_simulate gives it): the tolerance holds for the
+forces over the whole run. Every step's error rings on in the train's modes, for the run or for
+1/ζ radians, whichever is shorter, and the errors of the steps add up over those radians; the
+step tolerance is cut by the radians the train rings (ringing_radians, step_tolerance), which
+this module works out from the model's own matrices.
 """
 from __future__ import annotations
 
@@ -42,6 +50,13 @@ SLOPE_SPACING = 1e-5  # of a step: the half-spacing of the differences that give
 NEAR_ZERO = 4.0
 # The debug check of contact forces (check_tension) reads the step at this many points.
 TENSION_NODES = 33
+# The error of every step rings on in the train's modes until their damping eats it, adding up
+# over the radians a mode rings within the run: about 2.5 times the per-step tolerance per radian
+# (measured on the undamped and light-load regression scenes, tests/regression). The step
+# tolerance is cut so that RINGING_BUDGET radians' worth of error is what remains.
+RINGING_BUDGET = 10.0
+# scipy raises rtol below 100 ulp to 100 ulp (with a warning): the tightest step tolerance
+FINEST_STEP_TOLERANCE = 100 * np.finfo(float).eps
 STALL_RESOLUTION = 64 * np.finfo(float).eps  # of the time: a segment this short made no progress
 STALL_MESSAGE = ("contact switches without progress. If the pinion sits on a switch, its points "
                  "take load at once (edge_ramp = 0) and throw it back: give edge_ramp > 0 "
@@ -58,20 +73,29 @@ class _Step:
     start: float
     end: float
     dense: object  # scipy's DenseOutput: state at a time or at an array of times
+    start_state: np.ndarray
 
 
 class ScipyStepper:
     """Steps the scipy reference (the `Stepper` contract of integrate/contract.py) segment by
     segment, every segment ended exactly at its first event."""
     def __init__(self, model: GearTrainModel, tolerance: float, method: str = "DOP853",
-                 max_step: float = np.inf, check_tension: bool = False):
-        """method: a scipy.integrate OdeSolver ("DOP853", "RK45", "Radau", "BDF", "LSODA").
+                 max_step: float = np.inf, check_tension: bool = False,
+                 horizon: float | None = None):
+        """tolerance: the error allowed in the forces over a run of length `horizon`, relative
+        to the force scale (GearTrainModel.force_scale); each step is held to
+        `step_tolerance(model, tolerance, horizon)` of it, through GearTrainModel.state_scales
+        (relative and absolute). horizon: the run's length (s); None: each step is held to
+        `tolerance` itself (scipy's own meaning: an error per step, not per run).
+        method: a scipy.integrate OdeSolver ("DOP853", "RK45", "Radau", "BDF", "LSODA").
         check_tension: after every step, read every point's approach at TENSION_NODES points
         of it and raise IntegrationError where a loaded point pulls or a free one penetrates
         by more than the contact band (segments.contact_band): a debug check, for tests."""
         self.model = model
         self.tolerance = tolerance
-        self.absolute_tolerance = tolerance * model.state_scales()
+        self.step_tolerance = (tolerance if horizon is None
+                               else step_tolerance(model, tolerance, horizon))
+        self.absolute_tolerance = self.step_tolerance * model.state_scales()
         self.method = method
         self.solver_class = getattr(scipy.integrate, method)
         self.max_step = max_step
@@ -108,18 +132,16 @@ class ScipyStepper:
         reached, state there, the event's number or None, the step size to try next)."""
         model = self.model
         first_step = None if hint is None else min(hint, end - time)
-        solver = self.solver_class(
-            lambda t, x: model.derivative(x, segment.contact_set, segment.loaded, *torques),
-            time, state, end, rtol=self.tolerance, atol=self.absolute_tolerance,
-            max_step=self.max_step, first_step=first_step)
+        solver = self._solver(segment, torques, time, state, end, first_step)
         # an event whose function starts a hair above zero (within its band: the rule of
         # segments.py decided which side it starts on) is watched from that value on
         offsets = np.maximum(segments.event_values(model, segment, state[:, None])[:, 0], 0.0)
         while True:
+            start_state = solver.y.copy()
             message = solver.step()
             if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
                 raise IntegrationError(f"integration failed at t = {solver.t:.9g} s: {message}")
-            step = _Step(solver.t_old, solver.t, solver.dense_output())
+            step = _Step(solver.t_old, solver.t, solver.dense_output(), start_state)
             if solver.status != "finished" or hint is None:
                 hint = step.end - step.start  # the last step not cut short by `end`
             event, reached = self._first_event(step, segment, offsets)
@@ -127,11 +149,36 @@ class ScipyStepper:
                 self._check_tension(step, reached, segment)
             while samples and samples[0] < reached:
                 t = samples.pop(0)
-                on_sample(t, model.outputs(step.dense(t), segment.contact_set, segment.loaded))
+                on_sample(t, model.outputs(self._state_at(step, t, segment, torques),
+                                           segment.contact_set, segment.loaded))
             if event is not None:
-                return reached, step.dense(reached), event, hint
+                return reached, self._state_at(step, reached, segment, torques), event, hint
             if solver.status == "finished":
                 return step.end, solver.y.copy(), None, hint
+
+    def _solver(self, segment, torques, time, state, end, first_step):
+        """A scipy solver for the segment from (time, state) towards `end`."""
+        model = self.model
+        return self.solver_class(
+            lambda t, x: model.derivative(x, segment.contact_set, segment.loaded, *torques),
+            time, state, end, rtol=self.step_tolerance, atol=self.absolute_tolerance,
+            max_step=self.max_step, first_step=first_step)
+
+    def _state_at(self, step, time, segment, torques):
+        """The state at `time` inside the step, by steps of the method from the step's start
+        (error-controlled like every step): the dense output finds events, but its own error,
+        large where a step spans several radians of the fastest mode (stable, but coarse for
+        the interpolant), is kept out of samples and out of the states that events restart
+        from (docs/reference-accuracy.md)."""
+        if time == step.start:
+            return step.start_state.copy()
+        solver = self._solver(segment, torques, step.start, step.start_state, time,
+                              time - step.start)
+        while solver.status == "running":
+            message = solver.step()
+            if solver.status == "failed":
+                raise IntegrationError(f"integration failed at t = {solver.t:.9g} s: {message}")
+        return solver.y.copy()
 
     def _first_event(self, step, segment, offsets):
         """(event, time) of the earliest crossing inside the step, or (None, step's end)."""
@@ -216,6 +263,40 @@ class ScipyStepper:
                 f"at t = {times[node]:.12g} s point {point} of contact interval "
                 f"{contact_set.index} (cycle {contact_set.cycle}) {kind}: approach "
                 f"{approach[point, node]:.3e} m")
+
+
+def _eigenvalues(model: GearTrainModel) -> np.ndarray:
+    """The eigenvalues of the linearized train (mass, mean stiffness and mean damping over a
+    mesh period, every point loaded): −ζω ± iω√(1−ζ²) of each mode, 1/s."""
+    size = model.size
+    inverse_mass = 1.0 / model.mass[:, None]
+    state_matrix = np.block([
+        [np.zeros((size, size)), np.eye(size)],
+        [-inverse_mass * model.mean_stiffness_matrix(),
+         -inverse_mass * model.mean_damping_matrix()]])
+    return np.linalg.eigvals(state_matrix)
+
+
+def ringing_radians(model: GearTrainModel, horizon: float) -> float:
+    """The most radians any mode of the train rings within `horizon` seconds before its damping
+    has taken the amplitude down by e: max over the modes of min(ω·horizon, 1/ζ), where
+    −ζω ± iω√(1−ζ²) are the eigenvalues of the linearized train (mass, mean stiffness and mean
+    damping over a mesh period, every point loaded). Modes that do not oscillate ring 0."""
+    eigenvalues = _eigenvalues(model)
+    frequency = np.abs(eigenvalues)  # ω, rad/s
+    decay = np.maximum(-eigenvalues.real, 0.0)  # ζω, 1/s
+    oscillating = np.abs(eigenvalues.imag) > 1e-6 * max(frequency.max(), 1.0)
+    radians = np.minimum(frequency * horizon, frequency / np.maximum(decay, 1e-300))
+    return float(np.max(radians[oscillating], initial=0.0))
+
+
+def step_tolerance(model: GearTrainModel, tolerance: float, horizon: float) -> float:
+    """The tolerance per step that holds a run of `horizon` seconds to `tolerance`: cut by
+    RINGING_BUDGET / ringing_radians where the train rings longer than RINGING_BUDGET radians,
+    never below FINEST_STEP_TOLERANCE."""
+    radians = ringing_radians(model, horizon)
+    return max(tolerance * min(1.0, RINGING_BUDGET / radians) if radians > 0.0 else tolerance,
+               FINEST_STEP_TOLERANCE)
 
 
 def _bumps(values, slopes, times):

@@ -52,8 +52,21 @@ class GearTrainModel:
     def __init__(self, scene):
         p = scene.parameters
         self.scene = scene
-        self.geometry = g = GearGeometry.from_parameters(p)
+        self.geometry = GearGeometry.from_parameters(p)
         self.mesh = Mesh(p)
+        self._place_coordinates(scene)
+        self._assemble_rows(p)
+        self._damp_the_mesh(p)
+        self.system = self._compiled_system()
+        self.output_names = output_names(scene)
+        self._mean_stiffness = None
+        self.output_layout = self._output_layout()
+        self.output_layout_size = (equations.FIRST_ELEMENT_FORCE + len(self.elements)
+                                   + self.size)
+
+    def _place_coordinates(self, scene) -> None:
+        """The scene's coordinates, their masses, the rigid rotation and the torque rows."""
+        p, g = scene.parameters, self.geometry
         left_out = {c for comp, coords in COMPONENT_COORDINATES.items()
                     if not scene.has(comp) for c in coords}
         self.coordinates = [c for c in ALL_COORDINATES if c not in left_out]
@@ -74,6 +87,10 @@ class GearTrainModel:
         self.motor_torque_row = self.unit("phi_motor" if scene.has("motor") else "phi_pinion")
         self.load_torque_row = self.unit("phi_load" if scene.has("load") else "phi_wheel")
 
+    def _assemble_rows(self, p) -> None:
+        """The rows g of the shafts, bearings and contact, in absolute and relative
+        coordinates; none may move under the rigid rotation."""
+        g = self.geometry
         self.elements = self._shafts_and_bearings(p)
         self.contact_row_base = (g.radius_pinion * self.unit("phi_pinion")
                                  - g.radius_wheel * self.unit("phi_wheel")
@@ -88,6 +105,10 @@ class GearTrainModel:
         self._contact_base_relative = self.relative(self.contact_row_base)
         self._contact_tilt_relative = self.relative(self.contact_row_tilt)
 
+    def _damp_the_mesh(self, p) -> None:
+        """The mesh damping factor η (h = η·c, from zeta_mesh at the mean mesh frequency) and
+        the approach rows it enters."""
+        g = self.geometry
         equivalent_mass = 1.0 / (g.radius_pinion ** 2 / p["I_pinion"]
                                  + g.radius_wheel ** 2 / p["I_wheel"])
         mesh_frequency = math.sqrt(self.mesh.mean_stiffness() / equivalent_mass)
@@ -98,6 +119,10 @@ class GearTrainModel:
             np.concatenate([row, self.mesh_damping_factor * row])
             for row in (self._contact_base_relative, self._contact_tilt_relative)])
         self.axial_travel_per_radian = g.axial_speed_per_radian
+
+    def _compiled_system(self) -> equations.System:
+        """The equations' constants as the compiled kernels read them."""
+        g = self.geometry
         # ÿ = P·(generalized force): q̈ = M⁻¹·f, then ÿ = q̈ − r̃·φ̈p
         to_relative = ((np.eye(self.size) - np.outer(self._relative_offset,
                                                     self.unit("phi_pinion"))) / self.mass)
@@ -106,7 +131,7 @@ class GearTrainModel:
         damping = -to_relative @ (self.element_rows.T * self.element_damping) \
             @ self._element_rows_relative
         coupled = np.nonzero((elastic != 0.0) | (damping != 0.0))
-        self.system = equations.System(
+        return equations.System(
             pinion=self.pinion, wheel=self.wheel, mass=self.mass,
             rigid_rotation=self.rigid_rotation,
             element_rows_relative=self._element_rows_relative,
@@ -122,11 +147,6 @@ class GearTrainModel:
             mesh_damping_factor=float(self.mesh_damping_factor),
             axial_travel_per_radian=float(g.axial_speed_per_radian),
             radius_wheel=float(g.radius_wheel), contact_loss=bool(self.contact_loss))
-        self.output_names = output_names(scene)
-        self._mean_stiffness = None
-        self.output_layout = self._output_layout()
-        self.output_layout_size = (equations.FIRST_ELEMENT_FORCE + len(self.elements)
-                                   + self.size)
 
     def _output_layout(self) -> list[tuple[str, int]]:
         """Where each output of the scene sits in the vector equations.outputs fills, as
@@ -303,12 +323,17 @@ class GearTrainModel:
         rows = self.element_rows if rows is None else rows
         return (rows.T * values) @ rows
 
+    def static_mesh_force(self) -> float:
+        """M_motor/Rp at t = 0, N: the mesh force of the train at rest under its motor
+        torque."""
+        return self.geometry.mesh_force(self.scene.inputs.M_motor[0])
+
     def force_scale(self) -> float:
         """The static mesh force of the largest input torque: the scale errors are judged on.
         A train without torque is judged on the force of a 1 µm approach of one point."""
         torques = self.scene.inputs
-        scale = max(max(abs(m) for m in torques.M_motor) / self.geometry.radius_pinion,
-                    max(abs(m) for m in torques.M_load) / self.geometry.radius_wheel)
+        scale = max(max(self.geometry.mesh_force(abs(m)) for m in torques.M_motor),
+                    max(self.geometry.mesh_force(abs(m), "wheel") for m in torques.M_load))
         return scale if scale > 0.0 else self.mesh.c_point * 1e-6
 
     def state_scales(self) -> np.ndarray:

@@ -66,6 +66,11 @@ class GearGeometry:
         """L = b_left + b_right + groove: the length of a gear body."""
         return self.b_left + self.b_right + self.groove
 
+    def mesh_force(self, torque: float, gear: str = "pinion") -> float:
+        """The static mesh force, N, that balances `torque` (N·m) on `gear` ("pinion" or
+        "wheel"): torque / pitch radius, the one home of that formula."""
+        return torque / (self.radius_pinion if gear == "pinion" else self.radius_wheel)
+
     def face_width(self, half: str) -> float:
         """b of a helix half ("left" or "right"), m."""
         return self.b_left if half == "left" else self.b_right

@@ -7,9 +7,12 @@ carries none of that component's parameters.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 COMPONENTS = ("motor", "load", "bearings")
+# rpm per rad/s: the one conversion of a speed to revolutions per minute
+RPM_PER_RAD_S = 30.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -141,19 +144,59 @@ def parameters_of(components: dict[str, bool]) -> dict[str, Parameter]:
             if p.component is None or components[p.component]}
 
 
+def with_unit(text: str, unit: str) -> str:
+    """`text` followed by its `unit` as messages write it ("22.86 rad"); a pure number (unit
+    "1" or "") gets none."""
+    if unit in ("", "1"):
+        return text
+    return f"{text} {unit}"
+
+
+def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
+                   infinite: bool = False, meaning: str = "") -> str | None:
+    """Why `value` is not an allowed number, or None: the one check of a number against its
+    range, for the parameters and inputs of a scene (check_value) and the run arguments
+    (herringbone.arguments.Argument). The message gives the value and what is allowed with
+    the unit ("is 22.86 rad; allowed: (0, 1.5708) rad, an angle in radians"); `whole`: a whole
+    number; `infinite`: +inf allowed too ("no limit"); `meaning` closes it in parentheses."""
+    described = with_unit(allowed.describe(), unit) if allowed.low is not None \
+        or allowed.high is not None or unit in ("", "1") \
+        else f"{allowed.describe()}, in {unit}"
+    described += " or inf" if infinite else ""
+    described = f"a whole number {described}" if whole else described
+    described += ", an angle in radians" if unit == "rad" else ""
+    described += f" ({meaning})" if meaning else ""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return f"must be a number, got {type(value).__name__} {value!r}; allowed: {described}"
+    number = float(value)
+    fits = (infinite and number == math.inf) or allowed.contains(number)
+    if not fits or (whole and number != int(number)):
+        shown = with_unit(repr(value), unit) if math.isfinite(number) else repr(value)
+        return f"is {shown}; allowed: {described}"
+    return None
+
+
 def check_value(parameter: Parameter, value) -> str | None:
-    """Why `value` is not allowed for `parameter`, or None if it is."""
+    """Why `value` is not allowed for `parameter`, or None if it is (number_problem, with the
+    parameter's unit; a flag must be true or false)."""
     if parameter.kind is bool:
         return None if isinstance(value, bool) else "must be true or false"
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return f"must be a number, got {type(value).__name__} {value!r}"
-    if not math.isfinite(value):
-        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
-    if parameter.kind is int and value != int(value):
-        return f"must be a whole number, got {value!r}"
-    if not parameter.allowed.contains(float(value)):
-        return f"is {value!r}; allowed: {parameter.allowed.describe()}"
-    return None
+    return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int)
+
+
+def name_with_unit(name: str) -> str:
+    """A table column's header: the name and its SI unit, "F_mesh [N]"; pure numbers
+    ("n_contacts", "z_pinion") and unknown names bare."""
+    unit = unit_of(name)
+    return f"{name} [{unit}]" if unit not in ("", "1") else name
+
+
+def unit_of(name: str) -> str:
+    """The unit of a parameter, input or output by name ("" if it has none or is unknown)."""
+    for table in (PARAMETERS, INPUTS, OUTPUTS):
+        if name in table:
+            return table[name].unit
+    return "s" if name == "time" else ""
 
 
 @dataclass(frozen=True)

@@ -19,8 +19,17 @@ from dataclasses import dataclass, field, replace
 from typing import cast
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
+from ..suggest import did_you_mean
 from .geometry import solid_cylinder_transverse_inertia
-from .parameters import COMPONENTS, INPUTS, PARAMETERS, check_value, parameters_of
+from .parameters import (
+    COMPONENTS,
+    INPUTS,
+    PARAMETERS,
+    POSITIVE,
+    check_value,
+    number_problem,
+    parameters_of,
+)
 
 
 class SceneError(ValueError):
@@ -106,11 +115,28 @@ class Scene:
 
 
 def load_scene(path) -> Scene:
-    """Read and validate a scene file (see the module docstring for its format). A bare name
-    ("reference") that is not a file names a shipped scene (herringbone.shipped)."""
+    """Read and validate a scene file (see the module docstring for its format).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A TOML scene file, or the bare name of a shipped scene ("reference"; a file of that
+        name wins; `herringbone scenes` lists them).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        One line naming the file, the key and what is allowed (and the closest shipped name
+        or parameter for a misspelt one).
+    """
     given, path = path, resolve_scene(path)
     if not path.is_file():
-        names = (f"; shipped scenes: {', '.join(scene_files())} (`herringbone scenes`)"
+        names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
+                 f"{', '.join(scene_files())} (`herringbone scenes`)"
                  if is_scene_name(given) else "")
         raise SceneError(f"no such scene file{names}", str(path))
     try:
@@ -121,7 +147,27 @@ def load_scene(path) -> Scene:
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") -> Scene:
-    """Validate a scene given as the tables of a scene file."""
+    """Validate a scene given as the tables of a scene file.
+
+    Parameters
+    ----------
+    data : dict
+        {"parameters": {...}, "components": {...}, "experiment": {...}, "inputs": {...}},
+        any of them left out (their defaults: docs/model.md), SI units.
+    name : str
+        The scene's name.
+    source : str
+        Where it came from, for messages.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        One line naming the key and what is allowed.
+    """
     unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
     if unknown:
         key = sorted(unknown)[0]
@@ -158,7 +204,8 @@ def _complete_parameters(given, components, source):
     carried = parameters_of(components)
     for key, value in given.items():
         if key not in PARAMETERS:
-            hint = " (inputs belong in [inputs])" if key in INPUTS else ""
+            hint = (" (inputs belong in [inputs])" if key in INPUTS
+                    else did_you_mean(key, PARAMETERS))
             raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key)
         if key not in carried:
             raise SceneError(f"{key} belongs to the component '{PARAMETERS[key].component}', "
@@ -188,9 +235,9 @@ def _experiment(table, source):
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
             raise SceneError(f"unknown key '{key}'{hint}; allowed: stop_time, output_interval",
                              source, "experiment", key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value) or value <= 0:
-            raise SceneError(f"{key} is {value!r}; allowed: > 0", source, "experiment", key)
+        problem = number_problem(value, POSITIVE, "s")
+        if problem is not None:
+            raise SceneError(f"{key} {problem}", source, "experiment", key)
         values[key] = float(value)
     experiment = Experiment(**values)
     if experiment.output_interval > experiment.stop_time:

@@ -1,0 +1,68 @@
+"""What `herringbone run` writes and prints about a run: the CSV of its outputs (a header of
+names with units), the summary table (with a unit column) and, with --plot, its pictures."""
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of
+
+# outputs shown in the summary in a unit more readable than SI: name -> (unit, factor)
+SHOWN_IN = {"dte": ("um", 1e6)}
+
+
+def write_csv(results: dict, path: Path) -> None:
+    """A run's outputs ({name: samples}) as CSV, one column a name with its unit ("time [s]",
+    "F_mesh [N]"), 12 significant digits; the folder is made as needed."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(results)
+    with open(path, "w", newline="") as file:
+        writer = csv.writer(file)
+        writer.writerow([name_with_unit(name) for name in names])
+        for row in zip(*(results[name] for name in names)):
+            writer.writerow([f"{value:.12g}" for value in row])
+
+
+def summary(scene, results: dict, wall_time: float, integrator: str = "") -> str:
+    """A few lines on a finished run: its span, the static mesh force, a table of each output
+    (with its unit) at the start, its least and largest sample and at the end, and the time
+    it took (`integrator`: what ran it, in words)."""
+    from ..model.assembly import GearTrainModel
+
+    model = GearTrainModel(scene)
+    stop = results["time"][-1]
+    by = f" on {integrator}" if integrator else ""
+    lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
+             f"({', '.join(model.coordinates)})",
+             f"simulated {stop:g} s{by} in {wall_time:.2f} s of wall time "
+             f"({wall_time / stop:.2f} s per simulated second)",
+             f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N",
+             # no mean: samples synchronous with the mesh period alias its fast content
+             f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
+             f"{'max of samples':>16}{'at the end':>14}"]
+    for name, values in results.items():
+        if name != "time":
+            unit, factor = SHOWN_IN.get(name, (unit_of(name), 1.0))
+            shown = values * factor
+            lines.append(f"{name:<20}{unit:<8}{shown[0]:>14.6g}{shown.min():>16.6g}"
+                         f"{shown.max():>16.6g}{shown[-1]:>14.6g}")
+    return "\n".join(lines)
+
+
+def plot_run(scene, results, csv_path: Path) -> list[Path]:
+    """`run --plot`: time histories and amplitude spectra (second half of the run) beside the
+    run's CSV, <stem>_time.png and <stem>_spectrum.png; returns their paths."""
+    from .campbell import elastic_frequencies
+    from .plots import plot_spectra, plot_time_histories
+
+    stem = csv_path.with_suffix("")
+    histories, spectra = Path(f"{stem}_time.png"), Path(f"{stem}_spectrum.png")
+    speed = abs(scene.parameters["w0_pinion"])
+    plot_time_histories(results, histories, f"{scene.name}: time histories "
+                        f"(w0 {speed * RPM_PER_RAD_S:.0f} rpm)")
+    mesh_frequency = speed * scene.parameters["z_pinion"] / (2.0 * math.pi)
+    plot_spectra(results, spectra, mesh_frequency, elastic_frequencies(scene),
+                 f"{scene.name}: amplitude spectra, second half of the run "
+                 f"(f_mesh {mesh_frequency:.1f} Hz)", skip=0.5 * results["time"][-1])
+    return [histories, spectra]

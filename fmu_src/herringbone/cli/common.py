@@ -1,0 +1,148 @@
+"""What the commands of `herringbone` share: their parser (one-line errors, "did you mean"),
+the options every command declares the same way (SCENE, --speeds with --rpm, -o/--output,
+--no-progress), and the error a command raises to stop with one line.
+
+A command is a module of this package with `NAME`, `HELP`, `declare(parser)` (its options:
+one declaration each, checked by their `type=` or action through herringbone.arguments before
+any work) and `execute(args, parser)` (the work; returns the exit code).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..arguments import (
+    SPEED_SWEEP_ALLOWED,
+    OneLineParser,
+    SpeedSweep,
+    number,
+    output_file,
+    output_file_problem,
+    output_folder,
+    speed_sweep_problem,
+)
+from ..model.scene import SceneError
+from ..suggest import did_you_mean
+
+SCENE_HELP = "scene file (TOML), or the name of a shipped scene (`herringbone scenes` lists them)"
+
+
+class CommandError(Exception):
+    """A command cannot go on: printed as one line, `herringbone COMMAND: <message>`, exit
+    code 2."""
+
+
+# what a command's work may raise that is the user's to fix, not a fault of the program: a bad
+# scene or value, an integration that cannot go on (IntegrationError), a build that failed
+# (RuntimeError), a missing optional dependency, a file that cannot be written
+EXPECTED_ERRORS = (CommandError, SceneError, ValueError, RuntimeError, ImportError, OSError)
+
+
+def execute(module, args, parser: argparse.ArgumentParser) -> int:
+    """Run a command module's `execute`; an expected error becomes one line on stderr,
+    `PROG: message`, and exit code 2."""
+    try:
+        return module.execute(args, parser)
+    except EXPECTED_ERRORS as error:
+        print(f"{parser.prog}: {one_line(error)}", file=sys.stderr)
+        return 2
+
+
+def one_line(error: BaseException) -> str:
+    """An error as one line: its message, or its type where it has none."""
+    text = " ".join(str(error).split())
+    if isinstance(error, OSError) and error.filename is not None:
+        text = f"{error.filename}: {error.strerror}"
+    return text or type(error).__name__
+
+
+class CommandParser(OneLineParser):
+    """A command's parser: one-line errors (OneLineParser) and close-match suggestions for an
+    unknown option."""
+
+    def unknown(self, extras: list[str]) -> None:
+        """Stop on arguments the command does not take, suggesting the closest option."""
+        options = [option for action in self._actions for option in action.option_strings]
+        flagged = [extra for extra in extras if extra.startswith("-")]
+        if flagged:
+            word = flagged[0].split("=")[0]
+            self.error(f"unknown option {word}{did_you_mean(word, options)}")
+        self.error(f"unexpected argument {extras[0]!r}")
+
+
+def fail(parser: argparse.ArgumentParser, message: str) -> None:
+    """Stop the command with one line on stderr, `PROG: message`, exit code 2."""
+    parser.error(message)
+
+
+def add_scene(parser: argparse.ArgumentParser, optional_default: str | None = None) -> None:
+    """The SCENE argument: a file or a shipped scene's name (optional with a default)."""
+    if optional_default is None:
+        parser.add_argument("scene", type=Path, metavar="SCENE", help=SCENE_HELP)
+    else:
+        parser.add_argument("scene", type=Path, nargs="?", default=Path(optional_default),
+                            metavar="SCENE", help=f"{SCENE_HELP}; default: {optional_default}")
+
+
+class _SpeedsAction(argparse.Action):
+    """Checks FROM TO COUNT at once (arguments.speed_sweep_problem)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        low, high, count = values
+        problem = speed_sweep_problem(low, high, count)
+        if problem is not None:
+            raise argparse.ArgumentError(self, f"{low:g} {high:g} {count:g}: {problem}; "
+                                               f"allowed: {SPEED_SWEEP_ALLOWED}")
+        setattr(namespace, self.dest, SpeedSweep(low, high, int(count)))
+
+
+def add_speeds(parser: argparse.ArgumentParser, default: tuple[float, float, int] | None,
+               what: str) -> None:
+    """--speeds FROM TO COUNT (checked as a whole) and --rpm, the same in every command."""
+    shown = "" if default is None else f" (default: {' '.join(f'{v:g}' for v in default)})"
+    parser.add_argument("--speeds", type=number, nargs=3, action=_SpeedsAction,
+                        default=None if default is None else SpeedSweep(*default),
+                        metavar=("FROM", "TO", "COUNT"),
+                        help=f"{what}: COUNT pinion speeds from FROM to TO, rad/s (rpm with "
+                             f"--rpm); {SPEED_SWEEP_ALLOWED}{shown}")
+    parser.add_argument("--rpm", action="store_true", help="FROM and TO of --speeds are in rpm")
+
+
+def speeds_of(args) -> SpeedSweep | None:
+    """--speeds with --rpm applied (None when not given and without default)."""
+    return None if args.speeds is None else args.speeds._replace(in_rpm=args.rpm)
+
+
+def add_output(parser: argparse.ArgumentParser, what: str, default: str,
+               suffixes: tuple[str, ...] = (), folder: bool = False) -> None:
+    """-o/--output: a file ending in one of `suffixes`, or a folder (`folder`), checked as it is
+    parsed (writable, the right kind); `what` says what is written there and what replaced."""
+    kind = "a folder" if folder else f"a {' or '.join(suffixes)} file" if suffixes else "a file"
+    parser.add_argument("-o", "--output", type=output_folder if folder else output_file(*suffixes),
+                        metavar="FOLDER" if folder else "FILE",
+                        help=f"{kind} to write: {what} (default: {default})")
+
+
+def default_output(parser: argparse.ArgumentParser, given: Path | None, default: Path,
+                   suffixes: tuple[str, ...] = (), folder: bool = False) -> Path:
+    """The output to write: `given` (checked when parsed) or `default`, checked here, before any
+    work."""
+    if given is not None:
+        return given
+    problem = (f"{default} is a file" if folder and default.exists() and not default.is_dir()
+               else output_file_problem(default / "file" if folder else default, suffixes))
+    if problem is not None:
+        fail(parser, f"cannot write {default}: {problem}; give -o "
+                     f"{'FOLDER' if folder else 'FILE'} in a folder you can write in")
+    return default
+
+
+def add_progress(parser: argparse.ArgumentParser) -> None:
+    """--no-progress: no progress bar on stderr."""
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def say(message: str) -> None:
+    """A note on stderr (compiling, progress), apart from the results on stdout."""
+    print(message, file=sys.stderr, flush=True)

@@ -1,0 +1,92 @@
+"""`herringbone run SCENE`: simulate a scene (the compiled integrator the FMU runs, or the
+scipy reference with --reference), print a summary and write the outputs as CSV."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..arguments import (
+    COMPILED_TOLERANCE_ARGUMENT,
+    OUTPUT_INTERVAL,
+    REFERENCE_TOLERANCE_ARGUMENT,
+    STOP_TIME,
+    number,
+)
+from ..integrate.compiled_stepper import DEFAULT_TOLERANCE
+from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_DEFAULT_TOLERANCE
+from ..model.scene import load_scene
+from ..optional import require
+from .common import add_output, add_progress, add_scene, default_output, fail
+
+NAME = "run"
+HELP = ("simulate a scene on the compiled integrator (what the FMU runs; --reference: the scipy "
+        "reference), print a summary and write the outputs as CSV")
+SUFFIXES = (".csv",)
+
+
+def declare(parser) -> None:
+    """The options of `run`."""
+    add_scene(parser)
+    parser.add_argument("--stop-time", type=STOP_TIME.option_type,
+                        help="simulated seconds (default: the scene's)")
+    parser.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
+                        help="seconds between output samples, at most the stop time "
+                             "(default: the scene's)")
+    parser.add_argument("--reference", action="store_true",
+                        help="run the scipy reference (DOP853) instead: independent of the "
+                             "compiled integrator, about 40-50 s of wall time per simulated "
+                             "second at its default tolerance")
+    compiled, reference = COMPILED_TOLERANCE_ARGUMENT.allowed, REFERENCE_TOLERANCE_ARGUMENT.allowed
+    parser.add_argument("--tolerance", type=number,
+                        help="relative to the static mesh force: the error per step "
+                             f"{compiled.describe()} (default {DEFAULT_TOLERANCE:g}); with "
+                             f"--reference the error over the run {reference.describe()} "
+                             f"(default {REFERENCE_DEFAULT_TOLERANCE:g})")
+    add_output(parser, "the outputs, one column per output with its unit; an existing file is "
+               "replaced", "results/<scene>.csv", SUFFIXES)
+    parser.add_argument("--plot", action="store_true",
+                        help="also write PNGs beside the CSV: time histories and amplitude "
+                             "spectra with mesh harmonics and natural frequencies")
+    add_progress(parser)
+
+
+def tolerance_of(args, parser) -> float:
+    """--tolerance, checked against the range of the integrator chosen, or its default."""
+    argument = REFERENCE_TOLERANCE_ARGUMENT if args.reference else COMPILED_TOLERANCE_ARGUMENT
+    if args.tolerance is None:
+        return REFERENCE_DEFAULT_TOLERANCE if args.reference else DEFAULT_TOLERANCE
+    if argument.problem(args.tolerance) is not None:
+        fail(parser, f"--tolerance {args.tolerance:g}: allowed: {argument.describe()}")
+    return args.tolerance
+
+
+def execute(args, parser) -> int:
+    """Check everything, run, write the CSV (and the PNGs), print the summary."""
+    from ..analysis.run_progress import simulate_with_progress
+    from ..analysis.run_report import summary, write_csv
+
+    tolerance = tolerance_of(args, parser)
+    scene = load_scene(args.scene)
+    stop_time = args.stop_time or scene.experiment.stop_time
+    interval = args.output_interval or scene.experiment.output_interval
+    if interval > stop_time:
+        fail(parser, f"--output-interval {interval:g} s is longer than the stop time "
+                     f"{stop_time:g} s; allowed: > 0 and <= the stop time (give a shorter "
+                     "--output-interval or a longer --stop-time)")
+    output = default_output(parser, args.output, Path("results") / f"{scene.name}.csv",
+                            SUFFIXES)
+    if args.plot:
+        require("matplotlib", "--plot")
+    started = time.perf_counter()
+    results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
+                                     tolerance=tolerance, reference=args.reference,
+                                     progress=not args.no_progress)
+    wall = time.perf_counter() - started
+    write_csv(results, output)
+    integrator = "the scipy reference" if args.reference else "the compiled integrator"
+    print(summary(scene, results, wall, integrator))
+    print(f"outputs written to {output}")
+    if args.plot:
+        from ..analysis.run_report import plot_run
+        print("\n".join(f"written: {path}" for path in plot_run(scene, results, output)))
+    return 0

@@ -1,0 +1,52 @@
+"""`herringbone stability SCENE`: the Floquet chart of a scene's linear mesh against pinion
+speed, with its unstable bands."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..model.parameters import RPM_PER_RAD_S
+from ..model.scene import load_scene
+from ..optional import require
+from .common import add_output, add_progress, add_scene, add_speeds, default_output
+
+NAME = "stability"
+HELP = ("Floquet chart: the largest multiplier of the linear mesh against pinion speed, with "
+        "its unstable bands (a picture and a list of the bands)")
+PICTURES = (".png", ".pdf", ".svg")
+
+
+def declare(parser) -> None:
+    """The options of `stability`."""
+    add_scene(parser)
+    add_speeds(parser, (50.0, 3000.0, 300), "the chart's speeds")
+    add_output(parser, "the chart; an existing file is replaced",
+               "results/<scene>_stability.png", PICTURES)
+    add_progress(parser)
+
+
+def execute(args, parser) -> int:
+    """Chart the speeds, write the picture, print the bands."""
+    from ..analysis.stability import plot_stability_chart, stability_chart
+
+    sweep = args.speeds._replace(in_rpm=args.rpm)
+    scene = load_scene(args.scene)
+    output = default_output(parser, args.output,
+                            Path("results") / f"{scene.name}_stability.png", PICTURES)
+    require("matplotlib", "the stability chart")
+    tqdm = require("tqdm", "the progress bar (or give --no-progress)").tqdm
+    speeds = sweep.speeds()
+    with tqdm(total=len(speeds), unit="speed", desc=f"stability {scene.name}",
+              file=sys.stderr, disable=args.no_progress) as bar:
+        chart = stability_chart(scene, speeds, on_progress=bar.update)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
+    print(f"largest multiplier |λ|max from {chart.largest_modulus.min():.6g} to "
+          f"{chart.largest_modulus.max():.6g} over {speeds[0]:g}-{speeds[-1]:g} rad/s")
+    for band_low, band_high in chart.unstable_bands:
+        print(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
+              f"({band_low * RPM_PER_RAD_S:.0f}-{band_high * RPM_PER_RAD_S:.0f} rpm)")
+    if not chart.unstable_bands:
+        print("no unstable band: every multiplier inside the unit circle")
+    print(f"chart written to {output}")
+    return 0

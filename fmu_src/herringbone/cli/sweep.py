@@ -1,0 +1,131 @@
+"""`herringbone sweep SCENE`: run a scene over a grid of speeds or parameters (one or two),
+past its start-up transient, and write the table of figures per point and its pictures.
+
+Every option is one `add_argument` in `declare`, checked by its `type=` or action; `execute`
+hands them to analysis.sweep.run_sweep.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..arguments import (
+    COMPILED_TOLERANCE_ARGUMENT,
+    SAMPLES_PER_PERIOD,
+    SETTLE_RESIDUAL,
+    SETTLE_TIME,
+    SPEED_COUNT,
+    WINDOW_PERIODS,
+    existing_fmu,
+    number,
+)
+from ..integrate.compiled_stepper import DEFAULT_TOLERANCE
+from ..model.parameters import INPUTS, PARAMETERS
+from ..model.scene import load_scene
+from ..optional import require
+from ..suggest import did_you_mean
+from .common import (
+    add_output,
+    add_progress,
+    add_scene,
+    add_speeds,
+    default_output,
+    fail,
+    speeds_of,
+)
+
+NAME = "sweep"
+HELP = ("run a scene over a grid of speeds or parameters (one or two), past its start-up "
+        "transient: K_v, bearing reactions, dte, contact loss, Floquet |λ|max per point (CSV, "
+        "resonance curve and waterfall pictures)")
+SWEEPABLE = {**PARAMETERS, **INPUTS}
+
+
+class _ParamAction(argparse.Action):
+    """--param NAME FROM TO COUNT: a known parameter (or input), FROM < TO finite, COUNT >= 2."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        name, *numbers = values
+        if name not in SWEEPABLE:
+            raise argparse.ArgumentError(self, f"{name}: unknown parameter"
+                                               f"{did_you_mean(name, SWEEPABLE)}; allowed: a "
+                                               "parameter of the scene, M_motor or M_load")
+        try:
+            low, high, count = (float(text) for text in numbers)
+        except ValueError:
+            low = high = count = float("nan")
+        if not (low < high and abs(high - low) < float("inf")
+                and SPEED_COUNT.problem(count) is None):
+            raise argparse.ArgumentError(self, f"{' '.join(values)}: allowed: FROM < TO, "
+                                               "finite, and COUNT >= 2 values")
+        getattr(namespace, self.dest).append((name, low, high, int(count)))
+
+
+def declare(parser) -> None:
+    """The options of `sweep`: one declaration each."""
+    add_scene(parser)
+    add_speeds(parser, None, "sweep the pinion speed w0_pinion")
+    parser.add_argument("--param", nargs=4, action=_ParamAction, default=[],
+                        metavar=("NAME", "FROM", "TO", "COUNT"),
+                        help="sweep a parameter (or M_motor, M_load) over COUNT values from "
+                             "FROM to TO, in its unit; twice, or with --speeds, for a grid")
+    for argument, default in ((SETTLE_RESIDUAL, 1e-3), (SETTLE_TIME, None),
+                              (WINDOW_PERIODS, 50), (SAMPLES_PER_PERIOD, 64),
+                              (COMPILED_TOLERANCE_ARGUMENT, DEFAULT_TOLERANCE)):
+        shown = "" if default is None else f"; default {default:g}"
+        whole = "a whole number " if argument.whole else ""
+        parser.add_argument(argument.option, type=argument.option_type, default=default,
+                            help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
+                                 f"{shown}")
+    parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
+    parser.add_argument("--workers", type=number, help="Dask LocalCluster worker processes "
+                        "(default: one per core; 0: no Dask, run here one after the other)")
+    parser.add_argument("--scheduler", help="run on an existing Dask cluster, "
+                        "e.g. tcp://HOST:8786 (its workers need herringbone installed)")
+    parser.add_argument("--through-fmu", type=existing_fmu, metavar="FMU",
+                        help="run each point through this gear FMU with fmpy")
+    add_progress(parser)
+    add_output(parser, "the table <scene>_sweep_<swept>.csv and its pictures; files of those "
+               "names in it are replaced", "results", folder=True)
+
+
+def execute(args, parser) -> int:
+    """Check everything, run the sweep, write the table first, then the pictures."""
+    from ..analysis.sweep import run_sweep
+    from ..analysis.sweep_point import Protocol
+    from ..analysis.sweep_report import describe, write_outputs
+
+    if args.workers is not None and (args.workers < 0 or args.workers != int(args.workers)):
+        fail(parser, f"--workers {args.workers:g}: allowed: a whole number >= 0")
+    if args.rpm and args.speeds is None:
+        fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT")
+    sweep = speeds_of(args)
+    params = {name: _values(low, high, count) for name, low, high, count in args.param}
+    protocol = Protocol(settle_residual=args.settle_residual, settle_time=args.settle_time,
+                        window_periods=args.window_periods,
+                        samples_per_period=args.samples_per_period, tolerance=args.tolerance,
+                        floquet=not args.no_floquet)
+    scene = load_scene(args.scene)
+    folder = default_output(parser, args.output, Path("results"), folder=True)
+    require("pandas", "sweep")
+    require("matplotlib", "the sweep's pictures")
+    started = time.perf_counter()
+    table, series = run_sweep(scene, None if sweep is None else sweep.speeds(), params, protocol,
+                              workers=None if args.workers is None else int(args.workers),
+                              scheduler=args.scheduler, fmu=args.through_fmu,
+                              progress=not args.no_progress)
+    wall = time.perf_counter() - started
+    written = write_outputs(scene, table, series, folder)
+    print(describe(scene, table, wall))
+    for path in written:
+        print(f"written: {path}")
+    return 0
+
+
+def _values(low: float, high: float, count: int):
+    """COUNT evenly spaced values from `low` to `high`."""
+    import numpy as np
+
+    return np.linspace(low, high, count)
+

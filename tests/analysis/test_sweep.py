@@ -1,0 +1,318 @@
+"""Speed and parameter sweeps (herringbone.sweep): agreement with single runs, the same table
+serial and on Dask, the dynamic factor at a resonance of `herringbone info`, the settle time,
+the FMU path, bad arguments; the Campbell crossings; `run --plot` and its progress bar."""
+import math
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from helpers import MODELS
+
+import herringbone
+from herringbone import cli
+from herringbone.analysis.report import resonance_speeds
+from herringbone.analysis.stability import largest_multiplier
+from herringbone.analysis.sweep import run_sweep, sweep
+from herringbone.analysis.sweep_point import Protocol, timing, window_figures
+from herringbone.integrate.compiled_stepper import eigenvalues
+from herringbone.model.assembly import GearTrainModel, natural_modes
+
+MODELS = MODELS
+SHORT = Protocol(settle_time=0.02, window_periods=8, samples_per_period=32)
+SPEEDS = [157.08, 400.0, 1000.0]
+
+
+def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
+    """Each row's figures from herringbone.simulate of the same protocol (sampled from t = 0,
+    so its steps stop at other times during the settle): equal within the integrator's
+    tolerance, 1e-7 of the static force (measured: at most 1.2e-8, F_mesh_min at 1000 rad/s)."""
+    table = sweep(reference_scene, speeds=SPEEDS, protocol=SHORT, workers=0, progress=False,
+                  method="time")
+    assert list(table["w0_pinion"]) == SPEEDS
+    for _, row in table.iterrows():
+        scene = reference_scene.with_parameters(w0_pinion=row["w0_pinion"])
+        when = timing(scene, SHORT)
+        assert row["settle_time_s"] == pytest.approx(when.settle, rel=1e-15)
+        periods = row["settle_time_s"] * row["mesh_frequency_Hz"]
+        assert periods == pytest.approx(round(periods), abs=1e-9) and row["settle_time_s"] >= 0.02
+        assert row["window_time_s"] == pytest.approx(8 / row["mesh_frequency_Hz"], rel=1e-12)
+        results = herringbone.simulate(scene, stop_time=when.settle + when.window - when.interval,
+                                       output_interval=when.interval, tolerance=SHORT.tolerance)
+        first = round(when.settle / when.interval)
+        window = {name: values[first:first + when.samples] for name, values in results.items()}
+        assert window["time"][0] == pytest.approx(when.settle, abs=1e-12)
+        assert len(window["time"]) == when.samples == 256
+        force = row["static_mesh_force_N"]
+        assert force == pytest.approx(500.0 / GearTrainModel(scene).geometry.radius_pinion)
+        single = window_figures(window, force)
+        for name, value in single.items():
+            scale = 1.0 if name in ("K_v", "contact_lost_share") else \
+                1e6 * force / GearTrainModel(scene).mesh.mean_stiffness() if "dte" in name \
+                else force
+            assert abs(row[name] - value) <= SHORT.tolerance * scale, name
+        assert row["floquet_max"] == pytest.approx(
+            float(largest_multiplier(scene, row["w0_pinion"])), rel=1e-12)
+
+
+def test_settle_is_the_decay_of_the_least_damped_mode(reference_scene):
+    """Default settle: whole mesh periods just past ln(1000)/σ, σ the slowest decay among the
+    train's non-rigid eigenvalues (the 113 Hz motor-load torsional mode, σ ≈ 2 1/s)."""
+    modes = eigenvalues(GearTrainModel(reference_scene))
+    slowest = min([m for m in modes if abs(m) > 1.0 and m.imag >= 0], key=lambda m: -m.real)
+    assert abs(slowest.imag) / (2 * math.pi) == pytest.approx(112.9, abs=0.5)
+    when = timing(reference_scene, Protocol())
+    needed = math.log(1e3) / -slowest.real
+    assert needed <= when.settle < needed + when.mesh_period
+    assert 3.0 < when.settle < 4.0
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def dask_scheduler_and_worker(tmp_path):
+    """`dask scheduler` and one `dask worker` (two processes) on 127.0.0.1, shut down after."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    bin_dir = Path(sys.executable).parent
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    processes = [subprocess.Popen([str(bin_dir / "dask"), "scheduler", "--host", "127.0.0.1",
+                                   "--port", str(port), "--no-dashboard"], env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    processes.append(subprocess.Popen([str(bin_dir / "dask"), "worker", address, "--host",
+                                       "127.0.0.1", "--nworkers", "2", "--nthreads", "1",
+                                       "--no-dashboard"], env=env, cwd=tmp_path,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    try:
+        from dask.distributed import Client
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+            process.wait(timeout=30)
+
+
+def test_serial_local_cluster_and_scheduler_give_identical_tables(reference_scene,
+                                                                  dask_scheduler_and_worker):
+    """The same four points here, on a LocalCluster of two and on a scheduler with workers
+    started by `dask worker`: the same table to the bit; no worker compiled the integrator."""
+    from dask.distributed import Client
+
+    from herringbone.integrate.compiled import walk
+
+    speeds = [157.08, 300.0, 650.0, 1200.0]
+    serial = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=0, progress=False,
+                   method="time")
+    local = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=2, progress=False,
+                  method="time")
+    remote = sweep(reference_scene, speeds=speeds, protocol=SHORT,
+                   scheduler=dask_scheduler_and_worker, progress=False, method="time")
+    pd.testing.assert_frame_equal(serial, local, check_exact=True)
+    pd.testing.assert_frame_equal(serial, remote, check_exact=True)
+    with Client(dask_scheduler_and_worker) as client:
+        compiled = client.run(lambda: any(walk.advance.stats.cache_misses.values()))
+    assert len(compiled) == 2 and not any(compiled.values())
+
+
+def test_dynamic_factor_peaks_at_a_resonance_of_info(reference_scene):
+    """Across 350-650 rad/s (30 rad/s apart) K_v peaks within one step of the resonance
+    2·f_mesh = 1497 Hz (lateral mode, 470 rad/s) and stands 10 % above the sweep's ends; dte
+    peaks within one step of f_mesh = 684 Hz (torsional mesh mode, 430 rad/s)."""
+    speeds = np.linspace(350.0, 650.0, 11)
+    protocol = Protocol(settle_time=0.2, window_periods=20, floquet=False)
+    table = sweep(reference_scene, speeds=speeds, protocol=protocol, workers=0, progress=False,
+                  method="time")
+    step = speeds[1] - speeds[0]
+    frequencies = natural_modes(reference_scene)[0]
+    lateral = resonance_speeds(frequencies[3], 10)[2]
+    torsional = resonance_speeds(frequencies[2], 10)[1]
+    assert frequencies[3] == pytest.approx(1497.3, abs=0.1)
+    assert lateral == pytest.approx(470.4, abs=0.1)
+    assert frequencies[2] == pytest.approx(683.7, abs=0.1)
+    peak = table.loc[table["K_v"].idxmax()]
+    assert abs(peak["w0_pinion"] - lateral) <= step
+    assert peak["K_v"] > 1.1 * max(table["K_v"].iloc[0], table["K_v"].iloc[-1])
+    assert abs(table.loc[table["dte_p2p_um"].idxmax(), "w0_pinion"] - torsional) <= step
+
+
+def test_contact_loss_share_is_the_time_a_half_is_unloaded():
+    """The contact_loss scene (light load, large helix errors) loses its right half part of
+    each period; the reference scene never does."""
+    scene = herringbone.load_scene(MODELS / "contact_loss.toml")
+    table, series = run_sweep(scene, speeds=[157.08], protocol=SHORT, workers=0,
+                              progress=False)
+    assert 0.2 < table["contact_lost_share"].iloc[0] < 1.0
+    assert table["F_mesh_min_N"].iloc[0] >= 0.0
+    assert len(series[0]["dte"]) == 256
+
+
+def test_parameter_grid_of_two(reference_scene):
+    """A grid: the last quantity fastest, each row the scene with those values."""
+    table = sweep(reference_scene, params={"dbeta_right": [-1e-4, 1e-4], "M_motor": [300, 500]},
+                  protocol=SHORT, workers=0, progress=False)
+    assert list(zip(table["dbeta_right"], table["M_motor"])) == [
+        (-1e-4, 300), (-1e-4, 500), (1e-4, 300), (1e-4, 500)]
+    radius = GearTrainModel(reference_scene).geometry.radius_pinion
+    assert list(table["static_mesh_force_N"]) == pytest.approx([300 / radius, 500 / radius] * 2)
+    assert table["K_v"].iloc[2] != table["K_v"].iloc[0]
+
+
+@pytest.mark.slow
+def test_through_fmu_matches_the_compiled_sweep(reference_scene, scene_fmu):
+    """Each point through the FMU with fmpy: the FMU steps the same integrator, stopping at
+    every sample from t = 0, so it agrees with simulate() to the bound of the first test."""
+    table = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0, progress=False,
+                  method="time")
+    through = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0,
+                    fmu=scene_fmu("reference"), progress=False, method="time")
+    assert through.columns.equals(table.columns)
+    assert np.abs(through["K_v"] - table["K_v"]).max() <= 1e-9
+    assert np.abs(through["dte_p2p_um"] - table["dte_p2p_um"]).max() <= 1e-6
+
+
+def test_shooting_is_the_default_and_agrees_with_settled_time_points(reference_scene):
+    """A speed sweep computes the periodic steady state directly by default: a stable row at
+    each requested speed, whose K_v and dte peak-to-peak agree with the time protocol settled
+    to 1e-6 within 1e-5 relative (at the default residual 1e-3 the time sweep lies 5.8e-6
+    (K_v) and 8e-5 (dte peak-to-peak) from the orbits: benchmarks/steady_state.py)."""
+    speeds = [300.0, 650.0, 1200.0]
+    branch = sweep(reference_scene, speeds=speeds, progress=False)
+    assert set(branch["method"]) == {"shooting"} and set(branch["stability"]) == {"stable"}
+    assert (branch["floquet_exponent_per_s"] < 0).all() and not branch.attrs["folds"]
+    assert np.all(np.diff(branch["w0_pinion"]) > 0)  # no fold: the speed only rises
+    table = branch[branch["on_grid"]].reset_index(drop=True)
+    assert list(table["w0_pinion"]) == speeds
+    settled = Protocol(settle_residual=1e-6, tolerance=1e-10, window_periods=1, floquet=False)
+    timed = sweep(reference_scene, speeds=speeds, protocol=settled, workers=0,
+                  progress=False, method="time")
+    assert set(timed["stability"]) == {"time"}
+    for name in ("K_v", "dte_p2p_um"):
+        assert np.abs(table[name] / timed[name] - 1.0).max() <= 1e-5, name
+    assert np.abs(table["static_mesh_force_N"] - timed["static_mesh_force_N"]).max() == 0.0
+    assert np.abs(table["mesh_frequency_Hz"] / timed["mesh_frequency_Hz"] - 1).max() <= 1e-15
+
+
+def test_shooting_where_it_does_not_apply_is_refused_by_name(reference_scene):
+    """method="shooting" on a parameter sweep or unbalanced torques: one message naming why
+    and what is allowed; the default then runs the time protocol."""
+    with pytest.raises(ValueError, match="other quantities than the speed.*method='time'"):
+        sweep(reference_scene, params={"zeta_mesh": [0.05]}, method="shooting")
+    unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=1000.0)
+    with pytest.raises(ValueError, match="does not balance"):
+        sweep(unbalanced, speeds=[300.0], method="shooting")
+    with pytest.raises(ValueError, match="method 'harmonic'; allowed: shooting, time"):
+        sweep(reference_scene, speeds=[300.0], method="harmonic")
+    table = sweep(unbalanced, speeds=[300.0], protocol=SHORT, workers=0, progress=False)
+    assert list(table["method"]) == ["time"]
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--speeds", "100", "50", "3"], "--speeds"),
+    (["--speeds", "0", "50", "3"], "--speeds"),
+    (["--speeds", "10", "50", "2.5"], "COUNT 2.5"),
+    (["--speeds", "10", "nan", "3"], "--speeds"),
+    (["--rpm"], "--rpm"),
+    ([], "nothing to sweep"),
+    (["--param", "no_such", "1", "2", "3"], "no_such: unknown parameter"),
+    (["--param", "zeta_mesh", "-1", "0.1", "3"], "zeta_mesh"),
+    (["--param", "z_pinion", "0", "2", "3"], "z_pinion"),
+    (["--speeds", "10", "50", "3", "--param", "w0_pinion", "1", "2", "2"], "w0_pinion"),
+    (["--speeds", "10", "50", "3", "--param", "beta", "0.3", "0.4", "2", "--param",
+      "eps_q", "0.5", "0.6", "2"], "at most 2"),
+    (["--speeds", "10", "50", "3", "--workers", "-1"], "workers"),
+    (["--speeds", "10", "50", "3", "--scheduler", "localhost"], "scheduler"),
+    (["--speeds", "10", "50", "3", "--window-periods", "0"], "--window-periods"),
+    (["--speeds", "10", "50", "3", "--settle-residual", "2"], "--settle-residual"),
+    (["--speeds", "10", "50", "3", "--through-fmu", "missing.fmu"], "--through-fmu"),
+])
+def test_bad_sweep_arguments_get_one_line_and_exit_code_2(arguments, culprit, capsys):
+    code = cli.main(["sweep", str(MODELS / "reference.toml"), "--no-progress", *arguments])
+    error = capsys.readouterr().err
+    assert code == 2
+    assert error.startswith("herringbone sweep: ") and error.count("\n") == 1
+    assert culprit in error and "allowed" in error
+
+
+def test_sweep_command_writes_table_and_pictures(tmp_path, capsys):
+    code = cli.main(["sweep", str(MODELS / "torsional.toml"), "--speeds", "2000", "6000", "3",
+                     "--rpm", "--settle-time", "0.01", "--window-periods", "5", "--workers",
+                     "0", "--no-progress", "-o", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0 and "settle" in out
+    table = pd.read_csv(tmp_path / "torsional_sweep_w0_pinion.csv")
+    assert table["speed_rpm"].to_numpy() == pytest.approx([2000, 4000, 6000])
+    assert "F_brg_pinion_left_peak_N" not in table  # rigid bearings: no bearing outputs
+    for name in ("resonance", "waterfall"):
+        assert (tmp_path / f"torsional_sweep_w0_pinion_{name}.png").stat().st_size > 10_000
+
+
+def test_campbell_crossings_are_the_resonance_speeds_of_info(tmp_path, capsys):
+    output = tmp_path / "campbell.png"
+    assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "400", "500",
+                     "2", "-o", str(output)]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "k = " in line]
+    # info: 683.71 Hz at k = 1 429.6 rad/s, 2059.40 Hz k = 3 431.3, 1497.33 Hz k = 2 470.4
+    assert [line.split("(")[1].split("rad/s")[0].strip() for line in lines] == ["429.6", "431.3",
+                                                                          "470.4"]
+    assert output.stat().st_size > 10_000
+    assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "500", "400",
+                     "2"]) == 2
+    assert capsys.readouterr().err.startswith("herringbone campbell: --speeds")
+
+
+def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
+    from herringbone.analysis.run_progress import reference_simulate_with_progress
+
+    scene = herringbone.load_scene(MODELS / "contact_loss.toml")
+    plain = herringbone.reference_simulate(scene, stop_time=0.004, output_interval=2e-5)
+    watched = reference_simulate_with_progress(scene, stop_time=0.004, output_interval=2e-5)
+    for name in plain:
+        assert np.array_equal(plain[name], watched[name]), name
+    assert "s simulated" in capsys.readouterr().err
+    csv = tmp_path / "run.csv"
+    assert cli.main(["run", str(MODELS / "contact_loss.toml"), "--stop-time", "0.004",
+                     "--output-interval", "2e-5", "--plot", "-o", str(csv)]) == 0
+    for name in ("run_time.png", "run_spectrum.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
+    """A branch table: stable stretches solid, unstable dashed (each stretch joined to the next
+    point), folds crossed, time sweeps as triangles; the picture is written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis.sweep_plots import draw_branch, plot_resonance_curve
+
+    table = pd.DataFrame({"w0_pinion": [1.0, 2.0, 3.0, 2.5, 2.0, 3.0],
+                          "K_v": [1.0, 1.2, 1.5, 1.8, 2.0, 1.9],
+                          "dte_p2p_um": [1.0, 2.0, 3.0, 4.0, 5.0, 4.5],
+                          "stability": ["stable", "stable", "unstable", "unstable", "stable",
+                                        "stable"],
+                          "event": ["", "", "fold", "", "fold", ""]})
+    table["speed_rpm"] = table["w0_pinion"] * 30 / math.pi
+    figure, axes = plt.subplots(2, 1)
+    draw_branch(axes, table, [("K_v", "k"), ("dte_p2p_um", "C2")])
+    lines = {line.get_label(): line for line in axes[0].get_lines()}
+    stable, unstable = lines["K_v, stable orbits"], lines["K_v, unstable orbits"]
+    assert stable.get_linestyle() == "-" and unstable.get_linestyle() == "--"
+    assert list(np.isnan(stable.get_ydata())) == [False, False, False, True, False, False]
+    assert list(np.isnan(unstable.get_ydata())) == [True, True, False, False, False, True]
+    assert list(lines["fold (jump)"].get_ydata()) == [1.5, 2.0]
+    plt.close(figure)
+    up = table.iloc[:3].assign(stability="time")
+    path = tmp_path / "curve.png"
+    plot_resonance_curve(table, path, [], 10, "branch", sweeps={"up": up})
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,0 +1,243 @@
+"""The command line as a newcomer meets it: every friction point a first hour with it showed,
+one test each. In-process (`main([...])`, capsys) where possible: a process start costs a second
+or two of imports."""
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import MODELS
+
+import herringbone
+from herringbone.cli import main
+
+REFERENCE = str(MODELS / "reference.toml")
+
+
+def one_error_line(capsys, command: str) -> str:
+    """The one line on stderr, checked to start with `herringbone COMMAND: `; nothing on
+    stdout."""
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.count("\n") == 1, captured.err
+    assert captured.err.startswith(f"herringbone {command}: "), captured.err
+    assert "Traceback" not in captured.err
+    return captured.err
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Any run, chart or sweep beginning fails the test: the check must come first."""
+    import importlib
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the work began before the arguments were checked")
+
+    for module, name in (("analysis.sweep", "run_sweep"), ("analysis.stability",
+                                                           "stability_chart"),
+                         ("analysis.run_progress", "simulate_with_progress"),
+                         ("analysis.campbell", "plot_campbell"),
+                         ("fmu.builder", "build_gear_fmu")):
+        monkeypatch.setattr(importlib.import_module(f"herringbone.{module}"), name, refuse)
+
+
+def test_sweep_onto_a_file_fails_at_once_in_one_line(tmp_path, capsys, no_work):
+    afile = tmp_path / "afile"
+    afile.write_text("keep me\n")
+    assert main(["sweep", REFERENCE, "--speeds", "100", "200", "2", "-o", str(afile)]) == 2
+    error = one_error_line(capsys, "sweep")
+    assert "--output" in error and "is a file" in error and "folder" in error
+    assert afile.read_text() == "keep me\n"
+
+
+def test_sweep_default_folder_a_file_fails_before_work(tmp_path, capsys, no_work, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results").write_text("a file\n")
+    assert main(["sweep", REFERENCE, "--speeds", "100", "200", "2"]) == 2
+    assert "results" in one_error_line(capsys, "sweep")
+
+
+@pytest.mark.parametrize("command, output, words", [
+    ("stability", "chart.csv", ("not a .png",)),
+    ("stability", "/proc/nope/x.png", ("/proc/nope",)),
+    ("campbell", "diagram.csv", ("not a .png",)),
+    ("run", "out.png", ("not a .csv",)),
+])
+def test_an_output_of_the_wrong_kind_or_place_is_refused_before_work(
+        command, output, words, tmp_path, capsys, no_work, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([command, REFERENCE, "-o", output]) == 2
+    error = one_error_line(capsys, command)
+    assert "--output" in error and all(word in error for word in words), error
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_output_option_says_file_or_folder():
+    from herringbone.cli import parser
+
+    _, commands = parser()
+    for name, command in commands.items():
+        for action in command._actions:
+            if "--output" in action.option_strings:
+                assert "-o" in action.option_strings, name
+                assert re.search(r"\b(file|folder)\b", action.help), (name, action.help)
+
+
+def test_speeds_take_the_same_form_everywhere(capsys, no_work):
+    """FROM TO COUNT, COUNT >= 2, in stability, sweep and campbell alike."""
+    from herringbone.cli import parser
+
+    _, commands = parser()
+    for name in ("stability", "sweep", "campbell"):
+        speeds = next(a for a in commands[name]._actions if "--speeds" in a.option_strings)
+        assert speeds.metavar == ("FROM", "TO", "COUNT") and speeds.nargs == 3, name
+        assert main([name, REFERENCE, "--speeds", "100", "200", "1"]) == 2
+        error = one_error_line(capsys, name)
+        assert "COUNT 1" in error and "COUNT >= 2" in error
+
+
+@pytest.mark.parametrize("argv, command, suggestion", [
+    (["run", "refrence"], "run", "'reference'"),
+    (["run", REFERENCE, "--stoptime", "1"], "run", "'--stop-time'"),
+    (["sweep", REFERENCE, "--param", "z_pinon", "10", "12", "2"], "sweep", "'z_pinion'"),
+    (["stability", REFERENCE, "--speed", "1", "2", "3", "--outptu", "x.png"], "stability",
+     "'--output'"),
+])
+def test_a_typo_gets_did_you_mean(argv, command, suggestion, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    error = one_error_line(capsys, command)
+    assert f"did you mean {suggestion}?" in error
+
+
+def test_a_misspelt_command_and_parameter_get_did_you_mean(capsys, tmp_path):
+    assert main(["stabilty", REFERENCE]) == 2
+    assert "did you mean 'stability'?" in capsys.readouterr().err
+    scene = tmp_path / "typo.toml"
+    scene.write_text("[parameters]\nz_pinon = 12\n")
+    assert main(["info", str(scene)]) == 2
+    assert "did you mean 'z_pinion'?" in one_error_line(capsys, "info")
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"herringbone {herringbone.__version__}"
+
+
+def test_errors_of_run_name_the_command(capsys, tmp_path):
+    scene = tmp_path / "bad.toml"
+    scene.write_text("[parameters]\nbeta = 22.86\n")
+    assert main(["run", str(scene)]) == 2
+    error = one_error_line(capsys, "run")
+    # the unit, named as radians: the value was meant in degrees
+    assert "beta is 22.86 rad; allowed: (0, 1.5708) rad, an angle in radians" in error
+
+
+def test_build_fmu_names_its_fmu_by_scene_and_fmi_version(capsys):
+    from herringbone.cli.build_fmu import declare
+    from herringbone.fmu.builder import default_fmu_name
+
+    assert default_fmu_name("torsional", 2) != default_fmu_name("reference", 2)
+    assert default_fmu_name("reference", 3) != default_fmu_name("reference", 2)
+    assert default_fmu_name("reference", 2) == "reference-fmi2.fmu"
+    parser = herringbone.arguments.OneLineParser(prog="x")
+    declare(parser)
+    help_text = parser.format_help()
+    assert "<scene>-fmi<N>.fmu" in " ".join(help_text.split())
+
+
+def test_build_fmu_of_another_scene_leaves_the_reference_fmu(tmp_path, monkeypatch, capsys):
+    """Building torsional (FMI 2.0), then reference with --fmi 3, in a folder that already
+    holds the reference FMI 2.0 FMU: each lands in its own file, the first untouched."""
+    from herringbone.fmu import builder
+
+    built = []
+
+    def build(scene, output, fmi_version=2):
+        built.append((Path(scene).name, Path(output), fmi_version))
+        Path(output).write_text(f"{scene} {fmi_version}")
+        return Path(output)
+
+    monkeypatch.setattr(builder, "build_gear_fmu", build)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "dist").mkdir()
+    reference = tmp_path / "dist" / "reference-fmi2.fmu"
+    reference.write_text("the reference FMU")
+    assert main(["build-fmu", "torsional"]) == 0
+    assert main(["build-fmu", "reference", "--fmi", "3"]) == 0
+    assert reference.read_text() == "the reference FMU"
+    assert [(name, output.as_posix(), version) for name, output, version in built] == [
+        ("torsional", "dist/torsional-fmi2.fmu", 2), ("reference", "dist/reference-fmi3.fmu", 3)]
+    assert "built dist/torsional-fmi2.fmu" in capsys.readouterr().out
+
+
+def test_build_fmu_refuses_an_output_that_is_no_fmu(tmp_path, capsys, no_work):
+    assert main(["build-fmu", "reference", "-o", str(tmp_path / "x.zip")]) == 2
+    assert "not a .fmu file" in one_error_line(capsys, "build-fmu")
+
+
+def test_run_defaults_to_the_compiled_integrator_and_its_numbers(tmp_path, capsys):
+    """`run` gives herringbone.simulate's numbers to the CSV's 12 digits, with units in the
+    header and the summary; --reference gives reference_simulate's."""
+    scene = herringbone.load_scene("reference")
+    span = dict(stop_time=2e-3, output_interval=1e-4)
+    csv = tmp_path / "run.csv"
+    assert main(["run", "reference", "--stop-time", "2e-3", "--output-interval", "1e-4",
+                 "--no-progress", "-o", str(csv)]) == 0
+    printed = capsys.readouterr().out
+    assert "on the compiled integrator" in printed
+    assert re.search(r"^dte\s+um\s", printed, re.MULTILINE)  # dte shown in µm, with its unit
+    assert re.search(r"^F_mesh\s+N\s", printed, re.MULTILINE)
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header[:2] == ["time [s]", "k_mesh [N/m]"] and "dte [m]" in header
+    assert "n_contacts" in header
+    table = np.loadtxt(csv, delimiter=",", skiprows=1)
+    expected = herringbone.simulate(scene, **span)
+    assert np.allclose(table[:, header.index("F_mesh [N]")], expected["F_mesh"], rtol=1e-11)
+    assert main(["run", "reference", "--reference", "--stop-time", "2e-3",
+                 "--output-interval", "1e-4", "--no-progress", "-o", str(csv)]) == 0
+    assert "on the scipy reference" in capsys.readouterr().out
+    table = np.loadtxt(csv, delimiter=",", skiprows=1)
+    expected = herringbone.reference_simulate(scene, **span)
+    assert np.allclose(table[:, header.index("F_mesh [N]")], expected["F_mesh"], rtol=1e-11)
+
+
+def test_run_tolerance_is_checked_against_the_integrator_chosen(capsys, no_work, tmp_path):
+    with pytest.raises(AssertionError, match="the work began"):  # the compiled one allows it
+        main(["run", REFERENCE, "--tolerance", "1e-3", "-o", str(tmp_path / "x.csv")])
+    assert main(["run", REFERENCE, "--reference", "--tolerance", "1e-3"]) == 2
+    assert "[1e-12, 1e-05]" in one_error_line(capsys, "run")
+
+
+def test_the_compiled_run_shows_progress_and_keeps_its_numbers(capsys):
+    from herringbone.analysis.run_progress import simulate_with_progress
+
+    scene = herringbone.load_scene("reference")
+    plain = herringbone.simulate(scene, stop_time=2e-3, output_interval=1e-4)
+    watched = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4)
+    for name in plain:
+        assert np.array_equal(plain[name], watched[name]), name
+    assert "s simulated" in capsys.readouterr().err
+
+
+def test_the_console_script_runs_the_package(tmp_path):
+    """`herringbone` as installed (pyproject's herringbone.cli:main) from another folder."""
+    run = subprocess.run([str(Path(sys.executable).parent / "herringbone"), "--version"],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert run.returncode == 0 and run.stdout.startswith("herringbone ")
+
+
+def test_the_stability_chart_reports_progress_and_keeps_its_numbers():
+    """The chart in batches (for `stability`'s bar) is the chart in one go, to the bit."""
+    from herringbone.analysis.stability import stability_chart
+
+    scene = herringbone.load_scene("reference")
+    speeds = np.linspace(100.0, 3000.0, 12)
+    done = []
+    batched = stability_chart(scene, speeds, on_progress=done.append)
+    whole = stability_chart(scene, speeds)
+    assert sum(done) == len(speeds) and len(done) > 1
+    assert np.array_equal(batched.largest_modulus, whole.largest_modulus)
+    assert batched.unstable_bands == whole.unstable_bands

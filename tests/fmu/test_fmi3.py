@@ -1,0 +1,154 @@
+"""Issue 18 part 1: the FMI 3.0 co-simulation FMU (pythonfmu3) of the same slave as the FMI 2.0
+one (both adapters over herringbone/fmu/core.py): it validates, and driven by fmpy it gives the
+FMI 2.0 FMU's outputs bit for bit, on the reference scene and on one with contact loss; its start
+time, its message for a bad parameter, its FMU state.
+"""
+import shutil
+import xml.etree.ElementTree as ET
+import zipfile
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Slave
+from helpers import MODELS
+
+import herringbone
+from herringbone.fmu import builder
+from herringbone.fmu.run import simulate_scene_fmu
+
+SCENES = ("reference", "contact_loss")  # contact_loss: points lift off and re-engage
+STOP_TIME = 0.01  # 100 communication steps of the scenes' 1e-4 s
+ERROR = 3  # fmi3Error
+
+
+@pytest.fixture(scope="session")
+def fmus(tmp_path_factory):
+    """{(scene, FMI version): FMU path}, built once."""
+    folder = tmp_path_factory.mktemp("fmi3")
+    return {(scene, version): builder.build_gear_fmu(MODELS / f"{scene}.toml",
+                                                     folder / f"{scene}_{version}.fmu",
+                                                     fmi_version=version)
+            for scene in SCENES for version in (2, 3)}
+
+
+def variables(fmu):
+    return {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_fmi3_fmu_validates_and_declares_what_the_fmi2_one_does(fmus, scene):
+    fmu2, fmu3 = fmus[scene, 2], fmus[scene, 3]
+    assert builder.validate(fmu3) == []
+    description = read_model_description(str(fmu3))
+    assert description.fmiVersion == "3.0" and description.coSimulation.canSerializeFMUstate
+    two, three = variables(fmu2), variables(fmu3)
+    assert three.pop("time").causality == "independent"  # FMI 3.0 wants it
+    assert list(two) == list(three)  # the same names in the same order: the same references
+    for name, v2 in two.items():
+        v3 = three[name]
+        assert (v3.valueReference, v3.causality, v3.variability, v3.description) \
+            == (v2.valueReference, v2.causality, v2.variability, v2.description), name
+        assert (v3.unit, v3.min, v3.max) == (v2.unit, v2.min, v2.max), name
+        number = v2.type in ("Real", "Integer") and v2.start is not None
+        # FMI 2.0: pythonfmu writes 16 digits; FMI 3.0: every bit (repr)
+        assert (float(v3.start) == pytest.approx(float(v2.start), rel=1e-15, abs=0)) \
+            if number else v3.start == v2.start, name
+    with zipfile.ZipFile(fmu3) as zf:  # the FMU carries its compiled integrator
+        assert any("numba_cache" in name for name in zf.namelist())
+        root = ET.fromstring(zf.read("modelDescription.xml"))
+    assert all(output.get("dependencies") == "" for output in root.iter("Output"))
+    assert "generationDateAndTime" not in root.attrib
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_fmi3_outputs_are_the_fmi2_outputs_bit_for_bit(fmus, scene):
+    loaded = herringbone.load_scene(MODELS / f"{scene}.toml")
+    two = simulate_scene_fmu(fmus[scene, 2], loaded, stop_time=STOP_TIME)
+    three = simulate_scene_fmu(fmus[scene, 3], loaded, stop_time=STOP_TIME)
+    assert list(two) == list(three) and len(two["time"]) == round(STOP_TIME / 1e-4) + 1
+    for name in two:
+        assert np.array_equal(two[name], three[name]), name  # bit for bit, NaN nowhere
+    if scene == "contact_loss":  # the run does lose contact: fewer points carry load
+        assert two["n_contacts"].min() < two["n_contacts"].max()
+
+
+def test_fmi3_start_time_is_the_first_steps_time(fmus):
+    """pythonfmu3 does not pass enterInitializationMode's startTime on: the run starts where
+    the first doStep starts it, which gives the FMI 2.0 FMU's run from the same start time."""
+    runs = [fmpy.simulate_fmu(str(fmus["reference", version]), start_time=1.0,
+                              stop_time=1.002, output_interval=1e-4) for version in (2, 3)]
+    assert len(runs[1]) == 21 and runs[1]["time"][-1] == pytest.approx(1.002)
+    for name in ("F_mesh", "F_brg_pinion_left", "w_pinion"):
+        assert np.array_equal(runs[0][name], runs[1][name]), name
+
+
+def test_fmi3_bad_parameter_error_names_it(fmus, capfd):
+    with pytest.raises(FMICallException, match="fmi3DoStep failed with status 3"):
+        fmpy.simulate_fmu(str(fmus["reference", 3]), stop_time=1e-3,
+                          start_values={"m_pinion": -1.0})
+    printed = capfd.readouterr().out  # fmpy prints every message pythonfmu3 passes on
+    assert "[ERROR] " in printed and "parameter m_pinion is -1.0 kg; allowed: > 0 kg" in printed
+
+
+@pytest.fixture
+def instance(fmus):
+    fmu = fmus["reference", 3]
+    unzipped = extract(str(fmu))
+    description = read_model_description(unzipped)
+    messages = []
+    slave = FMU3Slave(guid=description.guid, unzipDirectory=unzipped,
+                      modelIdentifier=description.coSimulation.modelIdentifier,
+                      instanceName="gear")
+    slave.instantiate(loggingOn=False,
+                      logMessage=lambda env, status, category, message:
+                      messages.append((status, message.decode())))
+    slave.enterInitializationMode(startTime=0.0)
+    slave.exitInitializationMode()
+    slave.messages = messages
+    slave.refs = {v.name: v.valueReference for v in description.modelVariables}
+    yield slave
+    slave.terminate()
+    slave.freeInstance()
+    shutil.rmtree(unzipped, ignore_errors=True)
+
+
+def steps(slave, start, count, size=1e-4):
+    rows = []
+    for k in range(count):
+        slave.doStep(currentCommunicationPoint=start + k * size, communicationStepSize=size)
+        rows.append(slave.getFloat64([slave.refs["F_mesh"], slave.refs["w_pinion"]]))
+    return np.array(rows)
+
+
+def test_fmi3_state_round_trip_and_serialization(instance):
+    steps(instance, 0.0, 5)
+    state = instance.getFMUState()
+    serialized = instance.serializeFMUState(state)
+    first = steps(instance, 5e-4, 10)
+    instance.setFMUState(state)
+    assert np.array_equal(steps(instance, 5e-4, 10), first)
+    restored = instance.deserializeFMUState(serialized)
+    instance.setFMUState(restored)
+    assert np.array_equal(steps(instance, 5e-4, 10), first)
+    instance.freeFMUState(state)
+    instance.freeFMUState(restored)
+    assert instance.messages == []
+
+
+def test_fmi3_errors_are_fmi3error_and_the_instance_lives(instance):
+    steps(instance, 0.0, 2)
+    with pytest.raises(FMICallException, match="status 3"):  # a skipped step
+        instance.doStep(currentCommunicationPoint=1.0, communicationStepSize=1e-4)
+    ((status, text),) = instance.messages
+    assert status == ERROR and "doStep from t = 1.0 s" in text and "fmi3SetFMUState" in text
+    # refusals answer fmi3OK, with a message: an output set, a fixed parameter after init
+    instance.setFloat64([instance.refs["F_mesh"]], [1.0])
+    instance.setFloat64([instance.refs["m_pinion"]], [2.0])
+    assert "F_mesh is an output" in instance.messages[1][1]
+    assert "m_pinion is a fixed parameter" in instance.messages[2][1]
+    assert instance.getFloat64([instance.refs["m_pinion"]]) == [0.929436]
+    steps(instance, 2e-4, 2)  # the input problem has cleared: the run goes on
+    assert len(instance.messages) == 3

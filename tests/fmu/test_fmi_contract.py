@@ -1,0 +1,284 @@
+"""Issue 13: the FMU's contract with its hosts (FMI 2.0), point by point, through real hosts:
+fmpy's FMU2Slave in this process (tests/helpers/fmu_host.py, logging on), `fmpy.simulate_fmu`
+and the
+`fmpy simulate` command line and libcosimpy in child processes, so that a crash or an abort
+fails a test instead of the suite.
+
+How errors reach the user (README, "Errors in each host"): a host that enabled logging gets the
+message in its log and fmi2Discard; one that did not gets it on stderr and an fmi2Fatal, which
+fmpy raises.
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+import zipfile
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from helpers import FORCES, MODELS
+from helpers.fmu_host import Instance
+
+from herringbone.fmu import builder
+from herringbone.model.parameters import INPUTS, PARAMETERS
+
+DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
+STEP = 1e-4
+BIN = f"{sys.executable.rsplit('/', 1)[0]}"
+
+
+@pytest.fixture(scope="module")
+def fmu(scene_fmu):
+    return scene_fmu("reference")
+
+
+@pytest.fixture
+def gear(fmu):
+    instances = []
+
+    def make(**arguments):
+        instances.append(Instance(fmu, **arguments))
+        return instances[-1]
+
+    yield make
+    for instance in instances:
+        instance.free()
+
+
+def errors(instance, *words):
+    return [text for status, text in instance.messages
+            if status == ERROR and all(word in text for word in words)]
+
+
+def run_steps(instance, count, size=STEP):
+    rows = []
+    for _ in range(count):
+        instance.step(size)
+        rows.append(list(instance.get(list(FORCES)).values()))
+    return np.array(rows)
+
+
+# --- part 1: the contract -------------------------------------------------------------------
+
+def test_a_run_from_a_start_time_is_the_run_from_zero_shifted(gear, fmu):
+    from_zero = run_steps(gear(), 20)
+    late = gear(start_time=1.0)
+    from_one = run_steps(late, 20)
+    assert late.messages == []
+    # the same steps from another time origin: the times' rounding differs, nothing else
+    assert np.abs(from_one - from_zero).max() < 1e-9 * np.abs(from_zero).max()
+    result = fmpy.simulate_fmu(str(fmu), start_time=1.0, stop_time=1.002, output_interval=STEP)
+    assert len(result) == 21 and result["time"][-1] == pytest.approx(1.002)
+    assert np.abs(result["F_mesh"][1:] - from_zero[:, 0]).max() < 1e-9 * from_zero[0, 0]
+
+
+@pytest.mark.parametrize("tolerance, start_values, used", [
+    (1e-9, {}, 1e-9),  # the experiment's tolerance becomes solver_tolerance
+    (1e-9, {"solver_tolerance": 1e-8}, 1e-8),  # unless the user set solver_tolerance
+    (1.0, {}, 1e-2),  # clamped into solver_tolerance's range, with a warning
+    (None, {}, 1e-7),  # no tolerance: the start value
+])
+def test_experiment_tolerance_maps_to_solver_tolerance(gear, tolerance, start_values, used):
+    instance = gear(tolerance=tolerance, start_values=start_values)
+    assert instance.get(["solver_tolerance"])["solver_tolerance"] == used
+    warnings = [text for status, text in instance.messages if status == 1]  # fmi2Warning
+    assert bool(warnings) == (tolerance == 1.0)
+    assert all("tolerance 1" in text and "0.01" in text for text in warnings)
+
+
+def test_a_fixed_parameter_set_after_initialization_is_refused(gear):
+    untouched = run_steps(gear(), 5)
+    instance = gear()
+    instance.set(m_pinion=2.0)
+    assert instance.get(["m_pinion"])["m_pinion"] == 0.929436
+    (message,) = errors(instance, "m_pinion")
+    assert "fixed parameter" in message and "before exitInitializationMode" in message
+    assert np.array_equal(run_steps(instance, 5), untouched)  # it runs on, as it says
+
+
+def test_outputs_wrong_types_and_unknown_references_are_answered_without_fatal(gear):
+    instance = gear()
+    refs = {name: v.valueReference for name, v in instance.variables.items()}
+    instance.slave.setReal([refs["F_mesh"]], [5.0])
+    assert errors(instance, "F_mesh is an output", "cannot be set")
+    assert math.isnan(instance.slave.getReal([refs["n_contacts"]])[0])
+    assert errors(instance, "n_contacts is a Integer", "fmi2GetInteger")
+    assert instance.slave.getInteger([refs["F_mesh"]]) == [0]
+    assert errors(instance, "F_mesh is a Real", "fmi2GetReal")
+    assert math.isnan(instance.slave.getReal([100_000])[0])
+    assert errors(instance, "value reference 100000")
+    instance.slave.setReal([refs["internal_steps"]], [1.0])  # a local, through the wrong type
+    assert errors(instance, "internal_steps is a Integer")
+    assert not [text for status, text in instance.messages if status == FATAL]
+    forces = run_steps(instance, 3)  # the instance lives on, unchanged
+    assert np.array_equal(forces, run_steps(gear(), 3))
+
+
+def test_an_input_discard_clears_once_the_input_is_valid_and_is_logged_once(gear):
+    clean = run_steps(gear(), 6)
+    instance = gear()  # the last one made: fmpy's logger proxy reports to it
+    run_steps(instance, 2)
+    instance.set(M_load=float("nan"))
+    for _ in range(3):
+        with pytest.raises(FMICallException) as error:
+            instance.slave.doStep(instance.time, STEP)
+        assert error.value.status == DISCARD
+    assert len(errors(instance, "M_load", "finite")) == 1, instance.messages
+    instance.set(M_load=1800.0)
+    assert np.array_equal(run_steps(instance, 4), clean[2:])
+    # a doStep from the wrong time is refused, once, and the right one goes on
+    with pytest.raises(FMICallException):
+        instance.slave.doStep(instance.time + 1.0, STEP)
+    with pytest.raises(FMICallException):
+        instance.slave.doStep(instance.time + 1.0, STEP)
+    assert len(errors(instance, "FMU is at")) == 1
+    instance.step(STEP)
+    assert len(instance.messages) == 2
+
+
+def _serialize(instance):
+    state = instance.slave.getFMUstate()
+    data = instance.slave.serializeFMUstate(state)
+    instance.slave.freeFMUstate(state)
+    return bytes(data)
+
+
+def _restore(instance, data):
+    state = instance.slave.deSerializeFMUstate(data)
+    instance.slave.setFMUstate(state)
+    instance.slave.freeFMUstate(state)
+
+
+def test_serialized_state_restores_every_bit_also_in_a_new_instance(gear, fmu):
+    assert fmpy.read_model_description(str(fmu)).coSimulation.canSerializeFMUstate
+    instance = gear()
+    run_steps(instance, 30)
+    saved_time, data = instance.time, _serialize(instance)
+    assert _serialize(instance) == data  # a stable format: the same state, the same bytes
+    after = run_steps(instance, 30)
+    steps = instance.get(["internal_steps"])["internal_steps"]
+    assert steps > 0
+    for target in (instance, gear()):
+        _restore(target, data)
+        target.time = saved_time
+        assert np.array_equal(run_steps(target, 30), after)
+        assert target.get(["internal_steps"])["internal_steps"] == steps
+
+
+def test_model_description_ranges_guid_and_dependencies(fmu, tmp_path):
+    root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
+    declared = {v.get("name"): v[0] for v in root.iter("ScalarVariable")}
+    for name, parameter in {**PARAMETERS, **INPUTS}.items():
+        if name not in declared or parameter.kind is bool:
+            continue
+        for attribute, bound in (("min", parameter.allowed.low), ("max", parameter.allowed.high)):
+            text = declared[name].get(attribute)
+            assert (text is None) == (bound is None), (name, attribute)
+            if bound is not None:
+                assert float(text) == bound, (name, attribute)
+    assert declared["solver_tolerance"].get("min") == "1e-12"
+    outputs = root.find("ModelStructure/Outputs")
+    assert len(outputs) > 10 and all(u.get("dependencies") == "" for u in outputs)
+    # identical content, identical FMU: GUID and bytes. Built back to back: the FMU carries the
+    # compiled code the user's cache holds, which other compiles of the session add to.
+    first = builder.build_gear_fmu(MODELS / "reference.toml", tmp_path / "first.fmu")
+    again = builder.build_gear_fmu(MODELS / "reference.toml", tmp_path / "again.fmu")
+    with zipfile.ZipFile(first) as a, zipfile.ZipFile(again) as b:
+        assert a.namelist() == b.namelist()
+        differing = [name for name in a.namelist() if a.read(name) != b.read(name)]
+    assert not differing, f"two builds differ in {differing}"
+    assert first.read_bytes() == again.read_bytes(), "same entries, different archive bytes"
+    guid = fmpy.read_model_description(str(first)).guid
+    assert guid == fmpy.read_model_description(str(again)).guid
+    other = builder.build_gear_fmu(MODELS / "staggered.toml", tmp_path / "other.fmu")
+    assert fmpy.read_model_description(str(other)).guid != guid
+
+
+def test_a_runaway_stops_quickly_with_a_message_naming_the_torques(gear):
+    instance = gear(start_values={"M_motor": 1e12})
+    started = time.perf_counter()
+    with pytest.raises(FMICallException) as error:
+        for _ in range(10):
+            instance.step(STEP)
+    assert error.value.status == DISCARD
+    assert time.perf_counter() - started < 5.0
+    (message,) = errors(instance, "runs away")
+    assert "M_motor = 1e+12 N.m" in message and "M_load" in message and "internal steps" in message
+
+
+# --- part 2: errors reach the user in every host with its defaults -----------------------------
+
+FMPY_API = """
+import sys, fmpy
+try:
+    fmpy.simulate_fmu(sys.argv[1], stop_time=1e-3, output_interval=1e-4,
+                      start_values={sys.argv[2]: float(sys.argv[3])})
+except fmpy.fmi1.FMICallException as error:
+    print("RAISED", error)
+"""
+
+LIBCOSIM = """
+import json, sys, fmpy
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimObserver import CosimObserver
+from libcosimpy.CosimSlave import CosimLocalSlave
+refs = {v.name: v.valueReference for v in fmpy.read_model_description(sys.argv[1]).modelVariables}
+execution = CosimExecution.from_step_size(step_size=100_000)
+gear = execution.add_local_slave(CosimLocalSlave(fmu_path=sys.argv[1], instance_name="gear"))
+execution.real_initial_value(gear, refs[sys.argv[2]], float(sys.argv[3]))
+last = CosimObserver.create_last_value()
+execution.add_observer(observer=last)
+completed = execution.simulate_until(target_time=1_000_000)
+print("RESULT", json.dumps({"completed": completed, "time": execution.status().current_time}))
+"""
+
+
+def _child(arguments, tmp_path):
+    return subprocess.run(arguments, capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                          env={**os.environ, "TMPDIR": str(tmp_path)})
+
+
+def test_fmpy_api_with_defaults_raises_and_prints_the_message(fmu, tmp_path):
+    run = _child([sys.executable, "-c", FMPY_API, str(fmu), "m_pinion", "-1"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "RAISED fmi2ExitInitializationMode failed with status 4" in run.stdout
+    assert "HerringboneGear: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg" in run.stderr
+
+
+def test_fmpy_command_line_fails_with_the_message(fmu, tmp_path):
+    run = _child([f"{BIN}/fmpy", "simulate", str(fmu), "--stop-time", "1e-3",
+                  "--start-values", "m_pinion", "-1"], tmp_path)
+    assert run.returncode == 1
+    first_line = run.stderr.splitlines()[0]
+    assert first_line == "HerringboneGear: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg"
+
+
+def test_fmpy_with_logging_on_gets_the_message_in_its_log_only(fmu, tmp_path):
+    code = ("import sys, fmpy\nr = fmpy.simulate_fmu(sys.argv[1], stop_time=1e-3, "
+            "output_interval=1e-4, start_values={'m_pinion': -1.0}, debug_logging=True, "
+            "logger=lambda *a: print('LOG', a[-1].decode()))\n"
+            "print('ROWS', len(r), r['F_mesh'][0])\n")
+    run = _child([sys.executable, "-c", code, str(fmu)], tmp_path)
+    assert run.returncode == 0 and "m_pinion" not in run.stderr
+    assert "LOG HerringboneGear: parameter m_pinion is -1.0 kg; allowed: > 0 kg" in run.stdout
+    assert "ROWS 2 nan" in run.stdout  # no plausible-looking outputs of a train never started
+
+
+@pytest.mark.parametrize("variable, value, completed, words", [
+    ("m_pinion", -1.0, False, ("m_pinion is -1.0 kg; allowed: > 0 kg",)),
+    ("M_load", float("nan"), False, ("M_load is nan; allowed: any finite number, in N.m",)),
+    ("F_mesh", 5.0, True, ("F_mesh is an output: it cannot be set",)),
+])
+def test_libcosim_shows_the_message_and_lives(fmu, tmp_path, variable, value, completed, words):
+    run = _child([sys.executable, "-c", LIBCOSIM, str(fmu), variable, repr(value)], tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    (line,) = [line for line in run.stdout.splitlines() if line.startswith("RESULT ")]
+    assert json.loads(line[len("RESULT "):])["completed"] is completed
+    shown = [line for line in run.stderr.splitlines() + run.stdout.splitlines()
+             if "[error]" in line and "gear:" in line]
+    assert shown and all(word in shown[0] for word in words), shown

@@ -1,0 +1,205 @@
+"""The drive train as an SSP (herringbone.fmu.ssp, examples/cosimulate_drivetrain.py).
+
+`drivetrain.ssp` is built once; libcosim (libcosimpy) and fmpy's SSP support run it, each in a
+fresh interpreter (a host that aborts fails its test, not the session, and the gear FMU loads
+the herringbone it carries, not this source tree's), and must bring the train to the
+intersection of the motor's Kloss curve and the fan curve through the gear ratio, judged as in
+tests/fmu/test_cosimulation.py (same step, stop time, windows and tolerances).  The example script
+is run as a user runs it, and its printed numbers are checked.
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+
+import numpy as np
+import pytest
+import test_cosimulation as cosim
+from fmpy import read_model_description
+from helpers import ROOT
+
+from herringbone.fmu import ssp
+
+EXAMPLES = ROOT / "examples"
+sys.path.insert(0, str(EXAMPLES))
+from drivetrain_operating_point import operating_point  # noqa: E402
+
+EXAMPLE = EXAMPLES / "cosimulate_drivetrain.py"
+FMU_ENTRIES = {name: f"resources/{file}" for name, file in ssp.FMU_FILES.items()}
+SSD_NS = {"ssd": ssp.NAMESPACES["ssd"], "ssc": ssp.NAMESPACES["ssc"],
+          "ssv": ssp.NAMESPACES["ssv"]}
+# A heavier fan for the parameter-set test: it moves the operating point by far more than
+# the tolerances (w_motor by 7e-3, M_motor by 25 %) and stays on the motor's stable branch.
+HEAVY_FAN = 1.2
+
+
+@pytest.fixture(scope="session")
+def drivetrain(tmp_path_factory):
+    """The SSP of the reference scene, and its three FMUs unpacked beside it."""
+    folder = tmp_path_factory.mktemp("ssp")
+    path = ssp.build_ssp(ROOT / "models" / "reference.toml", folder / "drivetrain.ssp")
+    with zipfile.ZipFile(path) as archive:
+        archive.extractall(folder / "unpacked")
+    fmus = {name: folder / "unpacked" / entry for name, entry in FMU_ENTRIES.items()}
+    return {"ssp": path, "fmus": fmus, "folder": folder}
+
+
+def expected_point(fmus, **overrides):
+    """The analytic operating point from the FMUs' start values (and `overrides`)."""
+    motor, fan, gear = (cosim.start_values(fmus[name]) for name in ("motor", "fan", "gear"))
+    values = {"M_breakdown": motor["M_breakdown"], "s_breakdown": motor["s_breakdown"],
+              "w_sync": motor["w_sync"], "k_fan": fan["k_fan"], "z_pinion": gear["z_pinion"],
+              "z_wheel": gear["z_wheel"], **overrides}
+    return {**operating_point(**values), "w0_pinion": gear["w0_pinion"]}
+
+
+def run_child(code, folder):
+    """Run `code` in a fresh interpreter in `folder` (temporary files there too); the JSON it
+    printed on its last line starting with RESULT."""
+    run = subprocess.run([sys.executable, "-c", code], cwd=folder, capture_output=True,
+                         text=True, timeout=600, env={**os.environ, "TMPDIR": str(folder)})
+    assert run.returncode == 0, f"child exited with {run.returncode}:\n{run.stderr[-3000:]}"
+    lines = [line for line in run.stdout.splitlines() if line.startswith("RESULT ")]
+    assert lines, f"child printed no result:\n{run.stdout[-3000:]}\n{run.stderr[-3000:]}"
+    return json.loads(lines[-1][len("RESULT "):])
+
+
+def test_archive_holds_the_ssd_and_the_three_fmus(drivetrain):
+    """The zip: SystemStructure.ssd and the FMUs it names; the SSD passes the SSP 1.0 schema
+    (fmpy), connects speed and torque both ways, gives every connector its FMU's unit, and
+    binds the motor's and fan's parameters at their FMUs' start values."""
+    from fmpy.ssp.ssd import read_ssd
+
+    with zipfile.ZipFile(drivetrain["ssp"]) as archive:
+        assert sorted(archive.namelist()) == sorted(["SystemStructure.ssd",
+                                                     *FMU_ENTRIES.values()])
+        root = ET.fromstring(archive.read("SystemStructure.ssd"))
+    read_ssd(str(drivetrain["ssp"]))  # raises with the schema's complaint if invalid
+    connections = {(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
+                    c.get("endConnector")) for c in root.iterfind(".//ssd:Connection", SSD_NS)}
+    assert connections == {("gear", "w_motor", "motor", "w_motor"),
+                           ("motor", "M_motor", "gear", "M_motor"),
+                           ("gear", "w_load", "fan", "w_load"),
+                           ("fan", "M_load", "gear", "M_load")}
+    for component in root.iterfind(".//ssd:Component", SSD_NS):
+        name = component.get("name")
+        assert component.get("source") == FMU_ENTRIES[name]
+        variables = {v.name: v for v in
+                     read_model_description(str(drivetrain["fmus"][name])).modelVariables}
+        for connector in component.iterfind(".//ssd:Connector", SSD_NS):
+            variable = variables[connector.get("name")]
+            assert connector.get("kind") == variable.causality, connector.get("name")
+            assert connector.find("ssc:Real", SSD_NS).get("unit") == (variable.unit or "1")
+        bound = {p.get("name"): float(p.find("ssv:Real", SSD_NS).get("value"))
+                 for p in component.iterfind(".//ssv:Parameter", SSD_NS)}
+        assert bound == {p: float(variables[p].start)
+                         for p in ssp.DEFAULT_PARAMETERS.get(name, ())}, name
+    units = {u.get("name") for u in root.iterfind("ssd:Units/ssc:Unit", SSD_NS)}
+    assert units == {"rad/s", "N.m", "1", "N.m.s2/rad2"}
+
+
+def test_same_fmus_and_values_give_the_same_bytes(drivetrain, tmp_path):
+    again = ssp.write_ssp(drivetrain["fmus"], tmp_path / "again.ssp")
+    assert again.read_bytes() == drivetrain["ssp"].read_bytes()
+    other = ssp.write_ssp(drivetrain["fmus"], tmp_path / "other.ssp",
+                          parameters={"motor": {"w_sync": 161.0}})
+    assert other.read_bytes() != drivetrain["ssp"].read_bytes()
+
+
+def test_unknown_parameter_is_refused_by_name(drivetrain, tmp_path):
+    with pytest.raises(ValueError, match=r"fan\.k_fun is not a Real parameter of FanLoad\.fmu; "
+                                         r"allowed: k_fan"):
+        ssp.write_ssp(drivetrain["fmus"], tmp_path / "bad.ssp", parameters={"fan": {"k_fun": 1}})
+    assert not (tmp_path / "bad.ssp").exists()
+
+
+def test_libcosim_runs_the_ssp_to_the_operating_point(drivetrain, tmp_path):
+    """libcosimpy loads the .ssp in one call and, at the SSD's own 1e-4 s step, settles at
+    the curves' intersection (the checks of tests/fmu/test_cosimulation.py)."""
+    code = (f"import json, sys; sys.path.insert(0, {str(EXAMPLES)!r})\n"
+            "import cosimulate_drivetrain as example\n"
+            f"done, end, samples, _ = example.cosimulate({str(drivetrain['ssp'])!r}, "
+            f"{cosim.STOP_TIME!r}, {cosim.STEP!r})\n"
+            "module = sys.modules.get('herringbone')\n"
+            "print('RESULT ' + json.dumps({'completed': done, 'end_time': end, "
+            "'samples': samples, 'herringbone': module and module.__file__}))\n")
+    result = run_child(code, tmp_path)
+    assert result["completed"]
+    assert result["end_time"] == pytest.approx(cosim.STOP_TIME, rel=1e-12)
+    cosim.assert_ran_packaged_copy(result)
+    samples = {name: np.array(values) for name, values in result["samples"].items()}
+    samples["time"] = cosim.STEP * np.arange(1, len(samples["w_motor"]) + 1)
+    assert len(samples["time"]) == round(cosim.STOP_TIME / cosim.STEP)
+    cosim.check_settles_at_operating_point(samples, expected_point(drivetrain["fmus"]),
+                                           cosim.STEP)
+
+
+def run_example(ssp_path, folder):
+    """Run the example as a user does; its table as {signal: (last, before, analytic)}."""
+    run = subprocess.run([sys.executable, str(EXAMPLE), str(ssp_path)], cwd=folder,
+                         capture_output=True, text=True, timeout=600,
+                         env={**os.environ, "TMPDIR": str(folder)})
+    assert run.returncode == 0, f"{EXAMPLE.name} exited {run.returncode}:\n{run.stderr[-3000:]}"
+    table = {}
+    for line in run.stdout.splitlines():
+        match = re.match(r"(w_motor|w_load|M_motor|M_load)\s+\S+\s+(\S+)\s+(\S+)\s+(\S+)", line)
+        if match:
+            table[match[1]] = tuple(float(match[i]) for i in (2, 3, 4))
+    assert set(table) == set(cosim.SIGNALS), f"no full table in:\n{run.stdout}"
+    chatter = [line for line in run.stderr.splitlines()
+               if re.search(r"\[(trace|debug|info)\]", line)]  # libcosim's level tags
+    assert not chatter, f"libcosim logged below warning level: {chatter[:3]}"
+    return table
+
+
+def check_table(table, expected):
+    for signal, (last, before, analytic) in table.items():
+        tolerance = cosim.TOLERANCES[signal]
+        # printed to 6 decimals: 5e-7 of absolute rounding, far below the tolerances
+        assert analytic == pytest.approx(expected[signal], abs=1e-6), signal
+        assert last == pytest.approx(expected[signal], rel=tolerance), signal
+        assert last == pytest.approx(before, rel=cosim.DRIFT_FRACTION * tolerance), signal
+
+
+def test_example_prints_the_operating_point(drivetrain, tmp_path):
+    """`python examples/cosimulate_drivetrain.py drivetrain.ssp` prints window means at the
+    analytic intersection, and that intersection itself."""
+    check_table(run_example(drivetrain["ssp"], tmp_path), expected_point(drivetrain["fmus"]))
+
+
+def test_example_follows_the_parameter_set(drivetrain, tmp_path):
+    """With k_fan = 1.2 in the SSD's parameter set, libcosim applies it and the example's
+    analytic point uses it: both move to the new intersection, far from the default one."""
+    heavy = ssp.write_ssp(drivetrain["fmus"], tmp_path / "heavy.ssp",
+                          parameters={"fan": {"k_fan": HEAVY_FAN}})
+    expected = expected_point(drivetrain["fmus"], k_fan=HEAVY_FAN)
+    default = expected_point(drivetrain["fmus"])
+    for signal in cosim.SIGNALS:  # the check below could not pass with the default k_fan
+        assert abs(expected[signal] / default[signal] - 1) > 20 * cosim.TOLERANCES[signal]
+    check_table(run_example(heavy, tmp_path), expected)
+
+
+def test_fmpy_simulate_ssp_reaches_the_operating_point(drivetrain, tmp_path):
+    """fmpy's own SSP support runs the same file (its loop steps every FMU, then passes the
+    outputs on: a delay of a step, and it starts the torques at 0) to the same point.  It does
+    not read the SSD's parameter bindings; here they equal the FMUs' start values."""
+    code = ("import json\nfrom fmpy.ssp.simulation import simulate_ssp\n"
+            f"rows = simulate_ssp({str(drivetrain['ssp'])!r}, stop_time={cosim.STOP_TIME!r}, "
+            f"step_size={cosim.STEP!r})\n"
+            "print('RESULT ' + json.dumps({name: rows[name].tolist() for name in "
+            "('time', 'gear.w_motor', 'gear.w_load', 'motor.M_motor', 'fan.M_load')}))\n")
+    rows = run_child(code, tmp_path)
+    samples = {"time": np.array(rows["time"]),
+               **{signal: np.array(rows[f"{cosim.SOURCE_OF_SIGNAL[signal]}.{signal}"])
+                  for signal in cosim.SIGNALS}}
+    assert len(samples["time"]) == round(cosim.STOP_TIME / cosim.STEP)
+    expected = expected_point(drivetrain["fmus"])
+    last, before = cosim.window_means(samples, expected, cosim.STEP)
+    for signal in cosim.SIGNALS:
+        tolerance = cosim.TOLERANCES[signal]
+        assert last[signal] == pytest.approx(expected[signal], rel=tolerance), signal
+        assert last[signal] == pytest.approx(before[signal],
+                                             rel=cosim.DRIFT_FRACTION * tolerance), signal

@@ -1,0 +1,45 @@
+"""What the tests share: where things are, and how two runs are compared.
+
+The modules beside this one are the shared tools of the test suite: `fmu_host` (an fmpy host of
+one instance), `independent_model` (the model written anew from docs/model.md),
+`property_checks` (the invariants every run must keep), `scene_distribution` and
+`random_scenes` (random scenes, plain and through hypothesis).
+"""
+from pathlib import Path
+
+import numpy as np
+
+TESTS = Path(__file__).resolve().parent.parent
+ROOT = TESTS.parent
+MODELS = ROOT / "models"
+REGRESSION = TESTS / "regression"
+
+# The forces every comparison of two runs is judged on: the mesh force and the bearing forces
+# (a scene without bearings has F_mesh alone).
+FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left",
+          "F_brg_wheel_right")
+
+
+def _names(run) -> set[str]:
+    """The outputs a run has: a dict's keys, or a structured array's fields (fmpy's result)."""
+    names = getattr(getattr(run, "dtype", None), "names", None)
+    return set(names if names is not None else run)
+
+
+def force_errors(a, b, scene) -> dict[str, float]:
+    """For each of FORCES that both runs have ({name: samples} as simulate gives them, or
+    fmpy's structured array): max |a − b| over the samples, as a fraction of
+    GearTrainModel.force_scale() (the static mesh force of the largest input torque).
+    `scene`: a Scene or a GearTrainModel."""
+    from herringbone.model.assembly import GearTrainModel
+
+    model = scene if isinstance(scene, GearTrainModel) else GearTrainModel(scene)
+    scale = model.force_scale()
+    present = _names(a) & _names(b)
+    return {name: float(np.abs(np.asarray(a[name]) - np.asarray(b[name])).max()) / scale
+            for name in FORCES if name in present}
+
+
+def force_error(a, b, scene) -> float:
+    """The standard measure of two runs' disagreement: the largest of `force_errors`."""
+    return max(force_errors(a, b, scene).values())

@@ -1,0 +1,168 @@
+"""The first start on a machine: an FMU carries its compiled integrator; a compile says so first."""
+import os
+import pickle
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from helpers import MODELS
+
+import herringbone
+from herringbone.integrate import first_start
+
+COLD_START_BOUND = 5.0  # s of wall time, process start included (issue 14)
+SOURCE = Path(herringbone.__file__).resolve().parent.parent
+
+
+def fresh_user(tmp_path):
+    """The environment of a user who has never run anything: every cache folder new."""
+    home = tmp_path / "home"
+    home.mkdir()
+    return {**os.environ, "HOME": str(home), "XDG_CACHE_HOME": str(home / "xdg"),
+            "HERRINGBONE_CACHE_DIR": str(home / "herringbone")}
+
+
+SIMULATE = """
+import sys, time, fmpy
+messages = []
+logger = lambda *a: messages.append((time.time(), a[-1].decode()))
+fmpy.simulate_fmu(sys.argv[1], stop_time=0.01, output_interval=1e-4, debug_logging=True,
+                  logger=logger)
+for at, text in messages:
+    print(f"{at:.3f} {text}")
+"""
+
+
+def test_a_built_fmu_starts_on_an_empty_cache_in_seconds(scene_fmu, tmp_path):
+    environment, fmu = fresh_user(tmp_path), scene_fmu("reference")
+    started = time.time()
+    run = subprocess.run([sys.executable, "-c", SIMULATE, str(fmu)],
+                         env=environment, capture_output=True, text=True, timeout=300)
+    wall = time.time() - started
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "compil" not in run.stdout + run.stderr  # nothing was compiled
+    assert wall < COLD_START_BOUND
+    # the carried code now sits in the user's cache, for every later start
+    kernels = list(Path(environment["HERRINGBONE_CACHE_DIR"]).glob("kernels-*/walk.advance-*.nbi"))
+    assert len(kernels) == 1
+
+
+# Loads or compiles the integrator for a scene (argv[1]) as its FMU would, in a fresh cache, and
+# prints the kernels numba compiled there.
+COMPILE_FOR_SCENE = """
+import sys
+from herringbone.integrate import first_start
+from herringbone.integrate.compiled import cache
+first_start.compile_for_scene(sys.argv[1], say=lambda message: None)
+print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder().glob("*.nbi"))))
+"""
+
+
+def test_a_scene_compiles_the_code_of_its_own_method_only(tmp_path):
+    """The reference scene runs DOP853 (as "auto" picks): Radau IIA's kernels are not compiled,
+    which shortens a cold compile by a quarter (README, First start)."""
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
+    run = subprocess.run([sys.executable, "-c", COMPILE_FOR_SCENE,
+                          str(MODELS / "reference.toml")],
+                         env=environment, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    compiled = run.stdout.split()
+    assert "walk.advance" in compiled and "dop853.step" in compiled
+    # Radau IIA's step, LU factors and Jacobian (its step-size rule, a few scalar lines, is
+    # compiled with the loop's controller either way)
+    assert not {"radau.step", "radau.factorize", "radau.lu_factor", "radau.lu_solve",
+                "radau.jacobian_of"} & set(compiled)
+
+
+PROBE = """
+import json, pickle, sys
+from pathlib import Path
+from numba import typeof
+from herringbone.integrate.compiled import cache, walk
+from herringbone.integrate import first_start
+
+said = []
+first_start.announce_compiles(lambda m: said.append((m, len(walk.hermite_root.overloads))))
+arguments = (1.0, -1.0, -2.0, -2.0)
+signature = tuple(typeof(a) for a in arguments)
+before = cache.why_not_cached(walk.hermite_root, signature)
+walk.hermite_root(*arguments)
+after = cache.why_not_cached(walk.hermite_root, signature)
+index = next(cache.kernels_folder().glob("walk.hermite_root-*.nbi"))
+with open(index, "rb") as f:
+    version = pickle.load(f)
+    stamp, overloads = pickle.loads(f.read())
+(key, data), = overloads.items()
+def write(version, stamp, overloads):
+    with open(index, "wb") as f:
+        pickle.dump(version, f)
+        f.write(pickle.dumps((stamp, overloads)))
+other_cpu = (key[0], (key[1][0], "pentium4", key[1][2]), key[2])
+write(version, stamp, {other_cpu: data})
+on_other_cpu = cache.why_not_cached(walk.hermite_root, signature)
+write("0.1.0", stamp, overloads)
+other_numba = cache.why_not_cached(walk.hermite_root, signature)
+write(version, "0" * 20, overloads)
+other_version = cache.why_not_cached(walk.hermite_root, signature)
+print(json.dumps(dict(before=before, after=after, on_other_cpu=on_other_cpu, cpu=key[1][1],
+                      other_numba=other_numba, other_version=other_version, said=said,
+                      records=first_start._records())))
+"""
+
+
+def test_numba_is_asked_why_it_must_compile_and_the_compile_is_announced_first(tmp_path):
+    import json
+
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
+    run = subprocess.run([sys.executable, "-c", PROBE], env=environment, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    found = json.loads(run.stdout.splitlines()[-1])
+    assert found["before"].startswith("there is no compiled code for this version")
+    assert found["after"] is None
+    assert found["on_other_cpu"] == ("the code was compiled for a pentium4 CPU, and this is a "
+                                     f"{found['cpu']}")
+    assert found["other_numba"].startswith("the code was compiled by numba 0.1.0, and this is")
+    assert found["other_version"] == "the cached code belongs to another version of the integrator"
+    (message, overloads_then), = found["said"]  # one message, said before numba compiled
+    assert overloads_then == 0
+    assert message.startswith("compiling the integrator for this machine (there is no compiled "
+                              "code for this version of the integrator in ")
+    assert f"about {first_start.DEFAULT_COMPILE_SECONDS:.0f} s, once" in message
+    assert found["records"]["hermite_root"]["seconds"] > 0.0
+
+
+@pytest.mark.slow
+def test_an_fmu_on_another_cpu_says_why_and_how_long_before_it_compiles(scene_fmu, tmp_path):
+    """The carried code marked as compiled for another CPU: the FMU compiles, and the host's
+    logger hears about it while fmi2Instantiate is still running, not after."""
+    import shutil
+    import zipfile
+
+    fmu = tmp_path / "other_cpu.fmu"
+    unzipped = tmp_path / "unzipped"
+    with zipfile.ZipFile(scene_fmu("reference")) as archive:
+        archive.extractall(unzipped)
+    for index in (unzipped / "resources" / first_start.CARRIED_FOLDER).glob("*/*.nbi"):
+        with open(index, "rb") as f:
+            version = pickle.load(f)
+            stamp, overloads = pickle.loads(f.read())
+        moved = {(k[0], (k[1][0], "pentium4", k[1][2]), k[2]): v for k, v in overloads.items()}
+        with open(index, "wb") as f:
+            pickle.dump(version, f)
+            f.write(pickle.dumps((stamp, moved)))
+    shutil.make_archive(str(fmu.with_suffix("")), "zip", unzipped)
+    fmu.with_suffix(".zip").rename(fmu)
+    started = time.time()  # the process's start: the announcement must come within seconds
+    run = subprocess.run([sys.executable, "-c", SIMULATE, str(fmu)], env=fresh_user(tmp_path),
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = [line.split(" ", 1) for line in run.stdout.splitlines()]
+    announced = [(float(at), text) for at, text in lines if "compiling the integrator" in text]
+    done = [(float(at), text) for at, text in lines if "compiled the integrator in" in text]
+    assert len(announced) == 1 and len(done) == 1, run.stdout
+    assert "the code was compiled for a pentium4 CPU, and this is a" in announced[0][1]
+    assert announced[0][0] - started < COLD_START_BOUND  # said at the start, not after
+    assert done[0][0] - announced[0][0] > 5.0  # ... of a compile that took a while

@@ -1,0 +1,94 @@
+"""Scene files: defaults, and one clear message for each kind of bad input."""
+import pickle
+
+import pytest
+
+import herringbone
+from herringbone import SceneError
+
+BAD_SCENES = [
+    ('[parameters]\nm_pinion = -1.0\n', "m_pinion", "> 0"),
+    ('[parameters]\nbeta = 1.6\n', "beta", "(0, 1.5708)"),
+    ('[parameters]\nbeta = 0.0\n', "beta", "(0, 1.5708)"),
+    ('[parameters]\neps_q = 1.0\n', "eps_q", "[0, 1)"),
+    ('[parameters]\nstagger = -0.1\n', "stagger", "[0, 1)"),
+    ('[parameters]\nb_left = 0.0\n', "b_left", "> 0"),
+    ('[parameters]\nc_point = -2.5e8\n', "c_point", "> 0"),
+    ('[parameters]\nz_pinion = 0\n', "z_pinion", ">= 1"),
+    ('[parameters]\nz_wheel = 3.5\n', "z_wheel", "whole number"),
+    ('[parameters]\nm_n = "4 mm"\n', "m_n", "must be a number"),
+    ('[parameters]\ncontact_loss = 1\n', "contact_loss", "true or false"),
+    ('[parameters]\nmodule = 0.004\n', "module", "unknown parameter"),
+    ('[parameters]\nM_motor = 500\n', "M_motor", "[inputs]"),
+    ('[parameters]\nzeta_mesh = nan\n', "zeta_mesh", ">= 0"),
+    ('[parameters]\nw0_pinion = inf\n', "w0_pinion", "finite"),
+    ('[components]\nbearings = false\n[parameters]\nc_brg_wheel_left = 1e9\n',
+     "c_brg_wheel_left", "leaves out"),
+    ('[components]\ngearbox = true\n', "gearbox", "motor, load, bearings"),
+    ('[components]\nmotor = "yes"\n', "motor", "true or false"),
+    ('[experiment]\nstop_time = -1\n', "stop_time", "> 0"),
+    ('[experiment]\nstop_time = 0.01\noutput_interval = 0.1\n', "output_interval", "stop_time"),
+    ('[experiment]\nduration = 1\n', "duration", "stop_time, output_interval"),
+    ('[inputs]\nM_motor = nan\n', "M_motor", "finite"),
+    ('[inputs]\ntable = [[0.1, 500, 1800]]\n', "table", "time 0"),
+    ('[inputs]\ntable = [[0, 500], [1, 600, 2000]]\n', "row 0", "three finite numbers"),
+    ('[inputs]\ntable = [[0, 500, 1800], [0, 600, 2000]]\n', "table", "increase"),
+    ('[inputs]\nM_motor = 500\ntable = [[0, 500, 1800]]\n', "table", "not both"),
+    ('[solver]\nrtol = 1e-6\n', "solver", "[parameters]"),
+    ('[parameters\nbeta = 0.3\n', "not a valid TOML", ""),
+]
+
+
+@pytest.mark.parametrize("text, culprit, allowed", BAD_SCENES)
+def test_bad_scene_gets_one_clear_message(tmp_path, text, culprit, allowed):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as error:
+        herringbone.load_scene(path)
+    message = str(error.value)
+    assert str(path) in message and culprit in message and allowed in message
+
+
+def test_missing_scene_file(tmp_path):
+    with pytest.raises(SceneError, match="no such scene file"):
+        herringbone.load_scene(tmp_path / "absent.toml")
+
+
+def test_defaults_are_the_reference_values(tmp_path, reference_scene):
+    path = tmp_path / "empty.toml"
+    path.write_text("")
+    scene = herringbone.load_scene(path)
+    assert scene.parameters == reference_scene.parameters
+    assert scene.inputs.at(0.0) == (500.0, 1800.0)
+    # J from the solid cylinder m(3R² + L²)/12, R the pitch radius, L = bL + bR + groove
+    assert scene.parameters["J_pinion"] == pytest.approx(
+        0.929436 * (3 * 0.021704758 ** 2 + 0.08 ** 2) / 12, rel=1e-8)
+
+
+def test_input_table_is_held_between_rows():
+    scene = herringbone.scene_from_dict({"inputs": {"table": [[0, 500, 1800], [0.5, 600, 2000]]}})
+    assert scene.inputs.at(0.0) == (500, 1800)
+    assert scene.inputs.at(0.4999) == (500, 1800)
+    assert scene.inputs.at(0.5) == (600, 2000)
+    assert scene.inputs.at(7.0) == (600, 2000)
+
+
+def test_shipped_scenes_load():
+    from conftest import MODELS
+    names = sorted(p.stem for p in MODELS.glob("*.toml"))
+    for name in ["reference", "torsional", "staggered", "lead_error"]:
+        assert name in names
+    for name in names:
+        herringbone.load_scene(MODELS / f"{name}.toml")
+
+
+def test_scene_error_carries_its_fields():
+    """SceneError names the file, table and key apart, and its text joins them (issue 17)."""
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"z_pinion": 0}}, source="x.toml")
+    error = raised.value
+    assert (error.source, error.table, error.key) == ("x.toml", "parameters", "z_pinion")
+    assert error.problem == "z_pinion is 0; allowed: a whole number >= 1"
+    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: a whole number >= 1"
+    again = pickle.loads(pickle.dumps(error))
+    assert (str(again), again.key) == (str(error), "z_pinion")

@@ -1,0 +1,83 @@
+"""Static equilibrium at t = 0 (docs/model.md sections 6-7): every output of the first sample."""
+import pytest
+from helpers.independent_model import bearing_positions, radii, static_state
+
+import herringbone
+
+STATIC_TOLERANCE = 1e-9  # relative: the start is an exact linear solve
+
+
+def first_sample(scene):
+    results = herringbone.reference_simulate(scene, stop_time=1e-5, output_interval=1e-5)
+    return {name: values[0] for name, values in results.items()}
+
+
+def lever_rule(point_forces, zeta_left, zeta_right):
+    """Bearing reactions of a body loaded by −F_k at lever arms ζ_k (the pinion's side)."""
+    total = sum(f for _, _, f in point_forces)
+    moment = sum(f * zeta for _, zeta, f in point_forces)
+    right = (moment - total * zeta_left) / (zeta_right - zeta_left)
+    return total - right, right
+
+
+@pytest.mark.parametrize("changes", [
+    {},
+    {"b_left": 0.030, "b_right": 0.045, "a_left": 0.015, "a_right": 0.035},
+    {"b_left": 0.050, "a_right": 0.0, "groove": 0.0, "c_brg_pinion_left": 2e8},
+    {"dbeta_left": 7.5e-5, "dbeta_right": -2.5e-5},
+])
+def test_static_equilibrium(reference_scene, changes):
+    scene = reference_scene.with_parameters(**changes)
+    p = scene.parameters
+    motor_torque = scene.inputs.M_motor[0]
+    rp, rw = radii(p)
+    out = first_sample(scene)
+    mesh_force = motor_torque / rp
+    assert out["F_mesh"] == pytest.approx(mesh_force, rel=STATIC_TOLERANCE)
+    assert out["T_shaft_in"] == pytest.approx(motor_torque, rel=STATIC_TOLERANCE)
+    assert out["T_shaft_out"] == pytest.approx(motor_torque * rw / rp, rel=STATIC_TOLERANCE)
+
+    _, point_forces = static_state(p, motor_torque)
+    zeta_left, zeta_right = bearing_positions(p)
+    left, right = lever_rule(point_forces, zeta_left, zeta_right)
+    scale = STATIC_TOLERANCE * mesh_force
+    # the pinion is pushed by −F_k, the wheel by +F_k
+    assert out["F_brg_pinion_left"] == pytest.approx(-left, abs=scale)
+    assert out["F_brg_pinion_right"] == pytest.approx(-right, abs=scale)
+    assert out["F_brg_wheel_left"] == pytest.approx(left, abs=scale)
+    assert out["F_brg_wheel_right"] == pytest.approx(right, abs=scale)
+    assert out["F_brg_pinion_left"] + out["F_brg_pinion_right"] == pytest.approx(-mesh_force,
+                                                                                 abs=scale)
+    for half in ("left", "right"):
+        expected = sum(f for h, _, f in point_forces if h == half)
+        assert out[f"F_mesh_{half}"] == pytest.approx(expected, abs=scale)
+
+
+def test_symmetric_gear_splits_load_evenly(reference_scene):
+    out = first_sample(reference_scene)
+    assert out["F_mesh_left"] == pytest.approx(out["F_mesh"] / 2, rel=1e-12)
+    assert out["F_brg_pinion_left"] == pytest.approx(-out["F_mesh"] / 2, rel=1e-12)
+    assert out["n_contacts"] == 6
+    assert out["k_mesh"] == pytest.approx(6 * 2.5e8)
+
+
+def test_torsional_scene_statics(torsional_scene):
+    out = first_sample(torsional_scene)
+    rp, rw = radii(torsional_scene.parameters)
+    assert out["F_mesh"] == pytest.approx(500 / rp, rel=STATIC_TOLERANCE)
+    # rigid bearings: dte is the mesh approach alone, F / Σc
+    assert out["dte"] == pytest.approx(out["F_mesh"] / out["k_mesh"], rel=STATIC_TOLERANCE)
+    assert not any(name.startswith("F_brg") for name in out)
+
+
+def test_helix_error_moves_load_to_the_other_half(reference_scene):
+    """A positive helix error of a half adds interference to its points, so it takes load from
+    the other half; the sign flipped moves it back."""
+    base = first_sample(reference_scene)
+    for half, other in (("left", "right"), ("right", "left")):
+        for sign in (1.0, -1.0):
+            out = first_sample(reference_scene.with_parameters(**{f"dbeta_{half}": sign * 5e-5}))
+            shift = out[f"F_mesh_{half}"] - base[f"F_mesh_{half}"]
+            assert sign * shift > 0.01 * base["F_mesh"]  # 5e-5 rad: 1.4 % of the load
+            assert out[f"F_mesh_{other}"] - base[f"F_mesh_{other}"] == pytest.approx(-shift,
+                                                                                  rel=1e-9)
