@@ -31,7 +31,8 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
     """Each row's figures from herringbone.simulate of the same protocol (sampled from t = 0,
     so its steps stop at other times during the settle): equal within the integrator's
     tolerance, 1e-7 of the static force (measured: at most 1.2e-8, F_mesh_min at 1000 rad/s)."""
-    table = sweep(reference_scene, speeds=SPEEDS, protocol=SHORT, workers=0, progress=False)
+    table = sweep(reference_scene, speeds=SPEEDS, protocol=SHORT, workers=0, progress=False,
+                  method="time")
     assert list(table["w0_pinion"]) == SPEEDS
     for _, row in table.iterrows():
         scene = reference_scene.with_parameters(w0_pinion=row["w0_pinion"])
@@ -110,10 +111,12 @@ def test_serial_local_cluster_and_scheduler_give_identical_tables(reference_scen
     from herringbone.integrate.compiled import walk
 
     speeds = [157.08, 300.0, 650.0, 1200.0]
-    serial = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=0, progress=False)
-    local = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=2, progress=False)
+    serial = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=0, progress=False,
+                   method="time")
+    local = sweep(reference_scene, speeds=speeds, protocol=SHORT, workers=2, progress=False,
+                  method="time")
     remote = sweep(reference_scene, speeds=speeds, protocol=SHORT,
-                   scheduler=dask_scheduler_and_worker, progress=False)
+                   scheduler=dask_scheduler_and_worker, progress=False, method="time")
     pd.testing.assert_frame_equal(serial, local, check_exact=True)
     pd.testing.assert_frame_equal(serial, remote, check_exact=True)
     with Client(dask_scheduler_and_worker) as client:
@@ -127,7 +130,8 @@ def test_dynamic_factor_peaks_at_a_resonance_of_info(reference_scene):
     peaks within one step of f_mesh = 684 Hz (torsional mesh mode, 430 rad/s)."""
     speeds = np.linspace(350.0, 650.0, 11)
     protocol = Protocol(settle_time=0.2, window_periods=20, floquet=False)
-    table = sweep(reference_scene, speeds=speeds, protocol=protocol, workers=0, progress=False)
+    table = sweep(reference_scene, speeds=speeds, protocol=protocol, workers=0, progress=False,
+                  method="time")
     step = speeds[1] - speeds[0]
     frequencies = natural_modes(reference_scene)[0]
     lateral = resonance_speeds(frequencies[3], 10)[2]
@@ -167,12 +171,49 @@ def test_parameter_grid_of_two(reference_scene):
 def test_through_fmu_matches_the_compiled_sweep(reference_scene, scene_fmu):
     """Each point through the FMU with fmpy: the FMU steps the same integrator, stopping at
     every sample from t = 0, so it agrees with simulate() to the bound of the first test."""
-    table = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0, progress=False)
+    table = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0, progress=False,
+                  method="time")
     through = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0,
-                    fmu=scene_fmu("reference"), progress=False)
+                    fmu=scene_fmu("reference"), progress=False, method="time")
     assert through.columns.equals(table.columns)
     assert np.abs(through["K_v"] - table["K_v"]).max() <= 1e-9
     assert np.abs(through["dte_p2p_um"] - table["dte_p2p_um"]).max() <= 1e-6
+
+
+def test_shooting_is_the_default_and_agrees_with_settled_time_points(reference_scene):
+    """A speed sweep computes the periodic steady state directly by default: a stable row at
+    each requested speed, whose K_v and dte peak-to-peak agree with the time protocol settled
+    to 1e-6 within 1e-5 relative (at the default residual 1e-3 the time sweep lies 5.8e-6
+    (K_v) and 8e-5 (dte peak-to-peak) from the orbits: benchmarks/steady_state.py)."""
+    speeds = [300.0, 650.0, 1200.0]
+    branch = sweep(reference_scene, speeds=speeds, progress=False)
+    assert set(branch["method"]) == {"shooting"} and set(branch["stability"]) == {"stable"}
+    assert (branch["floquet_exponent_per_s"] < 0).all() and not branch.attrs["folds"]
+    assert np.all(np.diff(branch["w0_pinion"]) > 0)  # no fold: the speed only rises
+    table = branch[branch["on_grid"]].reset_index(drop=True)
+    assert list(table["w0_pinion"]) == speeds
+    settled = Protocol(settle_residual=1e-6, tolerance=1e-10, window_periods=1, floquet=False)
+    timed = sweep(reference_scene, speeds=speeds, protocol=settled, workers=0,
+                  progress=False, method="time")
+    assert set(timed["stability"]) == {"time"}
+    for name in ("K_v", "dte_p2p_um"):
+        assert np.abs(table[name] / timed[name] - 1.0).max() <= 1e-5, name
+    assert np.abs(table["static_mesh_force_N"] - timed["static_mesh_force_N"]).max() == 0.0
+    assert np.abs(table["mesh_frequency_Hz"] / timed["mesh_frequency_Hz"] - 1).max() <= 1e-15
+
+
+def test_shooting_where_it_does_not_apply_is_refused_by_name(reference_scene):
+    """method="shooting" on a parameter sweep or unbalanced torques: one message naming why
+    and what is allowed; the default then runs the time protocol."""
+    with pytest.raises(ValueError, match="other quantities than the speed.*method='time'"):
+        sweep(reference_scene, params={"zeta_mesh": [0.05]}, method="shooting")
+    unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=1000.0)
+    with pytest.raises(ValueError, match="does not balance"):
+        sweep(unbalanced, speeds=[300.0], method="shooting")
+    with pytest.raises(ValueError, match="method 'harmonic'; allowed: shooting, time"):
+        sweep(reference_scene, speeds=[300.0], method="harmonic")
+    table = sweep(unbalanced, speeds=[300.0], protocol=SHORT, workers=0, progress=False)
+    assert list(table["method"]) == ["time"]
 
 
 @pytest.mark.parametrize("arguments, culprit", [
@@ -243,3 +284,35 @@ def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
                      "--output-interval", "2e-5", "--plot", "-o", str(csv)]) == 0
     for name in ("run_time.png", "run_spectrum.png"):
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
+    """A branch table: stable stretches solid, unstable dashed (each stretch joined to the next
+    point), folds crossed, time sweeps as triangles; the picture is written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis.sweep_plots import draw_branch, plot_resonance_curve
+
+    table = pd.DataFrame({"w0_pinion": [1.0, 2.0, 3.0, 2.5, 2.0, 3.0],
+                          "K_v": [1.0, 1.2, 1.5, 1.8, 2.0, 1.9],
+                          "dte_p2p_um": [1.0, 2.0, 3.0, 4.0, 5.0, 4.5],
+                          "stability": ["stable", "stable", "unstable", "unstable", "stable",
+                                        "stable"],
+                          "event": ["", "", "fold", "", "fold", ""]})
+    table["speed_rpm"] = table["w0_pinion"] * 30 / math.pi
+    figure, axes = plt.subplots(2, 1)
+    draw_branch(axes, table, [("K_v", "k"), ("dte_p2p_um", "C2")])
+    lines = {line.get_label(): line for line in axes[0].get_lines()}
+    stable, unstable = lines["K_v, stable orbits"], lines["K_v, unstable orbits"]
+    assert stable.get_linestyle() == "-" and unstable.get_linestyle() == "--"
+    assert list(np.isnan(stable.get_ydata())) == [False, False, False, True, False, False]
+    assert list(np.isnan(unstable.get_ydata())) == [True, True, False, False, False, True]
+    assert list(lines["fold (jump)"].get_ydata()) == [1.5, 2.0]
+    plt.close(figure)
+    up = table.iloc[:3].assign(stability="time")
+    path = tmp_path / "curve.png"
+    plot_resonance_curve(table, path, [], 10, "branch", sweeps={"up": up})
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

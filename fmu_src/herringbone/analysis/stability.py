@@ -189,12 +189,22 @@ PROGRESS_BATCHES = 10  # stability_chart's batches of speeds when it reports its
 
 @dataclass(frozen=True)
 class StabilityChart:
-    """The largest Floquet multiplier |λ|max per mesh period over a range of pinion speeds, and
-    the bands where it exceeds 1."""
+    """The largest Floquet multiplier over a range of pinion speeds, as |λ|max per mesh period
+    and as the largest Floquet exponent ln|λ|max/T (1/s), and the bands where it exceeds 1.
+
+    The exponent is what the chart shows: a disturbance grows (> 0) or decays (< 0) like
+    exp(exponent·t) whatever the speed, whereas |λ|max per period of a train whose least-damped
+    mode decays at a constant rate σ rises towards 1 with speed (exp(−σ·T), T shrinking) and
+    reads like an approach to instability that is not there."""
     speeds: np.ndarray  # pinion speeds, rad/s, ascending
-    largest_modulus: np.ndarray  # |λ|max at each speed
+    largest_modulus: np.ndarray  # |λ|max at each speed, per mesh period
     unstable_bands: tuple[tuple[float, float], ...]  # (from, to) rad/s where |λ|max > 1
     mesh_teeth: int  # z_pinion: mesh frequency = speed·z_pinion/(2π)
+
+    @property
+    def largest_exponent(self) -> np.ndarray:
+        """ln|λ|max / T at each speed, 1/s, T = 2π/(z_pinion·speed) the mesh period."""
+        return np.log(self.largest_modulus) * self.speeds * self.mesh_teeth / (2.0 * math.pi)
 
 
 def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...]:
@@ -233,24 +243,24 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
 
 
 def plot_stability_chart(chart: StabilityChart, path, title=None):
-    """Write a PNG of |λ|max against pinion speed (rpm; mesh frequency in Hz on the top axis),
-    with the line |λ| = 1 and the unstable bands shaded."""
+    """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
+    frequency in Hz on the top axis), with the line 0 (growth above, decay below) and the
+    unstable bands shaded."""
     from .plots import _pyplot
 
     plt = _pyplot()
     rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
     figure, axes = plt.subplots(figsize=(9, 4.5))
-    axes.plot(chart.speeds * rpm, chart.largest_modulus, color="C0", lw=1.2,
-              label="largest multiplier |λ|max")
-    if chart.largest_modulus.max() > 10 * chart.largest_modulus.min():
-        axes.set_yscale("log")
-    axes.axhline(1.0, color="k", lw=0.8, ls="--", label="|λ| = 1")
+    axes.plot(chart.speeds * rpm, chart.largest_exponent, color="C0", lw=1.2,
+              label="largest Floquet exponent ln|λ|max / T")
+    axes.axhline(0.0, color="k", lw=0.8, ls="--", label="0: neither growth nor decay")
     for number, (low, high) in enumerate(chart.unstable_bands):
         axes.axvspan(low * rpm, high * rpm, color="C3", alpha=0.25,
-                     label="unstable band" if number == 0 else None)
+                     label="unstable band (disturbances grow)" if number == 0 else None)
     axes.set_xlabel("pinion speed, rpm")
-    axes.set_ylabel("|λ|max per mesh period")
+    axes.set_ylabel("largest Floquet exponent, 1/s\n(< 0: slowest decay rate)")
+
     def to_hertz(n):  # rpm on the bottom axis -> mesh frequency on the top one
         return np.asarray(n) * hertz_per_rpm
 
@@ -259,7 +269,7 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
 
     top = axes.secondary_xaxis("top", functions=(to_hertz, to_rpm))
     top.set_xlabel("mesh frequency, Hz")
-    axes.set_title(title or "Parametric stability of the linear mesh (Floquet multipliers)")
+    axes.set_title(title or "Parametric stability of the linear mesh (Floquet exponents)")
     axes.legend(loc="best")
     axes.grid(True, alpha=0.3)
     figure.tight_layout()

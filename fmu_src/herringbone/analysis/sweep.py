@@ -114,8 +114,30 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     return table, [series for _, series in results]
 
 
-def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **options):
-    """Run a scene over speeds and/or parameters past its start-up transient.
+METHODS = ("shooting", "time")
+
+
+def shooting_applies(scene, speeds, params, fmu) -> str | None:
+    """Why the periodic steady state cannot be computed directly for this sweep, or None: it
+    needs a sweep of speeds alone, run by the package (not through an FMU), at constant
+    torques that balance."""
+    from .steady_state import ShootingError, check_balanced
+
+    if speeds is None or params:
+        return "it sweeps other quantities than the speed (--param)"
+    if fmu is not None:
+        return "it runs through an FMU"
+    try:
+        check_balanced(scene)
+    except ShootingError as error:
+        return str(error)
+    return None
+
+
+def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), method=None,
+          **options):
+    """Run a scene over speeds and/or parameters: its periodic steady state directly, or past
+    its start-up transient by time integration.
 
     Parameters
     ----------
@@ -126,26 +148,92 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), **op
         {parameter name (or "M_motor", "M_load"): values, in its unit}; with `speeds`, at
         most two quantities in all (a grid).
     protocol : Protocol
-        How each point is settled and recorded (analysis.sweep_point.Protocol).
+        How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
+    method : {"shooting", "time"} or None
+        "shooting" (None's choice where it applies: a sweep of speeds alone at balanced
+        constant torques, not through an FMU): the branch of periodic steady states by
+        continuation (analysis.continuation); elsewhere it is refused with the reason. "time"
+        (None's choice elsewhere): each point from its static start past its transient.
     **options
         workers (0: here, one point after the other; None: one Dask process per core),
-        scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU),
-        progress (a bar on stderr).
+        scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU):
+        time only; progress (a bar on stderr).
 
     Returns
     -------
     pandas.DataFrame
-        A row per point in grid order: the swept values, then speed_rpm, K_v, forces (N), dte
-        (µm), contact_lost_share, floquet_max (the columns name their units).
+        "time": a row per point in grid order: the swept values, then speed_rpm, K_v, forces
+        (N), dte (µm), contact_lost_share, floquet_max (the columns name their units), method
+        and stability "time". "shooting": a row per branch point in branch order (a row at
+        each requested speed the branch passes, several where it folds back over it, and the
+        points that passing a fold took, on_grid False), the same figures, floquet_max and
+        floquet_exponent_per_s (1/s) of the orbit, stability ("stable", "unstable", or "time"
+        where no orbit converged and the point was run by time integration), method, on_grid,
+        event ("fold", "period doubling", "torus"); attrs["folds"]: the folds' speeds, rad/s.
 
     Raises
     ------
     ValueError
-        A swept name or value that is not allowed, before any work.
+        A swept name or value that is not allowed, or method "shooting" where it does not
+        apply, before any work.
     MissingDependency
         pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
     """
-    return run_sweep(scene, speeds, params, protocol, **options)[0]
+    if method not in (None, *METHODS):
+        raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
+    why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
+    if method == "shooting" and why_not:
+        raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
+                         "allowed: method='time'")
+    if method == "time" or why_not:
+        table = run_sweep(scene, speeds, params, protocol, **options)[0]
+        return table.assign(stability="time", method="time")
+    return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True))
+
+
+def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True):
+    """The branch table of `sweep`'s method "shooting" (each row's static force and mesh
+    frequency added, as the time table has them)."""
+    import math
+
+    from .continuation import continue_in_speed
+    from .sweep_point import static_mesh_force
+
+    checked = sweep_axes(scene, speeds=speeds)[SPEED]
+    branch = continue_in_speed(scene, checked, protocol=protocol, progress=progress)
+    table = branch.table()
+    table.insert(2, "mesh_frequency_Hz",
+                 table[SPEED] * scene.parameters["z_pinion"] / (2.0 * math.pi))
+    table.insert(3, "static_mesh_force_N", static_mesh_force(scene))
+    table.attrs["folds"] = list(branch.folds)
+    return table
+
+
+def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = False):
+    """A speed sweep by time integration in the order of `speeds` (rad/s), each point started
+    from the end state of the point before (the first from the static start), its rigid speed
+    moved to the point's: what a test rig sees when the speed is raised or lowered slowly,
+    which stays on one branch of a multi-valued response until that branch ends at a fold.
+    A table as `sweep`'s (method "time"), one row a speed, in the order given."""
+    import pandas as pd
+    from tqdm import tqdm
+
+    from ..integrate.contract import Position
+    from ..model.assembly import GearTrainModel
+    from .sweep_point import at_speed, run_window_from
+
+    values = np.atleast_1d(np.asarray(speeds, dtype=float))
+    sweep_axes(scene, speeds=values)
+    rows: list[dict] = []
+    end = None
+    for speed in tqdm(values, unit="point", desc="time sweep", disable=not progress):
+        at = scene.with_parameters(w0_pinion=float(speed))
+        start: Position | None = (None if end is None
+                                  else at_speed(GearTrainModel(at), end, float(speed)))
+        window, end = run_window_from(at, protocol, start)
+        rows.append({SPEED: float(speed), **point_row(at, window, protocol),
+                     "stability": "time", "method": "time"})
+    return pd.DataFrame(rows)
 
 
 def resonation_summary(table) -> str:

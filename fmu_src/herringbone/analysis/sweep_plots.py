@@ -16,21 +16,84 @@ def resonances_between(frequencies, z_pinion, low, high):
                   for k, speed in resonance_speeds(f, z_pinion).items() if low <= speed <= high)
 
 
-def plot_resonance_curve(table, path, natural, z_pinion, title) -> None:
+def is_branch(table) -> bool:
+    """A table of sweep's method "shooting" (rows in branch order, a stability column)."""
+    return "stability" in table and table["stability"].isin(["stable", "unstable"]).any()
+
+
+def draw_branch(axes, table, columns) -> None:
+    """The branch in its order on each panel (one a column of `columns`): stable stretches
+    solid, unstable dashed, points found by time integration as open circles, folds as
+    crosses; rows in branch order (a fold makes the speed turn back)."""
+    rpm = table["speed_rpm"].to_numpy()
+    stability = table["stability"].to_numpy()
+    for panel, (column, colour) in zip(axes, columns):
+        values = table[column].to_numpy()
+        for kind, style in (("stable", "-"), ("unstable", "--")):
+            # each stretch drawn to the next point, so that stretches join
+            shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
+            masked = np.where(shown, values, np.nan)
+            panel.plot(rpm, masked, style, color=colour, lw=1.3,
+                       label=f"{column}, {kind} orbits")
+        timed = stability == "time"
+        if timed.any():
+            panel.plot(rpm[timed], values[timed], "o", mfc="none", color=colour, ms=5,
+                       label=f"{column}, time integration (no orbit converged)")
+        folds = table["event"].str.contains("fold").to_numpy()
+        if folds.any():
+            panel.plot(rpm[folds], values[folds], "x", color="C3", ms=9, mew=2,
+                       label="fold (jump)")
+
+
+def draw_time_sweeps(axes, sweeps, columns) -> None:
+    """Time-integration sweeps over the curve, e.g. {"up": table, "down": table} from
+    sweep.chained_time_sweep: triangles pointing the way each went."""
+    for name, table in (sweeps or {}).items():
+        rising = table["w0_pinion"].iloc[-1] >= table["w0_pinion"].iloc[0]
+        for panel, (column, _) in zip(axes, columns):
+            panel.plot(table["speed_rpm"], table[column], "^" if rising else "v", color="C1"
+                       if rising else "C4", ms=5, ls="none",
+                       label=f"time sweep {name} (each point from the last)")
+
+
+def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> None:
     """K_v (top) and dte peak-to-peak (bottom) against pinion speed, rpm (rad/s on top), each
-    resonance k·f_mesh = f_n in the range marked and labelled."""
+    resonance k·f_mesh = f_n in the range marked and labelled. A branch table (sweep's method
+    "shooting") is drawn as `draw_branch` says; `sweeps`: time sweeps drawn over it."""
     plt = _pyplot()
-    table = table.sort_values("w0_pinion")
+    branch = is_branch(table)
+    if not branch:
+        table = table.sort_values("w0_pinion")
     rpm = table["speed_rpm"].to_numpy()
     figure, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0,
-                 label="K_v = max F_mesh / F_static")
+    if branch:
+        columns = [("K_v", "k"), ("dte_p2p_um", "C2")]
+        draw_branch(axes, table, columns)
+        draw_time_sweeps(axes, sweeps, columns)
+    else:
+        axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0,
+                     label="K_v = max F_mesh / F_static")
+        axes[1].plot(rpm, table["dte_p2p_um"], "o-", color="C2", ms=3, lw=1.0,
+                     label="dte peak-to-peak")
+        axes[1].plot(rpm, table["dte_rms_um"], "s-", color="C0", ms=3, lw=1.0, label="dte rms")
     axes[0].set_ylabel("dynamic factor K_v")
-    axes[1].plot(rpm, table["dte_p2p_um"], "o-", color="C2", ms=3, lw=1.0, label="dte peak-to-peak")
-    axes[1].plot(rpm, table["dte_rms_um"], "s-", color="C0", ms=3, lw=1.0, label="dte rms")
     axes[1].set_ylabel("dte, µm")
     axes[1].set_xlabel("pinion speed, rpm")
-    low, high = table["w0_pinion"].min(), table["w0_pinion"].max()
+    mark_resonances(axes, natural, z_pinion, table["w0_pinion"].min(),
+                    table["w0_pinion"].max())
+    top = axes[0].secondary_xaxis("top", functions=(lambda n: n / RPM_PER_RAD_S,
+                                                     lambda w: w * RPM_PER_RAD_S))
+    top.set_xlabel("pinion speed, rad/s")
+    for panel in axes:
+        panel.grid(True, alpha=0.3)
+        panel.legend(loc="upper left", fontsize=8)
+    axes[0].set_title(title)
+    _save(figure, path)
+
+
+def mark_resonances(axes, natural, z_pinion, low, high) -> None:
+    """Each resonance k·f_mesh = f_n between the speeds low and high (rad/s): a dashed line
+    on every panel, labelled with f_n on the first."""
     labelled = set()
     for speed, k, f in resonances_between(natural, z_pinion, low, high):
         for panel in axes:
@@ -40,14 +103,6 @@ def plot_resonance_curve(table, path, natural, z_pinion, title) -> None:
         axes[0].annotate(f" {f:.0f} Hz", (speed * RPM_PER_RAD_S, 0.0), rotation=90,
                          xycoords=("data", "axes fraction"), fontsize=7, ha="right",
                          va="bottom", color=f"C{3 + k}")
-    top = axes[0].secondary_xaxis("top", functions=(lambda n: n / RPM_PER_RAD_S,
-                                                     lambda w: w * RPM_PER_RAD_S))
-    top.set_xlabel("pinion speed, rad/s")
-    for panel in axes:
-        panel.grid(True, alpha=0.3)
-        panel.legend(loc="upper left", fontsize=8)
-    axes[0].set_title(title)
-    _save(figure, path)
 
 
 def plot_parameter_sweep(table, axes_names, path, title) -> None:

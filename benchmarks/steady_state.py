@@ -1,0 +1,91 @@
+"""The resonance curve by continuation of periodic orbits against the time sweep (issue 23).
+
+    python benchmarks/steady_state.py                 # reference scene, 200 speeds 100-3000 rad/s
+    python benchmarks/steady_state.py --time-points 5 --scene models/reference.toml
+
+Prints, side by side, one core's CPU time (process time, this process alone: the points run
+here one after the other) of
+- the branch by continuation (analysis/continuation.py) over all the speeds, and its period
+  integrations a point;
+- the time sweep (sweep_point's protocol, `sweep(..., method="time", workers=0)`) over an
+  evenly spread subset of the speeds, extrapolated to all of them by its mean time a point (and
+  labelled so: a time point costs what its settle costs, which does not depend on the others);
+and, at the subset's speeds, how far the time sweep's K_v and dte peak-to-peak lie from the
+orbits' (the time protocol stops its settle at a residual of 1e-3 of the start's transient).
+The compiled integrator is loaded (or compiled) before anything is timed.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # small matrices: threads only cost
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def timed(function, *args, **kwargs):
+    """(result, CPU seconds of this process, wall seconds)."""
+    cpu, wall = time.process_time(), time.perf_counter()
+    result = function(*args, **kwargs)
+    return result, time.process_time() - cpu, time.perf_counter() - wall
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", type=Path, default=ROOT / "models" / "reference.toml")
+    parser.add_argument("--speeds", nargs=3, type=float, default=[100.0, 3000.0, 200],
+                        metavar=("LO", "HI", "N"))
+    parser.add_argument("--time-points", type=int, default=10,
+                        help="speeds of the subset the time sweep runs (evenly spread)")
+    args = parser.parse_args(argv)
+
+    import herringbone
+    from herringbone.analysis.continuation import continue_in_speed
+    from herringbone.analysis.distributed_run import load_integrator
+    from herringbone.analysis.steady_state import periodic_orbit
+    from herringbone.analysis.sweep import sweep
+
+    scene = herringbone.load_scene(args.scene)
+    low, high, count = args.speeds
+    speeds = np.linspace(low, high, int(count))
+    load_integrator(scene)
+    periodic_orbit(scene, speeds[0])  # the numba functions this path calls, loaded
+
+    branch, branch_cpu, branch_wall = timed(continue_in_speed, scene, speeds)
+    table = branch.table()
+    grid = table[table["on_grid"]]
+    subset = speeds[np.linspace(0, len(speeds) - 1, args.time_points).round().astype(int)]
+    timed_table, time_cpu, time_wall = timed(sweep, scene, speeds=subset, method="time",
+                                             workers=0, progress=False)
+    per_time_point = time_cpu / len(subset)
+
+    print(f"scene {scene.name}: {len(speeds)} speeds {low:g}-{high:g} rad/s, one core")
+    print(f"{'':38s}{'continuation':>16s}{'time sweep':>16s}")
+    print(f"{'CPU s, all speeds':38s}{branch_cpu:16.3f}"
+          f"{per_time_point * len(speeds):16.1f}  (extrapolated from {len(subset)} points)")
+    print(f"{'CPU ms a requested speed':38s}{1e3 * branch_cpu / len(speeds):16.2f}"
+          f"{1e3 * per_time_point:16.1f}")
+    print(f"{'wall s (this machine, shared)':38s}{branch_wall:16.3f}"
+          f"{time_wall / len(subset) * len(speeds):16.1f}")
+    print(f"{'points (branch) / requested speeds':38s}{len(table):>10d} / {len(grid):<5d}")
+    print(f"{'period integrations a branch point':38s}"
+          f"{branch.evaluations / len(table):16.1f}")
+    methods = dict(zip(*np.unique(table["method"], return_counts=True)))
+    stabilities = dict(zip(*np.unique(table["stability"], return_counts=True)))
+    print(f"branch: {methods}, stability {stabilities}, "
+          f"folds {[round(f, 1) for f in branch.folds]}")
+    merged = grid.set_index("w0_pinion").loc[subset]
+    for name in ("K_v", "dte_p2p_um"):
+        spread = np.abs(timed_table[name].to_numpy() / merged[name].to_numpy() - 1.0)
+        print(f"time sweep against the orbits, {name}: relative difference "
+              f"max {spread.max():.2e}, median {np.median(spread):.2e}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,364 @@
+"""The periodic steady state directly: Newton shooting on the mesh period (issue 23).
+
+Under constant torques that balance (M_load = u·M_motor) the train is autonomous: the mesh
+depends on the pinion angle φp, a state, not on time. The rigid rotation's momentum
+p = rᵀ·M·q̇ = R·θ̇ (R = rᵀ·M·r, θ = rᵀ·M·q/R the mass-weighted rigid angle) is conserved, since no
+element deforms under r and the torques balance: θ advances at exactly ω = p/R. We fix p by the
+pinion speed ω of the point (a time sweep, started in rigid rotation at w0_pinion, has the same
+p), so a steady state that repeats every k mesh periods has the period T = k·(2π/z_pinion)/ω,
+and after T the rigid angle has advanced exactly k pitches.
+
+The section. A state on the orbit is taken where φp is halfway through the first contact
+interval of a mesh period (no switch there, so which points exist is never ambiguous). The
+unknowns z are the state's other entries — the relative coordinates y_i and rates ẏ_i of every
+coordinate but the pinion's — with ẏ_pinion given by p; 2(n−1) of them, scaled by
+`state_scales` so that a unit is a force of the size of the static mesh force. The map
+z -> z(T) (the compiled integrator over the fixed time T) has the orbit as a fixed point, and
+at a fixed point φp is back on the section by itself (θ advanced k pitches, the y_i are back).
+Newton solves G(z) = z(T) − z = 0 with the Jacobian A − I, A = ∂z(T)/∂z by forward differences
+of the compiled integrator at a tight tolerance (`SHOOTING_TOLERANCE`): for perturbations this
+small the integrator takes the same steps, so the differences are those of one smooth discrete
+map, accurate to its rounding. Started from the static deflection, the first Newton step is
+the linear mesh's periodic solution (I − A)⁻¹·b exactly where the map is affine (no contact
+loss); a continuation starts each point from its predictor instead.
+
+Floquet multipliers. The fixed-time map's Jacobian A is not the Poincaré map's: a perturbation
+also moves where on the orbit the state is after T. The Poincaré map's Jacobian (return to the
+section φp = const) is A − (P·f)·(∂φp(T)/∂z)/φ̇p, f the vector field at the orbit point and P
+the projection on the unknowns; its 2(n−1) eigenvalues are the orbit's nontrivial Floquet
+multipliers (the trivial pair 1, 1 — phase and momentum — is left out).
+
+The figures of an orbit are those of a time sweep's window (sweep_point.window_figures),
+sampled at the same phases of θ as the time protocol samples: its samples lie at
+θ_start + (whole pitches) + j·pitch/samples_per_period, θ_start the rigid angle of its start.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..arguments import check_scene
+from ..integrate.compiled import equations
+from ..integrate.compiled_stepper import CompiledStepper
+from ..integrate.contract import IntegrationError, Position, start_position
+from ..integrate.segments import Segment, begin, contact_band, point_approaches
+from ..model.assembly import GearTrainModel
+from .sweep_point import static_mesh_force, window_figures
+
+# the compiled integrator's tolerance for the period integrations. The map it computes is one
+# smooth discrete map (a perturbation of 1e-6 takes the same steps), so Newton and the
+# differences converge on it at any tolerance; its orbits' figures and multipliers differ from
+# those at 1e-10 by at most 2.3e-9 (K_v), 1.4e-8 (dte peak-to-peak) and 5.7e-8 (|λ|) on the
+# reference scene at 100-3000 rad/s, and cost 27 % less (measured: docs/steady-state.md)
+SHOOTING_TOLERANCE = 1e-8
+# Newton stops when every entry of z(T) − z is within this fraction of its state scale (a force
+# error of this fraction of the static mesh force)
+NEWTON_TOLERANCE = 1e-8
+NEWTON_ITERATIONS = 12
+DIFFERENCE_STEP = 1e-6  # forward-difference step, in state scales
+# a multiplier is on the unit circle (neither stable nor unstable) within this much
+UNIT_CIRCLE_BAND = 1e-6
+SAMPLES_PER_PERIOD = 64  # as sweep_point.Protocol's default
+# A period integration gives up (StepBudgetExceeded, an IntegrationError: the iterate fails)
+# past this many steps per radian of the fastest mode, plus LEAST_STEP_BUDGET: a Newton iterate
+# far from the orbit may lose and regain contact over and over (the gear pair alone at 700 rad/s
+# took 18.9 million steps, 154 s, for one period where an orbit takes 550). DOP853 takes at
+# least 1/3.5 of a step per radian of it (compiled_stepper.EXPLICIT_STEP_BOUND).
+STEP_BUDGET_PER_FASTEST = 50.0
+LEAST_STEP_BUDGET = 5000
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic steady state at one pinion speed, at the section (module docstring)."""
+
+    pinion_speed: float  # ω, rad/s
+    mesh_periods: int  # k: the orbit repeats every k mesh periods
+    period: float  # k·(2π/z_pinion)/ω, s
+    state: np.ndarray  # [y, ẏ] at the section, relative coordinates (model docstring)
+    multipliers: np.ndarray  # nontrivial Floquet multipliers, largest modulus first
+    residual: float  # max |z(T) − z| in state scales (fraction of the static mesh force)
+    iterations: int  # Newton iterations taken
+    converged: bool
+    figures: dict = field(default_factory=dict)  # window_figures of one orbit period
+
+    @property
+    def stable(self) -> bool:
+        """Every nontrivial multiplier inside the unit circle."""
+        return bool(np.abs(self.multipliers).max() < 1.0 - UNIT_CIRCLE_BAND)
+
+    @property
+    def largest_exponent(self) -> float:
+        """ln|λ|max / T (1/s): the growth rate of the fastest-growing disturbance (< 0:
+        stable; −σ of the least-damped disturbance)."""
+        return float(math.log(np.abs(self.multipliers).max()) / self.period)
+
+
+class ShootingError(ValueError):
+    """A scene the shooting method cannot take (it says why and what is allowed)."""
+
+
+def check_balanced(scene) -> tuple[float, float]:
+    """The scene's constant torques (M_motor, M_load), which must balance (M_load =
+    u·M_motor, to 1e-9 of it): else the train accelerates and has no steady state."""
+    if len(scene.inputs.times) != 1:
+        raise ShootingError(f"{scene.source}: a steady state needs constant input torques; "
+                            "the scene has an input table (allowed: [inputs] M_motor, M_load)")
+    motor, load = (float(t) for t in scene.inputs.at(0.0))
+    ratio = GearTrainModel(scene).geometry.ratio
+    if abs(load - ratio * motor) > 1e-9 * max(abs(load), abs(ratio * motor), 1e-300):
+        raise ShootingError(f"M_load = {load:g} N·m does not balance M_motor = {motor:g} N·m "
+                            f"(u = {ratio:g}): the train accelerates and has no periodic "
+                            f"steady state; allowed: M_load = u·M_motor = {ratio * motor:g}")
+    return motor, load
+
+
+def unknown_scales(model: GearTrainModel) -> np.ndarray:
+    """For each state entry, the change that moves its generalized elastic force by the
+    static mesh force's share in that coordinate: F·Rp on the motor and pinion angles, F·Rw on
+    the wheel and load angles, F on displacements, F times the widest lever arm on tilts,
+    divided by the coordinate's mean stiffness; a rate by its ω_i = √(K_ii/M_ii) times that.
+    (model.state_scales takes F itself on every coordinate: on the soft motor shaft a unit
+    would wind it up 40 times its static torque, which makes the map strongly nonlinear per
+    unit there.)"""
+    force = model.force_scale()
+    g = model.geometry
+    lever = float(np.abs(model.mesh.period_table()[2][:, equations.LEVER_ARM0]).max())
+    levers = {"phi_motor": g.radius_pinion, "phi_pinion": g.radius_pinion,
+              "phi_wheel": g.radius_wheel, "phi_load": g.radius_wheel,
+              "psi_pinion": lever, "psi_wheel": lever, "x_pinion": 1.0, "x_wheel": 1.0}
+    stiffness = np.diag(model.mean_stiffness_matrix())
+    deflection = force * np.array([levers[c] for c in model.coordinates]) / stiffness
+    return np.concatenate([deflection, deflection * np.sqrt(stiffness / model.mass)])
+
+
+class PeriodMap:
+    """z -> z(T) on the section, and its derivatives, for one scene (any speed)."""
+
+    def __init__(self, scene, tolerance: float = SHOOTING_TOLERANCE, mesh_periods: int = 1):
+        check_scene(scene)
+        self.torques = check_balanced(scene)
+        self.scene = scene
+        self.model = model = GearTrainModel(scene)
+        self.stepper = CompiledStepper(model, tolerance)
+        self.mesh_periods = int(mesh_periods)
+        self.size = n = model.size
+        self.pinion = model.pinion
+        self.free = np.array([i for i in range(n) if i != model.pinion])
+        self.unknown_entries = np.concatenate([self.free, n + self.free])
+        self.scales = unknown_scales(model)[self.unknown_entries]
+        weights = model.mass * model.rigid_rotation
+        self.rigid_inertia = float(weights @ model.rigid_rotation)  # R
+        self.momentum_weights = weights[self.free] / self.rigid_inertia  # M_i·r_i/R, i ≠ p
+        self.section_set = model.mesh.contact_set(0, 0)
+        self.section_phase = 0.5 * self.section_set.length
+        self.pitch = model.geometry.angular_pitch
+        self.evaluations = 0  # period integrations done, for benchmarks
+        self.contact_band = contact_band(model)
+        self.run = self.stepper.start(start_position(model, self.torques[0]))
+
+    # --- coordinates --------------------------------------------------------------------
+
+    def period(self, speed: float) -> float:
+        """T = k·pitch/ω, s."""
+        return self.mesh_periods * self.pitch / speed
+
+    def state(self, unknowns: np.ndarray, speed: float) -> np.ndarray:
+        """The full state [y, ẏ] on the section for scaled unknowns at pinion speed ω."""
+        n = self.size
+        state = np.empty(2 * n)
+        state[self.unknown_entries] = unknowns * self.scales
+        state[self.pinion] = self.section_phase
+        state[n + self.pinion] = speed - self.momentum_weights @ state[n + self.free]
+        return state
+
+    def unknowns(self, state: np.ndarray) -> np.ndarray:
+        """The scaled unknowns of a state."""
+        return state[self.unknown_entries] / self.scales
+
+    def rigid_angle(self, state: np.ndarray, contact_set) -> float:
+        """θ (rad) of a state whose pinion entry is counted from `contact_set`'s start."""
+        y = state[:self.size]
+        pinion_angle = contact_set.pinion_angle + y[self.pinion]
+        return pinion_angle + self.momentum_weights @ y[self.free]
+
+    def static_unknowns(self) -> np.ndarray:
+        """The static deflection under M_motor on the section: Newton's first guess."""
+        y = np.zeros(self.size)
+        y[self.pinion] = self.section_phase
+        y = self.model.static_deflection(y, self.section_set, self.torques[0])
+        return self.unknowns(np.concatenate([y, np.zeros(self.size)]))
+
+    # --- the map ------------------------------------------------------------------------
+
+    def loaded(self, state: np.ndarray) -> np.ndarray:
+        """Which points of the section's set carry load at a state on it: segments.begin's
+        rule, its approaches by the compiled equations; a point within the contact band is
+        left to begin itself (its approach rate decides)."""
+        model = self.model
+        if not model.contact_loss:
+            return np.ones(len(self.section_set))
+        approach = point_approaches(model, self.section_set, state)
+        if np.any(np.abs(approach) <= self.contact_band):
+            return begin(model, self.section_set, state.copy(), self.torques).loaded
+        return (approach > 0.0).astype(float)
+
+    def start(self, state: np.ndarray) -> Position:
+        """A position at time 0 on the section (points loaded by their approach)."""
+        return Position(0.0, state, Segment(self.section_set, self.loaded(state)))
+
+    def flow(self, state: np.ndarray, speed: float) -> tuple[np.ndarray, float]:
+        """The state after T, re-expressed on the section's interval k periods on, and the
+        offset of its φp from the section (rad; 0 on a periodic orbit). The period runs on
+        one Run of the compiled integrator, reset in place to the same start each time (no
+        step-size memory carried from one period integration to the next: the map depends on
+        the state alone, as differences of it need)."""
+        self.evaluations += 1
+        run, stepper = self.run, self.stepper
+        run.clock[0], run.clock[1] = 0.0, stepper.first_step
+        run.place[0], run.place[1] = self.section_set.index, self.section_set.cycle
+        run.state[:] = state
+        run.loaded[:] = 0.0
+        run.loaded[:len(self.section_set)] = self.loaded(state)
+        run.first_steps[:] = 0.0
+        period = self.period(speed)
+        stepper.run_to(run, period, self.torques,
+                       int(STEP_BUDGET_PER_FASTEST * period * stepper.fastest_rate)
+                       + LEAST_STEP_BUDGET)
+        end_set = self.model.mesh.contact_set(int(run.place[1]), int(run.place[0]))
+        target = self.model.mesh.interval_start(self.mesh_periods, 0) + self.section_phase
+        offset = end_set.pinion_angle + run.state[self.pinion] - target
+        return run.state.copy(), float(offset)
+
+    def residual(self, unknowns: np.ndarray, speed: float):
+        """G = z(T) − z (scaled), the end state and its φp offset."""
+        end, offset = self.flow(self.state(unknowns, speed), speed)
+        return self.unknowns(end) - unknowns, end, offset
+
+    def jacobian(self, unknowns: np.ndarray, speed: float, base=None, with_speed=False):
+        """∂z(T)/∂z (A, scaled), ∂φp(T)/∂z (row), and with_speed ∂G/∂ω, by forward
+        differences from `base` (residual's result at the point, computed if not given)."""
+        if base is None:
+            base = self.residual(unknowns, speed)
+        residual, end, offset = base
+        count = len(unknowns)
+        images = np.empty((count, count))
+        phase_row = np.empty(count)
+        for j in range(count):
+            shifted = unknowns.copy()
+            shifted[j] += DIFFERENCE_STEP
+            moved, moved_offset = self.flow(self.state(shifted, speed), speed)
+            images[:, j] = (self.unknowns(moved) - self.unknowns(end)) / DIFFERENCE_STEP
+            phase_row[j] = (moved_offset - offset) / DIFFERENCE_STEP
+        speed_column = None
+        if with_speed:
+            step = DIFFERENCE_STEP * speed
+            moved = self.residual(unknowns, speed + step)[0]
+            speed_column = (moved - residual) / step
+        return images, phase_row, speed_column
+
+    def multipliers(self, images: np.ndarray, phase_row: np.ndarray,
+                    state: np.ndarray) -> np.ndarray:
+        """The nontrivial Floquet multipliers from the fixed-time Jacobian (module docstring),
+        largest modulus first."""
+        rate = self.model.derivative(state, self.section_set,
+                                     self.start(state).segment.loaded, *self.torques)
+        along = rate[self.unknown_entries] / self.scales
+        poincare = images - np.outer(along, phase_row) / rate[self.pinion]
+        values = np.linalg.eigvals(poincare)
+        return values[np.argsort(-np.abs(values), kind="stable")]
+
+    # --- what the user reads --------------------------------------------------------------
+
+    def figures(self, state: np.ndarray, speed: float,
+                samples_per_period: int = SAMPLES_PER_PERIOD) -> dict[str, float]:
+        """window_figures over one orbit period, sampled at the time protocol's phases."""
+        scene = self.scene.with_parameters(w0_pinion=speed)
+        model = self.model
+        start = start_position(model, self.torques[0])
+        theta_start = self.rigid_angle(start.state, start.segment.contact_set)
+        theta_section = self.rigid_angle(state, self.section_set)
+        period = self.period(speed)
+        count = self.mesh_periods * samples_per_period
+        offsets = theta_start + np.arange(count) * self.pitch / samples_per_period - theta_section
+        times = np.sort(np.mod(offsets / speed, period))
+        window: dict[str, list[float]] = {name: [] for name in model.output_names}
+
+        def record(t, outputs):
+            for name, value in outputs.items():
+                window[name].append(value)
+
+        self.evaluations += 1
+        self.stepper.advance(self.start(state), period, self.torques, times, record)
+        if len(window["F_mesh"]) != count:  # a sample time at T rounds to the period's end
+            raise IntegrationError("orbit samples lost to rounding")
+        return window_figures({k: np.array(v) for k, v in window.items()},
+                              static_mesh_force(scene))
+
+
+def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,
+           tolerance: float = NEWTON_TOLERANCE, iterations: int = NEWTON_ITERATIONS):
+    """Newton on G(z) = z(T) − z at a fixed speed, the Jacobian by differences at every
+    iteration. Returns (z, residual norm, iterations, converged, (A, phase row, base))."""
+    z = np.asarray(unknowns, dtype=float).copy()
+    base = period_map.residual(z, speed)
+    norm = float(np.abs(base[0]).max())
+    taken = 0
+    images = phase_row = None
+    while taken < iterations:
+        images, phase_row, _ = period_map.jacobian(z, speed, base)
+        if norm <= tolerance:
+            break
+        z = z - np.linalg.solve(images - np.eye(len(z)), base[0])
+        taken += 1
+        base = period_map.residual(z, speed)
+        norm = float(np.abs(base[0]).max())
+        if not np.isfinite(norm):
+            break
+    else:
+        images, phase_row, _ = period_map.jacobian(z, speed, base)
+    converged = bool(norm <= tolerance)
+    return z, norm, taken, converged, (images, phase_row, base)
+
+
+def orbit_record(period_map: PeriodMap, unknowns, speed, norm, taken, converged, images,
+                 phase_row, figures=True) -> PeriodicOrbit:
+    """A PeriodicOrbit from a solved (or abandoned) Newton iteration."""
+    state = period_map.state(unknowns, speed)
+    multipliers = (period_map.multipliers(images, phase_row, state) if images is not None
+                   else np.full(len(unknowns), np.nan))
+    return PeriodicOrbit(
+        pinion_speed=float(speed), mesh_periods=period_map.mesh_periods,
+        period=period_map.period(speed), state=state, multipliers=multipliers,
+        residual=norm, iterations=taken, converged=converged,
+        figures=period_map.figures(state, speed) if figures and converged else {})
+
+
+def periodic_orbit(scene, pinion_speed: float, initial_state=None, mesh_periods: int = 1,
+                   tolerance: float = SHOOTING_TOLERANCE,
+                   newton_tolerance: float = NEWTON_TOLERANCE,
+                   iterations: int = NEWTON_ITERATIONS) -> PeriodicOrbit:
+    """The periodic steady state of a scene at a pinion speed (rad/s) by Newton shooting.
+
+    initial_state: a state [y, ẏ] on the section to start from (e.g. an orbit's `state`);
+    None starts from the static deflection, whose first Newton step is the linear mesh's
+    periodic solution. mesh_periods: k, for an orbit that repeats every k mesh periods.
+    tolerance: the integrator's; newton_tolerance: on z(T) − z, a fraction of the static
+    mesh force. The result says whether Newton converged (`converged`); its figures are those
+    of a sweep point's window (sweep_point.window_figures) over one orbit period."""
+    speed = float(pinion_speed)
+    if not (math.isfinite(speed) and speed > 0.0):
+        raise ValueError(f"pinion_speed is {pinion_speed!r}; allowed: finite and > 0 rad/s")
+    period_map = PeriodMap(scene, tolerance, mesh_periods)
+    start = (period_map.static_unknowns() if initial_state is None
+             else period_map.unknowns(np.asarray(initial_state, dtype=float)))
+    try:
+        z, norm, taken, converged, (images, phase_row, _) = newton(
+            period_map, start, speed, newton_tolerance, iterations)
+    except IntegrationError:
+        return PeriodicOrbit(speed, period_map.mesh_periods, period_map.period(speed),
+                             period_map.state(start, speed),
+                             np.full(len(start), np.nan), math.inf, 0, False)
+    return orbit_record(period_map, z, speed, norm, taken, converged, images, phase_row)
