@@ -241,3 +241,33 @@ def test_the_stability_chart_reports_progress_and_keeps_its_numbers():
     assert sum(done) == len(speeds) and len(done) > 1
     assert np.array_equal(batched.largest_modulus, whole.largest_modulus)
     assert batched.unstable_bands == whole.unstable_bands
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    (["--param", "stagger", "0", "0.5", "3", "--method", "shooting"], "--method shooting"),
+    (["--param", "stagger", "0", "0.5", "3", "--time-sweeps"], "--time-sweeps"),
+    (["--speeds", "100", "200", "3", "--method", "time", "--time-sweeps"], "--time-sweeps"),
+])
+def test_a_sweep_method_that_cannot_run_is_refused_before_any_work(arguments, culprit, capsys,
+                                                                    monkeypatch, no_work):
+    import herringbone.analysis.sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "shooting_sweep", no_work_at_all)
+    assert main(["sweep", REFERENCE, *arguments, "--no-progress"]) == 2
+    error = one_error_line(capsys, "sweep")
+    assert culprit in error and "allowed:" in error
+
+
+def no_work_at_all(*args, **kwargs):
+    raise AssertionError("the work began before the arguments were checked")
+
+
+def test_a_speed_sweep_finds_the_periodic_branch_and_draws_no_waterfall(tmp_path, capsys):
+    assert main(["sweep", REFERENCE, "--speeds", "500", "600", "3", "--no-progress",
+                 "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "periodic steady state by shooting and continuation: " in out
+    written = sorted(path.name for path in tmp_path.iterdir())
+    assert written == ["reference_sweep_w0_pinion.csv", "reference_sweep_w0_pinion_resonance.png"]
+    header = (tmp_path / "reference_sweep_w0_pinion.csv").read_text().splitlines()[0]
+    assert "stability" in header and "w0_pinion [rad/s]" in header

@@ -1,5 +1,6 @@
 """What `herringbone sweep` prints and writes: the table as CSV, the resonance curve (speed
-sweeps) or parameter plot, the waterfall of dte spectra (one-axis speed sweeps)."""
+sweeps) or parameter plot, the waterfall of dte spectra (one-axis speed sweeps by time
+integration: a branch of periodic orbits has no window to show)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,6 +9,7 @@ from ..model.parameters import RPM_PER_RAD_S, name_with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
 from .sweep_plots import (
+    is_branch,
     plot_parameter_sweep,
     plot_resonance_curve,
     plot_waterfall,
@@ -20,8 +22,10 @@ def swept_names(table) -> list[str]:
     return list(table.columns[:list(table.columns).index("speed_rpm")])
 
 
-def write_outputs(scene, table, series, folder: Path) -> list[Path]:
-    """CSV, then the plots that fit the sweep's axes; returns the paths written."""
+def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[Path]:
+    """CSV, then the plots that fit the sweep's axes; returns the paths written. `series`:
+    each point's window (None for a branch: no waterfall); `time_sweeps`: {"up": table,
+    "down": table} of chained time sweeps drawn over a branch's resonance curve."""
     folder.mkdir(parents=True, exist_ok=True)
     names = swept_names(table)
     stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
@@ -34,10 +38,12 @@ def write_outputs(scene, table, series, folder: Path) -> list[Path]:
     if names == [SPEED]:
         curve, waterfall = Path(f"{stem}_resonance.png"), Path(f"{stem}_waterfall.png")
         plot_resonance_curve(table, curve, natural, z,
-                             f"{scene.name}: dynamic factor against speed")
-        plot_waterfall(table, series, waterfall, natural, z,
-                       f"{scene.name}: dte spectra over the sweep (waterfall)")
-        written += [curve, waterfall]
+                             f"{scene.name}: dynamic factor against speed", sweeps=time_sweeps)
+        written.append(curve)
+        if series is not None:
+            plot_waterfall(table, series, waterfall, natural, z,
+                           f"{scene.name}: dte spectra over the sweep (waterfall)")
+            written.append(waterfall)
     else:
         picture = Path(f"{stem}.png")
         plot_parameter_sweep(table, names, picture, f"{scene.name}: K_v over "
@@ -48,11 +54,8 @@ def write_outputs(scene, table, series, folder: Path) -> list[Path]:
 
 def describe(scene, table, wall: float, args=None) -> str:
     """The summary printed after a sweep."""
-    settle, window = table["settle_time_s"], table["window_time_s"]
     lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
-             f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
-             "the least-damped mode decayed), then a window of "
-             f"{int(table['samples'].iloc[0])} samples, {window.min():.4g}-{window.max():.4g} s",
+             *(_branch_lines(table) if is_branch(table) else _time_lines(table)),
              f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}; "
              f"largest at {resonation_summary(table)}"]
     if SPEED in swept_names(table) and len(swept_names(table)) == 1:
@@ -65,3 +68,21 @@ def describe(scene, table, wall: float, args=None) -> str:
         lost = int((table["contact_lost_share"] > 0).sum())
         lines.append(f"a helix half out of contact at {lost} points (contact_lost_share > 0)")
     return "\n".join(lines)
+
+
+def _time_lines(table) -> list[str]:
+    settle, window = table["settle_time_s"], table["window_time_s"]
+    return [f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
+            "the least-damped mode decayed), then a window of "
+            f"{int(table['samples'].iloc[0])} samples, {window.min():.4g}-{window.max():.4g} s"]
+
+
+def _branch_lines(table) -> list[str]:
+    counts = table["stability"].value_counts()
+    folds = table.attrs.get("folds", [])
+    lines = [f"periodic steady state by shooting and continuation: {counts.get('stable', 0)} "
+             f"stable, {counts.get('unstable', 0)} unstable orbits, "
+             f"{counts.get('time', 0)} points by time integration (no orbit converged)"]
+    if len(folds):
+        lines.append("folds (jumps) at " + ", ".join(f"{speed:.1f} rad/s" for speed in folds))
+    return lines

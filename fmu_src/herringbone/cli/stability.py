@@ -41,8 +41,11 @@ def execute(args, parser) -> int:
         chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)
     plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
-    print(f"largest multiplier |λ|max from {chart.largest_modulus.min():.6g} to "
-          f"{chart.largest_modulus.max():.6g} over {speeds[0]:g}-{speeds[-1]:g} rad/s")
+    exponent = chart.largest_exponent
+    print(f"largest Floquet exponent from {exponent.min():.6g} to {exponent.max():.6g} 1/s "
+          f"over {speeds[0]:g}-{speeds[-1]:g} rad/s (below zero: every disturbance decays; "
+          f"|λ|max per mesh period from {chart.largest_modulus.min():.6g} to "
+          f"{chart.largest_modulus.max():.6g})")
     for band_low, band_high in chart.unstable_bands:
         print(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
               f"({band_low * RPM_PER_RAD_S:.0f}-{band_high * RPM_PER_RAD_S:.0f} rpm)")

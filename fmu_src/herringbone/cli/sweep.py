@@ -1,5 +1,6 @@
-"""`herringbone sweep SCENE`: run a scene over a grid of speeds or parameters (one or two),
-past its start-up transient, and write the table of figures per point and its pictures.
+"""`herringbone sweep SCENE`: run a scene over a grid of speeds or parameters (one or two) and
+write the table of figures per point and its pictures: the periodic steady state directly
+(shooting and continuation) where it applies, else each point past its start-up transient.
 
 Every option is one `add_argument` in `declare`, checked by its `type=` or action; `execute`
 hands them to analysis.sweep.run_sweep.
@@ -10,6 +11,7 @@ import argparse
 import time
 from pathlib import Path
 
+from ..analysis.sweep import METHODS
 from ..arguments import (
     COMPILED_TOLERANCE_ARGUMENT,
     SAMPLES_PER_PERIOD,
@@ -36,9 +38,9 @@ from .common import (
 )
 
 NAME = "sweep"
-HELP = ("run a scene over a grid of speeds or parameters (one or two), past its start-up "
-        "transient: K_v, bearing reactions, dte, contact loss, Floquet |λ|max per point (CSV, "
-        "resonance curve and waterfall pictures)")
+HELP = ("run a scene over a grid of speeds or parameters (one or two): K_v, bearing "
+        "reactions, dte, contact loss and Floquet multipliers of the periodic steady state per "
+        "point, stable and unstable branches and their folds (CSV, resonance curve, waterfall)")
 SWEEPABLE = {**PARAMETERS, **INPUTS}
 
 
@@ -78,6 +80,16 @@ def declare(parser) -> None:
         parser.add_argument(argument.option, type=argument.option_type, default=default,
                             help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
                                  f"{shown}")
+    parser.add_argument("--method", choices=METHODS, default=None,
+                        help="shooting: the periodic steady state directly, followed in speed "
+                             "through folds, stable and unstable branches (the default for a "
+                             "speed sweep at balanced constant torques, not through an FMU); "
+                             "time: each point from its static start past its transient (the "
+                             "default elsewhere)")
+    parser.add_argument("--time-sweeps", action="store_true",
+                        help="with shooting: also sweep up and down by time integration, each "
+                             "point from the last one's end state, and draw both over the "
+                             "branch (where the response is multi-valued they jump at folds)")
     parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
     parser.add_argument("--workers", type=number, help="Dask LocalCluster worker processes "
                         "(default: one per core; 0: no Dask, run here one after the other)")
@@ -92,7 +104,7 @@ def declare(parser) -> None:
 
 def execute(args, parser) -> int:
     """Check everything, run the sweep, write the table first, then the pictures."""
-    from ..analysis.sweep import run_sweep
+    from ..analysis.sweep import chained_time_sweep, run_sweep, shooting_sweep
     from ..analysis.sweep_point import Protocol
     from ..analysis.sweep_report import describe, write_outputs
 
@@ -110,17 +122,45 @@ def execute(args, parser) -> int:
     folder = default_output(parser, args.output, Path("results"), folder=True)
     require("pandas", "sweep")
     require("matplotlib", "the sweep's pictures")
+    speeds = None if sweep is None else sweep.speeds()
+    method = _method(parser, args, scene, speeds, params)
     started = time.perf_counter()
-    table, series = run_sweep(scene, None if sweep is None else sweep.speeds(), params, protocol,
-                              workers=None if args.workers is None else int(args.workers),
-                              scheduler=args.scheduler, fmu=args.through_fmu,
-                              progress=not args.no_progress)
+    time_sweeps = None
+    if method == "shooting":
+        assert speeds is not None  # shooting_applies: a sweep of speeds
+        table, series = shooting_sweep(scene, speeds, protocol,
+                                       progress=not args.no_progress), None
+        if args.time_sweeps:
+            time_sweeps = {direction: chained_time_sweep(scene, order, protocol,
+                                                         progress=not args.no_progress)
+                           for direction, order in (("up", speeds), ("down", speeds[::-1]))}
+    else:
+        table, series = run_sweep(scene, speeds, params, protocol,
+                                  workers=None if args.workers is None else int(args.workers),
+                                  scheduler=args.scheduler, fmu=args.through_fmu,
+                                  progress=not args.no_progress)
     wall = time.perf_counter() - started
-    written = write_outputs(scene, table, series, folder)
+    written = write_outputs(scene, table, series, folder, time_sweeps)
     print(describe(scene, table, wall))
     for path in written:
         print(f"written: {path}")
     return 0
+
+
+def _method(parser, args, scene, speeds, params) -> str:
+    """The method the sweep runs by: --method, else shooting where it applies; one line and
+    exit 2 where shooting was asked for and cannot run, or --time-sweeps without it."""
+    from ..analysis.sweep import shooting_applies
+
+    why_not = shooting_applies(scene, speeds, params, args.through_fmu)
+    if args.method == "shooting" and why_not:
+        fail(parser, f"--method shooting: this sweep cannot be run so: {why_not}; allowed: "
+                     "--method time")
+    method = args.method or ("time" if why_not else "shooting")
+    if args.time_sweeps and method != "shooting":
+        fail(parser, "--time-sweeps: allowed: only with a sweep by --method shooting "
+                     f"(this one runs by time{': ' + why_not if why_not else ''})")
+    return method
 
 
 def _values(low: float, high: float, count: int):
