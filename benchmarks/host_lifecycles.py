@@ -257,10 +257,10 @@ def case_command(case: str, fmus: dict[str, str], folder: Path) -> list[str]:
             repr(STEP)]
 
 
-def run_case(case: str, fmus: dict[str, str], folder: Path, runs: int,
-             parallel: int = 2, timeout: float = 300.0) -> list[subprocess.CompletedProcess]:
+def run_case(case: str, fmus: dict[str, str], folder: Path, runs: int, parallel: int = 2,
+             timeout: float = 300.0, on_progress=None) -> list[subprocess.CompletedProcess]:
     """`runs` fresh processes of `case`, `parallel` at a time; the failed ones (non-zero
-    exit, or killed after `timeout` s)."""
+    exit, or killed after `timeout` s). `on_progress(done, failed)` after each process."""
     command = case_command(case, fmus, folder)
     environment = {**os.environ, "PYTHONFAULTHANDLER": "1"}
 
@@ -272,8 +272,22 @@ def run_case(case: str, fmus: dict[str, str], folder: Path, runs: int,
             return subprocess.CompletedProcess(command, -9, expired.stdout or "",
                                                f"timed out after {timeout} s")
 
+    failed = []
     with ThreadPoolExecutor(parallel) as pool:
-        return [run for run in pool.map(one, range(runs)) if run.returncode != 0]
+        for number, run in enumerate(pool.map(one, range(runs)), start=1):
+            if run.returncode != 0:
+                failed.append(run)
+            if on_progress is not None:
+                on_progress(number, len(failed))
+    return failed
+
+
+def _report_every(count: int):
+    """A progress callback that prints a line every `count` processes (to stderr)."""
+    def report(done: int, failed: int) -> None:
+        if done % count == 0:
+            print(f"    {done} processes, {failed} non-zero", file=sys.stderr, flush=True)
+    return report
 
 
 def main(argv=None) -> int:
@@ -296,7 +310,7 @@ def main(argv=None) -> int:
             continue
         runs = args.plain_runs if case == "plain" and args.plain_runs else args.runs
         started = time.perf_counter()
-        failed = run_case(case, fmus, folder, runs, args.parallel)
+        failed = run_case(case, fmus, folder, runs, args.parallel, on_progress=_report_every(50))
         total += len(failed)
         print(f"{case:<18} {runs:>6} {len(failed):>9} {time.perf_counter() - started:>8.0f}",
               flush=True)
