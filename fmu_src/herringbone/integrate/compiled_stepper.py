@@ -250,6 +250,8 @@ class CompiledStepper:
                                                       model.state_scales(), torque_scales,
                                                       self.step_tolerance)
                              if self.method_code == walk.Method.EXPONENTIAL else None)
+        self.exact_buffers = (exponential.pack_tables(self.exact_tables)
+                              if self.exact_tables is not None else None)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
 
     def start(self, position: Position) -> Run:
@@ -267,7 +269,7 @@ class CompiledStepper:
                    np.array([contact_set.index, contact_set.cycle], dtype=np.int64),
                    position.state.copy(), loaded, first_steps, outputs,
                    walk.allocate_workspace(self.method_code, len(position.state),
-                                           self.tables.shape[2], self.exact_tables))
+                                           self.tables.shape[2], self.exact_buffers))
 
     def position(self, run: Run) -> Position:
         """A snapshot of the run: its own copies, unchanged by the run going on."""

@@ -268,7 +268,55 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
                        np.zeros((2, slow_width), dtype=complex))
 
 
+def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tables as three flat arrays (complex, float, int) that `unpack_tables` takes apart in
+    compiled code: numba types each array of a call's arguments at every call, and the
+    fourteen of ExactTables cost the FMU's communication step more than the exact steps it
+    takes. The ints open with the sizes (I, V, N, M, S, C)."""
+    intervals, variants, size, width = tables.right.shape
+    header = [intervals, variants, size, width, tables.slow.shape[2], tables.tilt_rows.shape[2]]
+    complexes = np.concatenate([array.ravel() for array in (
+        tables.right, tables.left, tables.rates, tables.slow, tables.approach,
+        tables.pinion_rate, tables.modal, tables.series)])
+    floats = np.concatenate([tables.tilt_rows.ravel(), tables.augmented, [tables.tilt_bound]])
+    ints = np.concatenate([header, tables.valid.ravel(), tables.slow_count.ravel(),
+                           tables.tilt_count.ravel()]).astype(np.int64)
+    return complexes, floats, ints
+
+
 # --- the kernels ---------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def unpack_tables(complexes, floats, ints):
+    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers."""
+    intervals, variants, size, width, slow, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], \
+        ints[5]
+    pairs = intervals * variants
+    at = 0
+    right = complexes[at:at + pairs * size * width].reshape((intervals, variants, size, width))
+    at += pairs * size * width
+    left = complexes[at:at + pairs * width * width].reshape((intervals, variants, width, width))
+    at += pairs * width * width
+    rates = complexes[at:at + pairs * width].reshape((intervals, variants, width))
+    at += pairs * width
+    slow_block = complexes[at:at + pairs * slow * slow].reshape((intervals, variants, slow,
+                                                                  slow))
+    at += pairs * slow * slow
+    approach = complexes[at:at + pairs * width].reshape((intervals, variants, width))
+    at += pairs * width
+    pinion_rate = complexes[at:at + pairs * width].reshape((intervals, variants, width))
+    at += pairs * width
+    modal = complexes[at:at + width]
+    series = complexes[at + width:at + width + 2 * slow].reshape((2, slow))
+    rows = floats[:pairs * tilt * size].reshape((intervals, variants, tilt, size))
+    augmented = floats[pairs * tilt * size:pairs * tilt * size + width]
+    valid = ints[6:6 + pairs].reshape((intervals, variants))
+    slow_count = ints[6 + pairs:6 + 2 * pairs].reshape((intervals, variants))
+    tilt_count = ints[6 + 2 * pairs:6 + 3 * pairs].reshape((intervals, variants))
+    return ExactTables(valid, right, left, rates, slow_block, slow_count, rows, tilt_count,
+                       floats[floats.shape[0] - 1], approach, pinion_rate, modal, augmented,
+                       series)
+
 
 @njit(cache=True, error_model="numpy")
 def variant_of(tables, interval, count, loaded, state):

@@ -226,15 +226,16 @@ def pack_settings(relative_tolerance: float, max_step: float, event_time_toleran
 
 
 def allocate_workspace(method: Method, size: int, max_points: int,
-                       exact_tables: exponential.ExactTables | None = None) -> tuple:
+                       exact_tables: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                       ) -> tuple:
     """The scratch arrays of a run of `method` with `size` state entries and sets of up to
     `max_points` points, allocated once per run (CompiledStepper.start) and reused by every
     call of `advance`, whose results do not depend on what they held: in the order VECTORS
     (rows by Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors
     of Radau IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex
     factors), COUNTERS (by Counter), MEMORY (by Memory), EXACT (`exact_tables`, the
-    exponential method's); the three of Radau IIA are None but in its, EXACT but in the
-    exponential method's.
+    exponential method's tables as exponential.pack_tables packs them); the three of Radau
+    IIA are None but in its, EXACT but in the exponential method's.
 
     The method is so a matter of the workspace's type, which numba compiles `advance` for:
     the code of the other method is never compiled (`implicit_step`,
@@ -271,7 +272,8 @@ def _exact_form(workspace, interval, count, loaded, state):
     if isinstance(workspace[EXACT], types.NoneType):
         return lambda workspace, interval, count, loaded, state: -1
     return lambda workspace, interval, count, loaded, state: exponential.variant_of(
-        workspace[EXACT], interval, count, loaded, state)
+        exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
+                                  workspace[EXACT][2]), interval, count, loaded, state)
 
 
 def exact_step(system, segment, state, workspace, h, out):
@@ -284,7 +286,9 @@ def _exact_step(system, segment, state, workspace, h, out):
     if isinstance(workspace[EXACT], types.NoneType):
         return lambda system, segment, state, workspace, h, out: False
     return lambda system, segment, state, workspace, h, out: exponential.step(
-        workspace[EXACT], segment.exact, state, segment.motor_torque, segment.load_torque, h,
+        exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
+                                  workspace[EXACT][2]), segment.exact, state,
+        segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
         == exponential.ALL_LOADED else -1.0, out)
 
