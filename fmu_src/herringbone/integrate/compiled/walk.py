@@ -286,7 +286,7 @@ def _exact_step(system, segment, state, workspace, h, out):
     if isinstance(workspace[EXACT], types.NoneType):
         return lambda system, segment, state, workspace, h, out: False
     return lambda system, segment, state, workspace, h, out: exponential.step(
-        exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
+        system, exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
                                   workspace[EXACT][2]), segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
