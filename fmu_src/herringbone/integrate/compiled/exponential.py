@@ -219,10 +219,9 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     stepper's state scales (GearTrainModel.state_scales), the torques' scales (N·m: motor,
     load) and the step tolerance."""
     scales = np.concatenate([state_scales, torque_scales, [1.0]])
-    # The pinion angle runs over a whole contact interval, hundreds of its error scale: measured
-    # in that, it would carry hundreds of times the rounding of the modal round trip into the
-    # pinion speed at every step, and the switches drift (1e-8 of the force scale after 0.3 s
-    # on the reference scene); measured by the interval, it carries little.
+    # The pinion angle runs over a whole contact interval, hundreds of its error scale, and the
+    # rounding of the modal round trip grows with the largest scaled entry: it is measured by
+    # the longest interval instead.
     scales[system.pinion] = max(scales[system.pinion], float(np.max(period_table[0])))
     lengths, counts, tables = period_table
     intervals, size = len(lengths), 2 * system.mass.shape[0]
