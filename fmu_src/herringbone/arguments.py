@@ -45,7 +45,7 @@ COMPILED_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-2)
 # contact switches. Measured on the reference scene over 0.01 s against 1e-10: F_mesh 31 % off
 # at 1e-4 (and n_contacts wrong), 5e-4 at 1e-5, 1e-6 at 1e-6.
 REFERENCE_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-5)
-COMPILED_METHODS = ("auto", "dop853", "radau")  # compiled_stepper.METHODS
+COMPILED_METHODS = ("auto", "dop853", "radau", "exponential")  # compiled_stepper.METHODS
 REFERENCE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")  # scipy's solve_ivp
 
 

@@ -64,7 +64,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from . import dop853, radau
+from . import dop853, exponential, radau
 from .equations import approach_rates, approaches, derivative, outputs, unpack_system
 
 
@@ -93,6 +93,7 @@ class Method(IntEnum):
 
     EXPLICIT = 0  # DOP853
     IMPLICIT = 1  # Radau IIA
+    EXPONENTIAL = 2  # exact segments (exponential.py), DOP853 where a segment is not exact
 
 
 class Setting(IntEnum):
@@ -103,7 +104,8 @@ class Setting(IntEnum):
     MAX_STEP = 1  # s
     EVENT_TIME_TOLERANCE = 2  # s: how far past its crossing a segment may end
     CONTACT_SLACK = 3  # m; >= 0 turns the debug contact check on, < 0 leaves it off
-    ABSOLUTE_TOLERANCE = 4  # from here to the end: per state entry, in the entry's units
+    EXACT_MAX_STEP = 4  # s: the longest step of an exact segment (exponential method)
+    ABSOLUTE_TOLERANCE = 5  # from here to the end: per state entry, in the entry's units
 
 
 class Vector(IntEnum):
@@ -142,6 +144,7 @@ class Segment(NamedTuple):
     load_torque: float  # N·m
     length: float  # the contact interval's length in φp, rad
     events: int  # the number of event functions: Event.CONTACT (+ count if contact can be lost)
+    exact: int  # its exact form's index in the exponential method's tables; −1: none
 
 
 class Counter(IntEnum):
@@ -163,8 +166,9 @@ class Memory(IntEnum):
 
 
 # Workspace: the tuple allocate_workspace returns, in this order (MATRICES, COMPLEX_FACTORS and
-# PIVOTS are Radau IIA's: None in DOP853's)
-VECTORS, VALUES, MATRICES, COMPLEX_FACTORS, PIVOTS, COUNTERS, MEMORY = range(7)
+# PIVOTS are Radau IIA's: None in the others'; EXACT the exponential method's tables, None in
+# the others')
+VECTORS, VALUES, MATRICES, COMPLEX_FACTORS, PIVOTS, COUNTERS, MEMORY, EXACT = range(8)
 JACOBIAN, REAL_FACTORS = 0, 1  # of MATRICES; PIVOTS: the real factors' row, the complex ones'
 
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
@@ -187,6 +191,11 @@ MAX_PHASE_REVERSALS = 1000
 # than PREDICTION_FLOOR of the step ahead (a nearer one is crossed by the step as it is)
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
+# An exact step (exponential method) makes no error, so the step size serves the events only:
+# after a certified step the next may be this many times longer, after a rejected one this
+# fraction as long
+EXACT_GROWTH = 4.0
+EXACT_SHRINK = 0.25
 
 # Inlining and speed. The helpers the loop runs at every step are inlined (inline="always"):
 # a compiled call hands over each array it is given by reference, which numba counts
@@ -203,9 +212,11 @@ PREDICTION_FLOOR = 1e-3
 # --- the records ------------------------------------------------------------------------------
 
 def pack_settings(relative_tolerance: float, max_step: float, event_time_tolerance: float,
-                  contact_slack: float, absolute_tolerance: np.ndarray) -> np.ndarray:
+                  contact_slack: float, absolute_tolerance: np.ndarray,
+                  exact_max_step: float = math.inf) -> np.ndarray:
     """The settings record `advance` takes: the entries laid out by Setting."""
     settings = np.empty(Setting.ABSOLUTE_TOLERANCE + len(absolute_tolerance))
+    settings[Setting.EXACT_MAX_STEP] = exact_max_step
     settings[Setting.RELATIVE_TOLERANCE] = relative_tolerance
     settings[Setting.MAX_STEP] = max_step
     settings[Setting.EVENT_TIME_TOLERANCE] = event_time_tolerance
@@ -214,14 +225,17 @@ def pack_settings(relative_tolerance: float, max_step: float, event_time_toleran
     return settings
 
 
-def allocate_workspace(method: Method, size: int, max_points: int) -> tuple:
+def allocate_workspace(method: Method, size: int, max_points: int,
+                       exact_tables: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                       ) -> tuple:
     """The scratch arrays of a run of `method` with `size` state entries and sets of up to
     `max_points` points, allocated once per run (CompiledStepper.start) and reused by every
     call of `advance`, whose results do not depend on what they held: in the order VECTORS
     (rows by Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors
     of Radau IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex
-    factors), COUNTERS (by Counter), MEMORY (by Memory); for DOP853 the three of Radau IIA are
-    None.
+    factors), COUNTERS (by Counter), MEMORY (by Memory), EXACT (`exact_tables`, the
+    exponential method's tables as exponential.pack_tables packs them); the three of Radau
+    IIA are None but in its, EXACT but in the exponential method's.
 
     The method is so a matter of the workspace's type, which numba compiles `advance` for:
     the code of the other method is never compiled (`implicit_step`,
@@ -233,7 +247,8 @@ def allocate_workspace(method: Method, size: int, max_points: int) -> tuple:
             np.zeros((size, size), dtype=np.complex128) if implicit else None,
             np.zeros((2, size), dtype=np.int64) if implicit else None,
             np.zeros(len(Counter), dtype=np.int64),
-            np.zeros(len(Memory)))
+            np.zeros(len(Memory)),
+            exact_tables if method == Method.EXPONENTIAL else None)
 
 
 def is_explicit(workspace):
@@ -247,14 +262,46 @@ def _is_explicit(workspace):
     return lambda workspace: explicit
 
 
+def exact_form(workspace, interval, count, loaded, state):
+    """exponential.variant_of where the workspace is the exponential method's; −1 (a constant
+    in compiled code) in the others'."""
+
+
+@overload(exact_form, inline="always")
+def _exact_form(workspace, interval, count, loaded, state):
+    if isinstance(workspace[EXACT], types.NoneType):
+        return lambda workspace, interval, count, loaded, state: -1
+    return lambda workspace, interval, count, loaded, state: exponential.variant_of(
+        exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
+                                  workspace[EXACT][2]), interval, count, loaded, state)
+
+
+def exact_step(system, segment, state, workspace, h, out):
+    """exponential.step on the workspace's tables where it is the exponential method's (the
+    segment exact); never called in the others'."""
+
+
+@overload(exact_step, inline="always")
+def _exact_step(system, segment, state, workspace, h, out):
+    if isinstance(workspace[EXACT], types.NoneType):
+        return lambda system, segment, state, workspace, h, out: False
+    return lambda system, segment, state, workspace, h, out: exponential.step(
+        system, exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
+                                  workspace[EXACT][2]), segment.exact, state,
+        segment.motor_torque, segment.load_torque, h,
+        system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
+        == exponential.ALL_LOADED else -1.0, out)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def segment_of(system, mesh, interval, loaded, torques):
+def segment_of(system, mesh, interval, loaded, torques, exact):
     """The Segment of contact interval `interval` of the mesh's period (lengths, counts,
-    tables: mesh.period_table), with the run's loaded points and the torques (N·m)."""
+    tables: mesh.period_table), with the run's loaded points, the torques (N·m) and its exact
+    form (−1: none)."""
     lengths, counts, tables = mesh
     count = counts[interval]
     return Segment(tables[interval], count, loaded, torques[0], torques[1], lengths[interval],
-                   Event.CONTACT + (count if system.contact_loss else 0))
+                   Event.CONTACT + (count if system.contact_loss else 0), exact)
 
 
 # --- the event functions ----------------------------------------------------------------------
@@ -348,7 +395,9 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     only to look where an event lies: its error is not checked (it is shorter than a step
     already accepted). Radau IIA factorizes for h (and says so in the workspace's memory)."""
     vectors = workspace[VECTORS]
-    if is_explicit(workspace):
+    if segment.exact >= 0:
+        exact_step(system, segment, state, workspace, h, out)
+    elif is_explicit(workspace):
         dop853.step(system, segment.points, segment.point_count, segment.loaded,
                     segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
                     settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
@@ -512,14 +561,15 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
 # --- the steps of the loop --------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy", inline="always")
-def plan_step(settings, time, end, h, ahead):
+def plan_step(max_step, time, end, h, ahead):
     """The next step from `time` (s) with the controller's step size h (s): at most the
     settings' max step, stretched by a hair to land on `end` rather than leave a remainder of
     rounding size, or cut to end just past the phase event predicted `ahead` s from now
-    (phase_event_ahead; DOP853 only, inf for none). Returns (h_step, h_wanted, landing, aimed):
+    (phase_event_ahead; not for Radau IIA, inf for none). `max_step` (s): the settings' for
+    the segment's method. Returns (h_step, h_wanted, landing, aimed):
     the step's size, the size the controller asked for (bounded), whether the step ends at
     `end`, whether it is aimed at the phase event."""
-    h_wanted = min(h, settings[Setting.MAX_STEP])
+    h_wanted = min(h, max_step)
     landing = end - time <= h_wanted * (1.0 + 1e-7)
     h_step = end - time if landing else h_wanted
     # a step that would pass the next phase event ends just past it instead: the event is
@@ -609,6 +659,24 @@ def control_step(explicit, error, iterations, plan, controller):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def control_exact_step(certified, plan, floor):
+    """Accept or reject an exact step of `plan` (plan_step's): a certified one is accepted and
+    the next may be EXACT_GROWTH times longer; an uncertified one only at DOP853's step bound
+    `floor` (s) or below, where the loop's checks of a step's ends and of grazing hold, and
+    the next may grow up to `floor`; a longer one is rejected and tried EXACT_SHRINK times as
+    long (not below `floor`). A step cut short (landing on the end, aimed at a phase event)
+    says nothing of the next: it grows from the size the loop wanted. Returns (accepted; the
+    step size to try next, s)."""
+    h_step, h_wanted, landing, aimed = plan
+    grown = (h_wanted if landing or aimed else h_step) * EXACT_GROWTH
+    if certified:
+        return True, grown
+    if h_step <= floor:
+        return True, min(floor, grown)
+    return False, max(floor, EXACT_SHRINK * h_step)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def crossed_event(system, segment, new_state, values):
     """The event values at the end of a step (NEW_STATE; into the AFTER row of `values`), and
     which event the step crossed first (−1: none)."""
@@ -646,7 +714,8 @@ def finish_step(state, workspace):
 def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
     """The Segment of contact interval `interval` (segment_of), with the rate, event values and
     (where contact can be lost) approach slopes at `state`, its start, in the workspace."""
-    segment = segment_of(system, mesh, interval, loaded, torques)
+    segment = segment_of(system, mesh, interval, loaded, torques,
+                         exact_form(workspace, interval, mesh[1][interval], loaded, state))
     rate, values = workspace[VECTORS][Vector.RATE], workspace[VALUES]
     derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
                rate)
@@ -887,23 +956,30 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
         # (Radau IIA's steps are not aimed: with them its error stopped falling with the step
         # size in the order test, tests/test_integrator.py, and it steps to few events)
         ahead = phase_event_ahead(system, state, rate, segment.length) if explicit else math.inf
-        plan = plan_step(settings, time, end, h, ahead)
+        exact = segment.exact >= 0
+        plan = plan_step(settings[Setting.EXACT_MAX_STEP] if exact else settings[Setting.MAX_STEP],
+                         time, end, h, ahead)
         h_step, landing = plan[0], plan[2]
         status = step_allowed(steps, max_steps, time, plan)
         if status != Status.OK:
             break
-        if explicit:
-            error, iterations = dop853.step(
-                system, points, segment.point_count, loaded, torques[0], torques[1], state, rate,
-                h_step, tolerance, settings[Setting.RELATIVE_TOLERANCE], stages, work,
-                new_state), 0
+        certified = False
+        if exact:
+            certified = exact_step(system, segment, state, workspace, h_step, new_state)
+            accepted, clock[1] = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
         else:
-            retry, error, iterations = implicit_step(system, segment, settings, state,
-                                                     workspace, h_step)
-            if retry:
-                continue
-        accepted, clock[1], controller = control_step(explicit, error, iterations, plan,
-                                                      controller)
+            if explicit:
+                error, iterations = dop853.step(
+                    system, points, segment.point_count, loaded, torques[0], torques[1], state,
+                    rate, h_step, tolerance, settings[Setting.RELATIVE_TOLERANCE], stages, work,
+                    new_state), 0
+            else:
+                retry, error, iterations = implicit_step(system, segment, settings, state,
+                                                         workspace, h_step)
+                if retry:
+                    continue
+            accepted, clock[1], controller = control_step(explicit, error, iterations, plan,
+                                                          controller)
         if not accepted:
             continue
         steps += 1
@@ -912,12 +988,12 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
             first_steps[counters[Counter.OPENING]] = clock[1]
         counters[Counter.OPENING] = -1
         event, high = crossed_event(system, segment, new_state, values), h_step
-        if explicit:  # its last stage is the rate at the step's end
+        if explicit and not exact:  # its last stage is the rate at the step's end
             rate_after[:] = last_stage
         else:
             derivative(system, points, segment.point_count, loaded, torques[0], torques[1],
                        new_state, rate_after)
-        if system.contact_loss:
+        if system.contact_loss and not certified:  # (a certified step has no grazing inside)
             suspect = grazing_check(system, segment, new_state, rate_after, values, h_step)
             if suspect > 0.0:
                 event, high = probe_inside(system, segment, settings, state, workspace, suspect,

@@ -1,0 +1,120 @@
+"""DOP853 against the exponential method, side by side, on every shipped scene in one run.
+
+For each scene and method: the compiled kernel's wall time per simulated second as the FMU
+drives it (run_to every output interval; best of --repeats runs after a warm-up that loads the
+compiled code), its accepted steps per simulated second, its error against the scipy reference
+(max over the forces, over the force scale) and the seconds it takes to set the stepper up
+(eigenvalues, step bound, the exponential method's modal forms); and how many of the scene's
+contact sets (all points loaded) the exponential method takes exactly.
+
+    python benchmarks/exponential.py                      # every shipped scene, 0.05 s each
+    python benchmarks/exponential.py reference --span 1   # one scene, a simulated second
+
+The reference runs (scipy's DOP853 at --reference-tolerance) are cached on disk as the other
+benchmarks cache them (results/benchmark/reference_cache).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import common  # noqa: E402
+
+METHODS = ("dop853", "exponential")
+
+
+def kernel_run(scene, method, span, output_interval, tolerance, repeats):
+    """The compiled kernel alone, as the FMU drives it (CompiledStepper.run_to to every output
+    time, the torques of the scene's schedule held over each): (seconds to set the stepper
+    up, best wall s per simulated s of the stepping, accepted steps per simulated s, the
+    outputs at the output times after 0)."""
+    import numpy as np
+
+    from herringbone.integrate.compiled_stepper import CompiledStepper
+    from herringbone.integrate.contract import start_position
+    from herringbone.model.assembly import GearTrainModel
+
+    model = GearTrainModel(scene)
+    started = time.perf_counter()
+    stepper = CompiledStepper(model, tolerance, method)
+    setup = time.perf_counter() - started
+    start = start_position(model, scene.inputs.at(0.0)[0])
+    stepper.advance(start, output_interval, scene.inputs.at(0.0))  # load the compiled code
+    count = int(round(span / output_interval))
+    best, samples = math.inf, None
+    for _ in range(repeats):
+        run = stepper.start(start)
+        samples = np.empty((count, len(run.outputs)))
+        steps = stepper.accepted_steps
+        started = time.perf_counter()
+        for k in range(count):
+            stepper.run_to(run, (k + 1) * output_interval, scene.inputs.at(k * output_interval))
+            samples[k] = run.outputs
+        best = min(best, time.perf_counter() - started)
+        steps = stepper.accepted_steps - steps
+    outputs = {name: samples[:, i] for name, i in model.output_layout}
+    return setup, best / span, steps / span, outputs
+
+
+def force_error(outputs, reference, names, scale):
+    """max |x − x_ref| over the forces at the output times after 0, over the force scale."""
+    count = len(outputs[names[0]])
+    return max(float(abs(outputs[name] - reference[name][1:count + 1]).max())
+               for name in names) / scale
+
+
+def exact_sets(scene) -> str:
+    """How many of the scene's contact sets (all points loaded) the exponential method
+    propagates exactly."""
+    from herringbone.integrate.compiled_stepper import CompiledStepper
+    from herringbone.model.assembly import GearTrainModel
+
+    tables = CompiledStepper(GearTrainModel(scene), 1e-7, "exponential").exact_tables
+    return f"{int(tables.valid[:, 0].sum())}/{tables.valid.shape[0]}"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("scenes", nargs="*", default=["models/*.toml"])
+    parser.add_argument("--span", type=float, default=0.05, help="simulated s per scene")
+    parser.add_argument("--output-interval", type=float, default=1e-3)
+    parser.add_argument("--tolerance", type=float, default=1e-7)
+    parser.add_argument("--reference-tolerance", type=float, default=1e-10)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    import herringbone
+
+    print(f"span {args.span:g} s, output every {args.output_interval:g} s, tolerance "
+          f"{args.tolerance:g}; error against scipy's DOP853 at {args.reference_tolerance:g}, "
+          f"over the force scale; wall: the compiled kernel's stepping, best of "
+          f"{args.repeats}; setup: constructing the stepper")
+    header = ["scene", "exact sets"] + [f"{m} {what}" for m in METHODS
+                                        for what in ("s/s", "steps/s", "error", "setup s")]
+    print(" | ".join(header + ["speed-up"]))
+    for path in common.scene_paths(args.scenes):
+        scene = herringbone.load_scene(path)
+        reference = common.cached_reference(path, args.span, args.output_interval,
+                                            args.reference_tolerance, log=lambda text: None)
+        scale = common.force_scale(scene)
+        names = common.force_outputs(scene)
+        row = [path.stem, exact_sets(scene)]
+        walls = {}
+        for method in METHODS:
+            setup, wall, steps, outputs = kernel_run(scene, method, args.span,
+                                                     args.output_interval, args.tolerance,
+                                                     args.repeats)
+            walls[method] = wall
+            row += [f"{wall:.4f}", f"{steps:.3g}",
+                    f"{force_error(outputs, reference, names, scale):.1e}", f"{setup:.3f}"]
+        row.append(f"{walls['dop853'] / walls['exponential']:.1f}x")
+        print(" | ".join(row), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,197 @@
+"""The exponential method (integrate/compiled/exponential.py): its modal form against scipy's
+matrix exponential, which contact sets it takes exactly, agreement with the scipy reference on
+the reference scene and on scenes that lose and regain contact, exact re-runs from a saved
+position, and DOP853's results, bit for bit, where no segment is exact."""
+import numpy as np
+import pytest
+import scipy.linalg
+from helpers import MODELS, force_error
+
+import herringbone
+from herringbone.integrate.compiled import exponential
+from herringbone.integrate.compiled_stepper import CompiledStepper, choose_method
+from herringbone.integrate.contract import simulate_with, start_position
+from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model.assembly import GearTrainModel
+
+REGRESSION = Path(__file__).resolve().parents[1] / "regression"
+
+
+def model_of(name):
+    return GearTrainModel(herringbone.load_scene(MODELS / f"{name}.toml"))
+
+
+def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
+    """Outputs at every communication point, as a co-simulation master would see them."""
+    model = stepper.model
+    position = start_position(model, torques[0])
+    samples = []
+    for k in range(1, int(round(stop_time / communication_step)) + 1):
+        position = stepper.advance(position, k * communication_step, torques)
+        samples.append(model.outputs(position.state, position.segment.contact_set,
+                                     position.segment.loaded))
+    return {name: np.array([s[name] for s in samples]) for name in samples[0]}
+
+
+@pytest.fixture(scope="module")
+def reference_model():
+    return model_of("reference")
+
+
+@pytest.fixture(scope="module")
+def tight_reference(reference_model):
+    """scipy's DOP853 at 1e-12 over 0.02 s (five mesh periods, forty switches)."""
+    return run(ScipyStepper(reference_model, 1e-12), 0.02, 1e-3)
+
+
+def scales_of(model):
+    force = model.force_scale()
+    return np.concatenate([model.state_scales(), [force * model.geometry.radius_pinion,
+                                                  force * model.geometry.radius_wheel, 1.0]])
+
+
+@pytest.mark.parametrize("variant", [exponential.ALL_LOADED, exponential.NONE_LOADED])
+def test_modal_form_is_the_matrix_exponential(reference_model, variant):
+    """R·diag(exp(T_slow·h), e^{Λh})·L·X against scipy's expm of the augmented matrix, at
+    step sizes from a hundredth of the fastest period to a mesh period, in the state's
+    scales: within 1e-9 (measured 1e-12 to 4e-11)."""
+    model = reference_model
+    lengths, counts, tables = model.mesh.period_table()
+    loaded = np.full(counts[0], 1.0 if variant == exponential.ALL_LOADED else 0.0)
+    a, b = exponential.linear_system(model.system, tables[0], counts[0], loaded)
+    right, left, rates, slow = exponential.modal_form(a, b, scales_of(model))
+    size = a.shape[0]
+    augmented = np.zeros((size + 3, size + 3))
+    augmented[:size, :size], augmented[:size, size:] = a, b
+    start = np.concatenate([np.random.default_rng(1).normal(size=size) * model.state_scales(),
+                            [500.0, 1800.0, 1.0]])
+    start[model.pinion], start[size // 2 + model.pinion] = 0.1, 157.0
+    for h in (1e-6, 1e-4, 4e-3):
+        modal = left @ start
+        modal[len(slow):] *= np.exp(rates[len(slow):] * h)
+        modal[:len(slow)] = scipy.linalg.expm(slow * h) @ modal[:len(slow)]
+        exact = scipy.linalg.expm(augmented * h) @ start
+        error = np.abs(((right @ modal).real - exact)[:size] / model.state_scales()).max()
+        assert error <= 1e-9
+
+
+@pytest.mark.parametrize("name, exact", [
+    ("reference", True), ("stiff_bearings", True), ("torsional", True), ("separation", True),
+    # a lever arm that reaches the forces: the halves do not mirror each other (staggered), a
+    # lead error slope (lead_error), edge ramps load a point gradually (low_speed)
+    ("staggered", False), ("lead_error", False), ("low_speed", False)])
+def test_which_contact_sets_are_exact(name, exact):
+    """A set is exact where the loaded points' stiffness and lead error are constant along
+    the face and their lever arms cancel (module docstring); where one is, the frozen linear
+    system's derivative equals the model's at a state where the tilt is zero, whatever the
+    axial travel."""
+    model = model_of(name)
+    stepper = CompiledStepper(model, 1e-7, "exponential")
+    valid = stepper.exact_tables.valid[:, exponential.ALL_LOADED]
+    assert bool(valid.all()) is exact
+    if not exact:
+        return
+    lengths, counts, tables = model.mesh.period_table()
+    position = start_position(model, 500.0)
+    state = position.state.copy()
+    for interval in range(len(lengths)):
+        loaded = np.ones(counts[interval])
+        a, b = exponential.linear_system(model.system, tables[interval], counts[interval],
+                                         loaded)
+        for travel_angle in (0.0, 0.5 * lengths[interval], lengths[interval]):
+            state[model.pinion] = travel_angle
+            contact_set = model.mesh.contact_set(0, interval)
+            true = model.derivative(state, contact_set, loaded, 500.0, 1800.0)
+            frozen = a @ state + b @ [500.0, 1800.0, 1.0]
+            assert np.abs((frozen - true) / model.state_scales()).max() <= 1e-9 * np.abs(
+                true / model.state_scales()).max()
+
+
+def test_agrees_with_the_reference(reference_model, tight_reference):
+    """Within 1e-7 of the force scale of scipy's DOP853 at 1e-12 over forty switches, with the
+    same contact counts."""
+    fast = run(CompiledStepper(reference_model, 1e-7, "exponential"), 0.02, 1e-3)
+    assert force_error(fast, tight_reference, reference_model) <= 1e-7
+    assert np.array_equal(fast["n_contacts"], tight_reference["n_contacts"])
+
+
+def test_accuracy_across_switches_is_set_by_the_event_time_tolerance(reference_model,
+                                                                     tight_reference):
+    """Between switches the method is exact, so its error is where it places the switches:
+    first order in the event time tolerance δt (a switch δt late leaves about |λ|max·δt of
+    the force that switched), down to the reference's own error at the default (1e-2 of the
+    step tolerance over |λ|max, 1.2e-14 s here). Measured over forty switches: 7.8e-6,
+    1.2e-7, 7.8e-10 at δt = 1e-9, 1e-11, 1e-13 s; 1.3e-10 at the default."""
+    errors = [force_error(run(CompiledStepper(reference_model, 1e-7, "exponential",
+                                              event_time_tolerance=tolerance), 0.02, 1e-3),
+                          tight_reference, reference_model)
+              for tolerance in (1e-9, 1e-11, 1e-13)]
+    assert errors[0] > 20.0 * errors[1] > 400.0 * errors[2]
+    default = run(CompiledStepper(reference_model, 1e-7, "exponential"), 0.02, 1e-3)
+    assert force_error(default, tight_reference, reference_model) <= 1e-9
+
+
+@pytest.mark.parametrize("source", ["models:separation", "models:from_rest",
+                                    "regression:regain_after_separation"])
+def test_contact_loss_scenes_agree_with_the_reference(source):
+    """Scenes where the whole train lifts off and lands again (its points all at once: no
+    lead error), with the debug contact check on: within 1e-6 of the force scale of the
+    reference at 1e-12, the same contact counts."""
+    folder, name = source.split(":")
+    scene = herringbone.load_scene((MODELS if folder == "models" else REGRESSION)
+                                   / f"{name}.toml")
+    model = GearTrainModel(scene)
+    stop_time = min(scene.experiment.stop_time, 0.02)
+    reference = herringbone.reference_simulate(scene, stop_time=stop_time, tolerance=1e-12)
+    stepper = CompiledStepper(model, 1e-7, "exponential", check_contact=True)
+    fast = simulate_with(stepper, scene, stop_time=stop_time)
+    assert force_error(fast, reference, model) <= 1e-6
+    assert np.array_equal(fast["n_contacts"], reference["n_contacts"])
+
+
+def test_a_saved_position_reruns_identically(reference_model):
+    """The FMU's rollback: a run from a saved position repeats the run that went on from it,
+    bit for bit (nothing of the run lives outside its position)."""
+    stepper = CompiledStepper(reference_model, 1e-7, "exponential")
+    saved = stepper.advance(start_position(reference_model, 500.0), 0.0037, (500.0, 1800.0))
+    first = stepper.advance(saved, 0.0091, (500.0, 1800.0))
+    again = stepper.advance(saved, 0.0091, (500.0, 1800.0))
+    assert np.array_equal(first.state, again.state)
+    assert first.segment.contact_set.index == again.segment.contact_set.index
+
+
+def test_without_an_exact_segment_it_is_dop853_bit_for_bit():
+    """On a scene none of whose sets is exact (staggered halves) every segment is stepped by
+    DOP853, with DOP853's bound and controller: the same results to the last bit."""
+    model = model_of("staggered")
+    runs = [run(CompiledStepper(model, 1e-7, method), 0.005, 1e-3)
+            for method in ("dop853", "exponential")]
+    assert all(np.array_equal(runs[0][name], runs[1][name]) for name in runs[0])
+
+
+def test_auto_takes_it_where_enough_sets_are_exact():
+    """auto: the exponential method where the scene's contact sets are all exact, or half of
+    them (low_speed: its edge ramps vary the sets where a point enters or leaves) and DOP853
+    would be taken; DOP853 or Radau IIA by their rule where fewer are (staggered: a quarter)."""
+    assert choose_method(model_of("reference")) == "exponential"
+    assert choose_method(model_of("stiff_bearings")) == "exponential"
+    assert choose_method(model_of("low_speed")) == "exponential"
+    assert choose_method(model_of("staggered")) == "dop853"
+
+
+def test_overdamped_stiff_modes_cost_it_nothing(reference_model):
+    """Bearings of 1e11 N/m with 2e5 N·s/m of damping under light bodies: eigenvalues up to
+    ~2e7 1/s, for which DOP853 needs thousands of steps a millisecond for stability alone and
+    Radau IIA hundreds for accuracy. The exponential method takes them exactly: it agrees
+    with DOP853 at 1e-11 and takes fewer steps than Radau IIA."""
+    scene = reference_model.scene.with_parameters(
+        **{f"c_brg_{g}_{s}": 1e11 for g in ("pinion", "wheel") for s in ("left", "right")},
+        **{f"h_brg_{g}_{s}": 2e5 for g in ("pinion", "wheel") for s in ("left", "right")},
+        m_pinion=0.0929436, m_wheel=1.20455, I_pinion=2.18927e-5, I_wheel=0.00367713)
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, 1e-7, "exponential")
+    implicit = CompiledStepper(model, 1e-7, "radau")
+    truth = run(CompiledStepper(model, 1e-11, "dop853"), 1e-3, 1e-4)
+    assert force_error(run(stepper, 1e-3, 1e-4), truth, model) <= 1e-6
+    run(implicit, 1e-3, 1e-4)
+    assert stepper.accepted_steps < implicit.accepted_steps
