@@ -5,7 +5,7 @@ position, and DOP853's results, bit for bit, where no segment is exact."""
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import MODELS, force_error
+from helpers import MODELS, REGRESSION, force_error
 
 import herringbone
 from herringbone.integrate.compiled import exponential
@@ -13,8 +13,6 @@ from herringbone.integrate.compiled_stepper import CompiledStepper, choose_metho
 from herringbone.integrate.contract import simulate_with, start_position
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
-
-REGRESSION = Path(__file__).resolve().parents[1] / "regression"
 
 
 def model_of(name):
