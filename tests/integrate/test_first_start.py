@@ -61,8 +61,9 @@ print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder
 
 
 def test_a_scene_compiles_the_code_of_its_own_method_only(tmp_path):
-    """The reference scene runs DOP853 (as "auto" picks): Radau IIA's kernels are not compiled,
-    which shortens a cold compile by a quarter (README, First start)."""
+    """The reference scene runs the exponential method (as "auto" picks), whose loop holds
+    DOP853 for the segments it cannot take exactly: Radau IIA's kernels are not compiled, which
+    shortens a cold compile by a quarter (docs/integrator.md, First start)."""
     environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
     run = subprocess.run([sys.executable, "-c", COMPILE_FOR_SCENE,
                           str(MODELS / "reference.toml")],

@@ -89,9 +89,11 @@ SOLVER_SETTINGS = {
         allowed=FMU_MAX_STEP.allowed),
     "solver_method": Parameter(
         "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
-        "'radau' (implicit, L-stable, order 5, for stiff scenes) or 'auto' (radau when the "
-        f"fastest eigenvalue is over {STIFFNESS_RATIO:g} times the fastest oscillation: "
-        "overdamped stiffness)", kind=str),
+        "'radau' (implicit, L-stable, order 5, for stiff scenes), 'exponential' (time-invariant "
+        "segments propagated exactly, the others by dop853) or 'auto' (exponential where every "
+        "contact set, or at least half where dop853 would run, is time-invariant; else radau "
+        f"when the fastest eigenvalue is over {STIFFNESS_RATIO:g} times the fastest "
+        "oscillation, dop853 otherwise)", kind=str),
 }
 KINDS = {bool: "boolean", int: "integer", str: "string", float: "real"}
 CONVERT = {"real": float, "integer": int, "boolean": bool, "string": str}
