@@ -43,3 +43,18 @@ def force_errors(a, b, scene) -> dict[str, float]:
 def force_error(a, b, scene) -> float:
     """The standard measure of two runs' disagreement: the largest of `force_errors`."""
     return max(force_errors(a, b, scene).values())
+
+
+def communication_run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
+    """A stepper's outputs at every communication point from the start position of the motor
+    torque, as a co-simulation master would see them ({output name: samples})."""
+    from herringbone.integrate.contract import start_position
+
+    model = stepper.model
+    position = start_position(model, torques[0])
+    samples = []
+    for k in range(1, int(round(stop_time / communication_step)) + 1):
+        position = stepper.advance(position, k * communication_step, torques)
+        samples.append(model.outputs(position.state, position.segment.contact_set,
+                                     position.segment.loaded))
+    return {name: np.array([s[name] for s in samples]) for name in samples[0]}

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from helpers import MODELS, REGRESSION, force_error
+from helpers import communication_run as run
 
 import herringbone
 from herringbone.integrate.compiled import exponential
@@ -18,17 +19,6 @@ from herringbone.model.assembly import GearTrainModel
 def model_of(name):
     return GearTrainModel(herringbone.load_scene(MODELS / f"{name}.toml"))
 
-
-def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
-    """Outputs at every communication point, as a co-simulation master would see them."""
-    model = stepper.model
-    position = start_position(model, torques[0])
-    samples = []
-    for k in range(1, int(round(stop_time / communication_step)) + 1):
-        position = stepper.advance(position, k * communication_step, torques)
-        samples.append(model.outputs(position.state, position.segment.contact_set,
-                                     position.segment.loaded))
-    return {name: np.array([s[name] for s in samples]) for name in samples[0]}
 
 
 @pytest.fixture(scope="module")

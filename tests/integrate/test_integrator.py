@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from helpers import MODELS, REGRESSION, force_error
+from helpers import communication_run as run
 
 import herringbone
 from herringbone.integrate.compiled_stepper import (
@@ -16,18 +17,6 @@ from herringbone.integrate.compiled_stepper import (
 from herringbone.integrate.contract import simulate_with, start_position
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
-
-
-def run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
-    """Outputs at every communication point, as a co-simulation master would see them."""
-    model = stepper.model
-    position = start_position(model, torques[0])
-    samples = []
-    for k in range(1, int(round(stop_time / communication_step)) + 1):
-        position = stepper.advance(position, k * communication_step, torques)
-        samples.append(model.outputs(position.state, position.segment.contact_set,
-                                     position.segment.loaded))
-    return {name: np.array([s[name] for s in samples]) for name in samples[0]}
 
 
 @pytest.fixture(scope="module")
