@@ -110,7 +110,15 @@ def commands(document: Path) -> list[tuple[list[str], list[str]]]:
     """(argv, the lines shown after it) for each command of the document's code blocks and
     running text; the lines shown only where the command follows a `$ ` prompt."""
     text = document.read_text(encoding="utf-8")
-    found = [(shlex.split(span, comments=True), []) for span in INLINE.findall(text)]
+
+    def split(command: str) -> list[str]:
+        try:
+            return shlex.split(command, comments=True)
+        except ValueError as error:  # name the culprit: this runs while pytest collects
+            raise ValueError(f"{document.name}: {command!r}: {error} (a shell command "
+                             "here; put prose and output in a text block)") from None
+
+    found = [(split(span), []) for span in INLINE.findall(text)]
     for block in code_blocks(text):
         joined: list[str] = []
         for line in block:
@@ -128,7 +136,7 @@ def commands(document: Path) -> list[tuple[list[str], list[str]]]:
                 ends = [i for i, next_line in enumerate(following) if next_line.startswith("$ ")]
                 shown = following[:ends[0] if ends else len(following)]
             for part in line.removeprefix("$ ").split("&&"):
-                argv = shlex.split(part, comments=True)
+                argv = split(part)
                 if argv:
                     found.append((argv, shown))
     return found
