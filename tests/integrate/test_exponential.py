@@ -183,3 +183,12 @@ def test_overdamped_stiff_modes_cost_it_nothing(reference_model):
     assert force_error(run(stepper, 1e-3, 1e-4), truth, model) <= 1e-6
     run(implicit, 1e-3, 1e-4)
     assert stepper.accepted_steps < implicit.accepted_steps
+
+
+def test_a_scene_without_a_modal_form_runs_by_runge_kutta_under_auto_and_refuses_exponential():
+    """The gear pair alone (jump_resonance) with its points unloaded is two free bodies: no
+    modal form. "auto" takes DOP853 or Radau IIA instead; "exponential" is refused by name."""
+    model = GearTrainModel(herringbone.load_scene(MODELS / "jump_resonance.toml"))
+    assert CompiledStepper(model, 1e-7).method in ("dop853", "radau")
+    with pytest.raises(ValueError, match="method 'exponential' cannot take this scene"):
+        CompiledStepper(model, 1e-7, method="exponential")

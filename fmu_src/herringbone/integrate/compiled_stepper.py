@@ -227,6 +227,10 @@ class CompiledStepper:
         self.tolerance = float(tolerance)
         modes = eigenvalues(model)
         self.method = choose_method(model, method, modes)
+        exact_tables = None
+        if self.method == "exponential":
+            exact_tables = self._exact_tables(model, method, modes,
+                                              self.tolerance * ringing_factor(modes))
         self.method_code = {"radau": walk.Method.IMPLICIT, "dop853": walk.Method.EXPLICIT,
                             "exponential": walk.Method.EXPONENTIAL}[self.method]
         fastest = np.abs(modes).max()  # |λ|max, 1/s
@@ -253,15 +257,28 @@ class CompiledStepper:
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
                                            self.event_time_tolerance, self.contact_slack,
                                            self.absolute_tolerance, float(max_step))
-        force = model.force_scale()
-        torque_scales = (force * model.geometry.radius_pinion, force * model.geometry.radius_wheel)
-        self.exact_tables = (exponential.build_tables(model.system, self.mesh,
-                                                      model.state_scales(), torque_scales,
-                                                      self.step_tolerance)
-                             if self.method_code == walk.Method.EXPONENTIAL else None)
+        self.exact_tables = exact_tables
         self.exact_buffers = (exponential.pack_tables(self.exact_tables)
                               if self.exact_tables is not None else None)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
+
+    def _exact_tables(self, model, method, modes, step_tolerance):
+        """The exponential method's modal forms of every contact set; where a set's linear
+        system has no such form (a defective one: the gear pair alone with its points
+        unloaded has two free bodies), "auto" takes `runge_kutta_method`'s choice instead and
+        an explicit "exponential" is refused (ValueError)."""
+        force = model.force_scale()
+        torque_scales = (force * model.geometry.radius_pinion, force * model.geometry.radius_wheel)
+        try:
+            return exponential.build_tables(model.system, model.mesh.period_table(),
+                                            model.state_scales(), torque_scales, step_tolerance)
+        except np.linalg.LinAlgError as error:
+            if method == "exponential":
+                raise ValueError(f"method 'exponential' cannot take this scene: a contact set's "
+                                 f"linear system has no modal form ({error}); allowed: "
+                                 "'auto', 'dop853' or 'radau'") from None
+            self.method = runge_kutta_method(modes)
+            return None
 
     def start(self, position: Position) -> Run:
         """A run from a position (which it does not change)."""
