@@ -181,6 +181,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     """
     if method not in (None, *METHODS):
         raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
+    require("pandas", "a sweep's table")  # before any work, whichever method runs
     why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
     if method == "shooting" and why_not:
         raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "

@@ -156,7 +156,12 @@ def _method(parser, args, scene, speeds, params) -> str:
     if args.method == "shooting" and why_not:
         fail(parser, f"--method shooting: this sweep cannot be run so: {why_not}; allowed: "
                      "--method time")
-    method = args.method or ("time" if why_not else "shooting")
+    # Dask's workers run time sweeps: asking for them asks for the time method
+    distributed = args.workers is not None or args.scheduler is not None
+    if args.method == "shooting" and distributed:
+        fail(parser, "--workers/--scheduler: allowed: only with --method time (shooting runs "
+                     "here, in milliseconds a point)")
+    method = args.method or ("time" if why_not or distributed else "shooting")
     if args.time_sweeps and method != "shooting":
         fail(parser, "--time-sweeps: allowed: only with a sweep by --method shooting "
                      f"(this one runs by time{': ' + why_not if why_not else ''})")
