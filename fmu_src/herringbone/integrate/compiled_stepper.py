@@ -182,6 +182,11 @@ FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing con
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 
 
+# how far past its contact interval (a fraction of its length) a run's pinion may end: the
+# event rules place it within 1e-12 of a pitch
+PHASE_SLACK = 1e-6
+
+
 class StepBudgetExceeded(IntegrationError):
     """run_to took its `max_steps` steps without reaching its end (the run stays usable)."""
 
@@ -325,6 +330,13 @@ class CompiledStepper:
         if status != walk.Status.OK:
             raise IntegrationError(f"integration failed at t = {run.time:.9g} s: "
                                    f"{FAILURES[status]}")
+        # every method ends within its contact interval; a state past it (one so large that
+        # its rounding hides the phase events: a torque of 1e300 N·m) is no result to return
+        length = self.lengths[int(run.place[0])]
+        if not -PHASE_SLACK * length <= run.state[self.model.pinion] <= (1 + PHASE_SLACK) * length:
+            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: the pinion "
+                                   "left its contact interval unseen (the state is beyond the "
+                                   "integrator's resolution)")
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
