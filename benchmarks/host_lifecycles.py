@@ -25,7 +25,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-C_HOST = ROOT / "tests" / "c_host"
+C_HOST = ROOT / "tests" / "fmu" / "c_host"
 STOP, STEP = 0.005, 1e-3
 
 # Shared prologue of the Python cases: the FMUs' paths (argv[1], JSON) and a stepping helper.
