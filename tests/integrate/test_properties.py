@@ -48,9 +48,6 @@ DISAGREEMENTS = {
                         "reference of the previous release by more than the force scale, and "
                         "the compiled run lies 2 force scales from it (docs/reference-accuracy.md)",
 }
-DRAW_FAILS = pytest.mark.xfail(strict=True, reason="the CI draw holds found_6be024234d or "
-                               f"found_4c2831d756: {DISAGREEMENTS['found_6be024234d']}; "
-                               f"{DISAGREEMENTS['found_4c2831d756']}")
 
 
 def regression_cases():
@@ -67,7 +64,6 @@ def check_tight(scene):
 
 
 # about 0.5 s a scene on one core (at most ~2 s): the two CI tests take about a minute
-@DRAW_FAILS
 @settings(CI, max_examples=40)
 @given(scenes())
 def test_random_scene_at_the_default_tolerance(scene):
