@@ -232,18 +232,17 @@ class CompiledStepper:
         self.tolerance = float(tolerance)
         modes = eigenvalues(model)
         self.method = choose_method(model, method, modes)
+        # the tolerance each step is held to: tighter where lightly damped modes ring on
+        self.step_tolerance = self.tolerance * ringing_factor(modes)
         exact_tables = None
         if self.method == "exponential":
-            exact_tables = self._exact_tables(model, method, modes,
-                                              self.tolerance * ringing_factor(modes))
+            exact_tables = self._exact_tables(model, method, modes, self.step_tolerance)
         self.method_code = {"radau": walk.Method.IMPLICIT, "dop853": walk.Method.EXPLICIT,
                             "exponential": walk.Method.EXPONENTIAL}[self.method]
         fastest = np.abs(modes).max()  # |λ|max, 1/s
         self.fastest_rate = float(fastest)
         # a tenth of the fastest time scale: the controller adjusts it within a few steps
         self.first_step = 0.1 / fastest
-        # the tolerance each step is held to: tighter where lightly damped modes ring on
-        self.step_tolerance = self.tolerance * ringing_factor(modes)
         self.absolute_tolerance = self.step_tolerance * model.state_scales()
         self.max_step = float(max_step)
         # (the exponential method steps its segments that are not exact by DOP853)
