@@ -25,25 +25,15 @@ while it is loaded and +approach while it is not.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 
 from ..model.assembly import GearTrainModel
 from ..model.mesh import ContactSet
 from .compiled import equations
+from .compiled.equations import Event
 
-
-class Event(IntEnum):
-    """The numbers of a segment's events, the rows of `event_values` (the compiled walk,
-    integrate/compiled/walk.py, numbers its events the same way)."""
-
-    PHASE_END = 0  # φp reaches the end of the contact set's interval: the next set follows
-    PHASE_START = 1  # φp falls back to the interval's start: the previous set follows
-    FIRST_POINT = 2  # point i's approach δ + η·δ̇ crosses zero: event FIRST_POINT + i
-
-
-PHASE_END, PHASE_START, FIRST_POINT = Event.PHASE_END, Event.PHASE_START, Event.FIRST_POINT
+PHASE_END, PHASE_START, CONTACT = Event.PHASE_END, Event.PHASE_START, Event.CONTACT
 # An approach within this fraction of the force scale's approach of one point (force scale /
 # c_point) is at rounding level: a located crossing leaves about |rate|·(time's rounding), some
 # 1e-19 m on the shipped scenes, against a band of 1e-14 m; a point in the band carries at most
@@ -154,20 +144,20 @@ def event_values(model: GearTrainModel, segment: Segment, states: np.ndarray) ->
     """h of every event (rows) at every state (columns of `states`, one state a column)."""
     contact_set = segment.contact_set
     phase = states[model.pinion]
-    values = np.empty((FIRST_POINT + (len(contact_set) if model.contact_loss else 0),
+    values = np.empty((CONTACT + (len(contact_set) if model.contact_loss else 0),
                        states.shape[1]))
     values[PHASE_END] = phase - contact_set.length
     values[PHASE_START] = -phase
     if model.contact_loss:
         signs = 1.0 - 2.0 * segment.loaded  # loaded: watch −approach rise through zero
-        values[FIRST_POINT:] = signs[:, None] * model.point_approaches(states, contact_set)
+        values[CONTACT:] = signs[:, None] * model.point_approaches(states, contact_set)
     return values
 
 
 def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray,
           torques: tuple[float, float]) -> tuple[Segment, np.ndarray]:
     """The segment that follows event number `event` (an `Event`: PHASE_END, PHASE_START or
-    FIRST_POINT + point) at `state`, and the state re-expressed for it: a phase event moves to
+    CONTACT + point) at `state`, and the state re-expressed for it: a phase event moves to
     the neighbouring set; then every point's flag is decided afresh (`begin`)."""
     state = state.copy()
     contact_set = segment.contact_set

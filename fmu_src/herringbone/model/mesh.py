@@ -109,7 +109,7 @@ class Mesh:
         self.lead_error = {"left": parameters["dbeta_left"], "right": parameters["dbeta_right"]}
         self.switch_phases = self._switch_phases()
         self._sets_of_first_period: dict[int, ContactSet] = {}  # shared: never written to
-        self._period_table = None
+        self._period_table: equations.PeriodTable | None = None
 
     def _switch_phases(self) -> np.ndarray:
         p_x = self.geometry.axial_pitch
@@ -198,7 +198,7 @@ class Mesh:
                           pinion_angle=(cycle + start) * g.angular_pitch,
                           length=(end - start) * g.angular_pitch, table=table)
 
-    def period_table(self):
+    def period_table(self) -> equations.PeriodTable:
         """Every contact set of one mesh period, for the compiled kernels (the sets of other
         periods differ only in where they start): the intervals' lengths, their numbers of
         points, and their point tables stacked, padded with zero columns to the longest.
@@ -209,5 +209,6 @@ class Mesh:
             tables = np.zeros((len(sets), equations.POINT_FIELDS, max(1, counts.max())))
             for i, contact_set in enumerate(sets):
                 tables[i, :, :counts[i]] = contact_set.table
-            self._period_table = np.array([s.length for s in sets]), counts, tables
+            self._period_table = equations.PeriodTable(np.array([s.length for s in sets]),
+                                                       counts, tables)
         return self._period_table

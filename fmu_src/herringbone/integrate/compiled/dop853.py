@@ -69,65 +69,87 @@ def stability_function(z: ArrayLike) -> np.ndarray:
 # Dask workers, which load it, against the same sweep in the process that compiled it).
 # Without, every start of every host computes the same bits; the cost was within the noise.
 @njit(cache=True, error_model="numpy")
-def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
-         absolute_tolerance, relative_tolerance, stages, trial, new_state):
+def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance, stages, trial,
+         new_state):
     """One DOP853 step of size h (s) from `state`, whose derivative is `rate`: see the module's
-    docstring for the contract. The segment is (system, points, count, loaded, motor_torque,
-    load_torque) as equations.derivative takes it; `absolute_tolerance` is per entry of the
-    state (its units), `relative_tolerance` a number. Work arrays: `stages`, STAGE_ROWS rows
-    of the state's size (row k the stage k + 1 derivative, row N_STAGES the new state's),
-    and `trial`, one state. Returns the error norm (≤ 1: acceptable)."""
-    size = state.shape[0]
-    k1, k2, k3, k4, k5, k6 = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5]
-    k7, k8, k9, k10, k11, k12 = stages[6], stages[7], stages[8], stages[9], stages[10], stages[11]
-    k1[:] = rate
+    docstring for the contract.
+
+    `segment` holds the equations (walk.CompiledSegment: its points, point_count, loaded,
+    motor_torque and load_torque, as equations.derivative takes them); `absolute_tolerance`
+    is per entry of the state (its units), `relative_tolerance` a number. Work arrays:
+    `stages`, STAGE_ROWS rows of the state's size (row k the stage k + 1 derivative, row
+    N_STAGES the new state's), and `trial`, one state. Returns the error norm (≤ 1:
+    acceptable)."""
+    stages[0, :] = rate
     # one call site of the (inlined) derivative: thirteen copies would crowd the code cache
     for stage in range(1, N_STAGES):
-        if stage == 1:
-            for j in range(size):
-                trial[j] = state[j] + h * A21 * k1[j]
-        elif stage == 2:
-            for j in range(size):
-                trial[j] = state[j] + h * (A31 * k1[j] + A32 * k2[j])
-        elif stage == 3:
-            for j in range(size):
-                trial[j] = state[j] + h * (A41 * k1[j] + A43 * k3[j])
-        elif stage == 4:
-            for j in range(size):
-                trial[j] = state[j] + h * (A51 * k1[j] + A53 * k3[j] + A54 * k4[j])
-        elif stage == 5:
-            for j in range(size):
-                trial[j] = state[j] + h * (A61 * k1[j] + A64 * k4[j] + A65 * k5[j])
-        elif stage == 6:
-            for j in range(size):
-                trial[j] = state[j] + h * (A71 * k1[j] + A74 * k4[j] + A75 * k5[j]
-                                           + A76 * k6[j])
-        elif stage == 7:
-            for j in range(size):
-                trial[j] = state[j] + h * (A81 * k1[j] + A84 * k4[j] + A85 * k5[j]
-                                           + A86 * k6[j] + A87 * k7[j])
-        elif stage == 8:
-            for j in range(size):
-                trial[j] = state[j] + h * (A91 * k1[j] + A94 * k4[j] + A95 * k5[j]
-                                           + A96 * k6[j] + A97 * k7[j] + A98 * k8[j])
-        elif stage == 9:
-            for j in range(size):
-                trial[j] = state[j] + h * (A101 * k1[j] + A104 * k4[j] + A105 * k5[j]
-                                           + A106 * k6[j] + A107 * k7[j] + A108 * k8[j]
-                                           + A109 * k9[j])
-        elif stage == 10:
-            for j in range(size):
-                trial[j] = state[j] + h * (A111 * k1[j] + A114 * k4[j] + A115 * k5[j]
-                                           + A116 * k6[j] + A117 * k7[j] + A118 * k8[j]
-                                           + A119 * k9[j] + A1110 * k10[j])
-        else:
-            for j in range(size):
-                trial[j] = state[j] + h * (A121 * k1[j] + A124 * k4[j] + A125 * k5[j]
-                                           + A126 * k6[j] + A127 * k7[j] + A128 * k8[j]
-                                           + A129 * k9[j] + A1210 * k10[j] + A1211 * k11[j])
-        derivative(system, points, count, loaded, motor_torque, load_torque, trial,
-                   stages[stage])
-    # the solution, and the 5th- and 3rd-order error estimates scaled entry by entry
+        _stage_state(stage, state, h, stages, trial)
+        derivative(system, segment.points, segment.point_count, segment.loaded,
+                   segment.motor_torque, segment.load_torque, trial, stages[stage])
+    error = _solution_and_error(state, h, stages, absolute_tolerance, relative_tolerance,
+                                new_state)
+    derivative(system, segment.points, segment.point_count, segment.loaded,
+               segment.motor_torque, segment.load_torque, new_state, stages[N_STAGES])
+    return error
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _stage_state(stage, state, h, stages, trial):
+    """The state stage number `stage` (1 to N_STAGES − 1) evaluates the derivative at, into
+    `trial`: y + h·Σ a_ij·k_j over the stages before it (k_j: row j − 1 of `stages`)."""
+    size = state.shape[0]
+    k = stages  # indexed k[row, j]: a view of a row per stage would be counted, 121 a step
+    if stage == 1:
+        for j in range(size):
+            trial[j] = state[j] + h * A21 * k[0, j]
+    elif stage == 2:
+        for j in range(size):
+            trial[j] = state[j] + h * (A31 * k[0, j] + A32 * k[1, j])
+    elif stage == 3:
+        for j in range(size):
+            trial[j] = state[j] + h * (A41 * k[0, j] + A43 * k[2, j])
+    elif stage == 4:
+        for j in range(size):
+            trial[j] = state[j] + h * (A51 * k[0, j] + A53 * k[2, j] + A54 * k[3, j])
+    elif stage == 5:
+        for j in range(size):
+            trial[j] = state[j] + h * (A61 * k[0, j] + A64 * k[3, j] + A65 * k[4, j])
+    elif stage == 6:
+        for j in range(size):
+            trial[j] = state[j] + h * (A71 * k[0, j] + A74 * k[3, j] + A75 * k[4, j]
+                                       + A76 * k[5, j])
+    elif stage == 7:
+        for j in range(size):
+            trial[j] = state[j] + h * (A81 * k[0, j] + A84 * k[3, j] + A85 * k[4, j]
+                                       + A86 * k[5, j] + A87 * k[6, j])
+    elif stage == 8:
+        for j in range(size):
+            trial[j] = state[j] + h * (A91 * k[0, j] + A94 * k[3, j] + A95 * k[4, j]
+                                       + A96 * k[5, j] + A97 * k[6, j] + A98 * k[7, j])
+    elif stage == 9:
+        for j in range(size):
+            trial[j] = state[j] + h * (A101 * k[0, j] + A104 * k[3, j] + A105 * k[4, j]
+                                       + A106 * k[5, j] + A107 * k[6, j] + A108 * k[7, j]
+                                       + A109 * k[8, j])
+    elif stage == 10:
+        for j in range(size):
+            trial[j] = state[j] + h * (A111 * k[0, j] + A114 * k[3, j] + A115 * k[4, j]
+                                       + A116 * k[5, j] + A117 * k[6, j] + A118 * k[7, j]
+                                       + A119 * k[8, j] + A1110 * k[9, j])
+    else:
+        for j in range(size):
+            trial[j] = state[j] + h * (A121 * k[0, j] + A124 * k[3, j] + A125 * k[4, j]
+                                       + A126 * k[5, j] + A127 * k[6, j] + A128 * k[7, j]
+                                       + A129 * k[8, j] + A1210 * k[9, j] + A1211 * k[10, j])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _solution_and_error(state, h, stages, absolute_tolerance, relative_tolerance, new_state):
+    """The 8th-order solution into `new_state`, and the error norm: the 5th- and 3rd-order
+    estimates scaled entry by entry and combined as Hairer's code does."""
+    size = state.shape[0]
+    k1, k6, k7, k8 = stages[0], stages[5], stages[6], stages[7]
+    k9, k10, k11, k12 = stages[8], stages[9], stages[10], stages[11]
     error5 = error3 = 0.0
     for j in range(size):
         new_state[j] = state[j] + h * (B1 * k1[j] + B6 * k6[j] + B7 * k7[j] + B8 * k8[j]
@@ -140,8 +162,6 @@ def step(system, points, count, loaded, motor_torque, load_torque, state, rate, 
                                * max(abs(state[j]), abs(new_state[j])))
         error5 += (estimate5 * inverse_scale) ** 2
         error3 += (estimate3 * inverse_scale) ** 2
-    derivative(system, points, count, loaded, motor_torque, load_torque, new_state,
-               stages[N_STAGES])
     if error5 == 0.0 and error3 == 0.0:
         return 0.0
     return abs(h) * error5 / math.sqrt((error5 + 0.01 * error3) * size)

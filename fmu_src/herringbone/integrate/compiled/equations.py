@@ -18,6 +18,7 @@ segment, 0.0 where not (walk.py decides).
 """
 from __future__ import annotations
 
+from enum import IntEnum
 from typing import Annotated, NamedTuple, get_origin, get_type_hints
 
 import numpy as np
@@ -34,6 +35,25 @@ POINT_FIELDS = 7
 K_MESH, K_MESH_LEFT, K_MESH_RIGHT, F_MESH, F_MESH_LEFT, F_MESH_RIGHT, N_CONTACTS, DTE \
     = range(8)
 FIRST_ELEMENT_FORCE = 8
+
+
+class Event(IntEnum):
+    """The events that end a segment, numbered alike by both integrators (each locates them by
+    its own rule: integrate/segments.py for the reference, compiled/walk.py for the FMU's)."""
+
+    PHASE_END = 0  # φp reaches the end of the contact set's interval: the next set follows
+    PHASE_START = 1  # φp falls back to the interval's start: the previous set follows
+    CONTACT = 2  # CONTACT + i: point i's approach δ + η·δ̇ crosses zero (with contact loss)
+
+
+class PeriodTable(NamedTuple):
+    """Every contact set of one mesh period, as the compiled kernels take them
+    (model/mesh.py's `period_table`): the sets of other periods differ only in where they
+    start."""
+
+    lengths: np.ndarray  # per contact interval: its length in φp, rad
+    counts: np.ndarray  # per interval: its number of points
+    tables: np.ndarray  # per interval: its point table, padded with zero columns to the widest
 
 
 class Packed(NamedTuple):

@@ -17,6 +17,7 @@ converges in one or two iterations on a Jacobian taken at the segment's start.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -73,49 +74,60 @@ def lu_solve(matrix, pivots, vector):
 
 
 @njit(cache=True, error_model="numpy")
-def jacobian_of(system, points, count, loaded, motor_torque, load_torque, state, rate,
-                scale, jacobian, trial, column):
-    """The Jacobian ∂(derivative)/∂(state) of the segment at `state` (whose derivative is
-    `rate`) into `jacobian`, by forward differences of size 1e-7·max(|state_k|, scale_k) per
-    column k (`scale`: the state's typical magnitude per entry, in its units); exact but for
-    rounding in every entry the equations are linear in. Work arrays: `trial` and `column`,
-    one state each."""
+def jacobian_of(system, segment, state, rate, scale, jacobian, trial, column):
+    """The Jacobian ∂(derivative)/∂(state) of the segment (its equations as `step` takes them)
+    at `state` (whose derivative is `rate`) into `jacobian`, by forward differences of size
+    1e-7·max(|state_k|, scale_k) per column k (`scale`: the state's typical magnitude per
+    entry, in its units); exact but for rounding in every entry the equations are linear in.
+    Work arrays: `trial` and `column`, one state each."""
     size = state.shape[0]
     for k in range(size):
         trial[:] = state
         delta = 1e-7 * max(abs(state[k]), scale[k])
         trial[k] += delta
-        derivative(system, points, count, loaded, motor_torque, load_torque, trial, column)
+        derivative(system, segment.points, segment.point_count, segment.loaded,
+                   segment.motor_torque, segment.load_torque, trial, column)
         for i in range(size):
             jacobian[i, k] = (column[i] - rate[i]) / delta
 
 
+class Factors(NamedTuple):
+    """The LU factors `step` solves with, as lu_factor leaves them (`factorize` makes them for
+    one step size)."""
+
+    real: np.ndarray  # of MU_REAL/h·I − J
+    real_pivots: np.ndarray
+    complex: np.ndarray  # of MU_COMPLEX/h·I − J (complex128)
+    complex_pivots: np.ndarray
+
+
 @njit(cache=True, error_model="numpy")
-def factorize(jacobian, h, real, real_pivots, complex_, complex_pivots):
-    """The LU factors `step` takes for step size h (s): (MU_REAL/h·I − J) into `real` and
-    `real_pivots`, (MU_COMPLEX/h·I − J) into `complex_` (complex128) and `complex_pivots`,
-    each as lu_factor leaves them. `jacobian` is not changed."""
+def factorize(jacobian, h, factors):
+    """The LU factors `step` takes for step size h (s) into `factors` (a Factors record):
+    (MU_REAL/h·I − J) and (MU_COMPLEX/h·I − J). `jacobian` is not changed."""
     size = jacobian.shape[0]
+    real, complex_ = factors.real, factors.complex
     for i in range(size):
         for k in range(size):
             real[i, k] = -jacobian[i, k]
             complex_[i, k] = -jacobian[i, k]
         real[i, i] += MU_REAL / h
         complex_[i, i] += MU_COMPLEX / h
-    lu_factor(real, real_pivots)
-    lu_factor(complex_, complex_pivots)
+    lu_factor(real, factors.real_pivots)
+    lu_factor(complex_, factors.complex_pivots)
 
 
 @njit(cache=True, error_model="numpy")
-def step(system, points, count, loaded, motor_torque, load_torque, state, rate, h,
-         absolute_tolerance, relative_tolerance, real, real_pivots, complex_, complex_pivots,
+def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance, factors,
          stages, new_state):
     """One Radau IIA step of size h (s) from `state`, whose derivative is `rate`, with the
-    factors `factorize` made for this h: see the module's docstring for the contract. The
-    segment is (system, points, count, loaded, motor_torque, load_torque) as
-    equations.derivative takes it; `absolute_tolerance` is per entry of the state (its units),
-    `relative_tolerance` a number. `stages`: a 3 × size work array. Returns (error norm,
-    Newton iterations); the norm is inf where Newton did not converge."""
+    `factors` that `factorize` made for this h: see the module's docstring for the contract.
+
+    `segment` holds the equations (walk.CompiledSegment: its points, point_count, loaded,
+    motor_torque and load_torque, as equations.derivative takes them); `absolute_tolerance`
+    is per entry of the state (its units), `relative_tolerance` a number. `stages`: a
+    3 × size work array. Returns (error norm, Newton iterations); the norm is inf where
+    Newton did not converge."""
     size = state.shape[0]
     newton_tolerance = max(10 * 2.220446049250313e-16 / relative_tolerance,
                            min(0.03, math.sqrt(relative_tolerance)))
@@ -125,60 +137,85 @@ def step(system, points, count, loaded, motor_torque, load_torque, state, rate, 
     real_rhs = np.empty(size)
     complex_rhs = np.empty(size, dtype=np.complex128)
     previous_norm = -1.0
-    converged = False
     iterations = 0
     for iterations in range(1, NEWTON_MAXITER + 1):
-        for i in range(3):
-            derivative(system, points, count, loaded, motor_torque, load_torque,
-                       state + increments[i], stages[i])
-        for j in range(size):
-            real_rhs[j] = (_TI_REAL[0] * stages[0, j] + _TI_REAL[1] * stages[1, j]
-                           + _TI_REAL[2] * stages[2, j]) - MU_REAL / h * transformed[0, j]
-            complex_rhs[j] = (_TI_COMPLEX[0] * stages[0, j] + _TI_COMPLEX[1] * stages[1, j]
-                              + _TI_COMPLEX[2] * stages[2, j]) - MU_COMPLEX / h * (
-                transformed[1, j] + 1j * transformed[2, j])
-        if not np.all(np.isfinite(real_rhs)):
-            break
-        lu_solve(real, real_pivots, real_rhs)
-        lu_solve(complex_, complex_pivots, complex_rhs)
-        norm = 0.0
-        for j in range(size):
-            norm += ((real_rhs[j] / scale[j]) ** 2 + (complex_rhs[j].real / scale[j]) ** 2
-                     + (complex_rhs[j].imag / scale[j]) ** 2)
-        norm = math.sqrt(norm / (3 * size))
+        norm = _newton_correction(system, segment, state, h, factors, scale, increments,
+                                  transformed, stages, real_rhs, complex_rhs)
         rate_of_convergence = norm / previous_norm if previous_norm > 0.0 else -1.0
-        if rate_of_convergence >= 1.0 or (rate_of_convergence > 0.0 and rate_of_convergence
-                                          ** (NEWTON_MAXITER - iterations + 1)
-                                          / (1 - rate_of_convergence) * norm
-                                          > newton_tolerance):
+        if not norm < math.inf or rate_of_convergence >= 1.0 or (
+                rate_of_convergence > 0.0 and rate_of_convergence
+                ** (NEWTON_MAXITER - iterations + 1) / (1 - rate_of_convergence) * norm
+                > newton_tolerance):
             break
-        for j in range(size):
-            transformed[0, j] += real_rhs[j]
-            transformed[1, j] += complex_rhs[j].real
-            transformed[2, j] += complex_rhs[j].imag
-        for i in range(3):
-            for j in range(size):
-                increments[i, j] = (_T[i, 0] * transformed[0, j] + _T[i, 1] * transformed[1, j]
-                                    + _T[i, 2] * transformed[2, j])
+        _apply_correction(real_rhs, complex_rhs, transformed, increments)
         if norm == 0.0 or (rate_of_convergence > 0.0 and rate_of_convergence
                            / (1 - rate_of_convergence) * norm < newton_tolerance):
-            converged = True
-            break
+            return _error_norm(state, rate, h, increments, factors, absolute_tolerance,
+                               relative_tolerance, new_state), iterations
         previous_norm = norm
-    if not converged:
-        return math.inf, iterations
+    return math.inf, iterations
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _newton_correction(system, segment, state, h, factors, scale, increments, transformed,
+                       stages, real_rhs, complex_rhs):
+    """A simplified Newton iteration's correction of W (`transformed`) from the stages'
+    derivatives at `state` + `increments` (into `stages`): its real block into `real_rhs`,
+    its complex block into `complex_rhs`. Returns the correction's scaled RMS norm, inf where
+    a derivative is not finite."""
+    size = state.shape[0]
+    for i in range(3):
+        derivative(system, segment.points, segment.point_count, segment.loaded,
+                   segment.motor_torque, segment.load_torque, state + increments[i], stages[i])
+    for j in range(size):
+        real_rhs[j] = (_TI_REAL[0] * stages[0, j] + _TI_REAL[1] * stages[1, j]
+                       + _TI_REAL[2] * stages[2, j]) - MU_REAL / h * transformed[0, j]
+        complex_rhs[j] = (_TI_COMPLEX[0] * stages[0, j] + _TI_COMPLEX[1] * stages[1, j]
+                          + _TI_COMPLEX[2] * stages[2, j]) - MU_COMPLEX / h * (
+            transformed[1, j] + 1j * transformed[2, j])
+    if not np.all(np.isfinite(real_rhs)):
+        return math.inf
+    lu_solve(factors.real, factors.real_pivots, real_rhs)
+    lu_solve(factors.complex, factors.complex_pivots, complex_rhs)
+    norm = 0.0
+    for j in range(size):
+        norm += ((real_rhs[j] / scale[j]) ** 2 + (complex_rhs[j].real / scale[j]) ** 2
+                 + (complex_rhs[j].imag / scale[j]) ** 2)
+    return math.sqrt(norm / (3 * size))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _apply_correction(real_rhs, complex_rhs, transformed, increments):
+    """W += the correction (_newton_correction's), and the increments Z = T·W."""
+    size = transformed.shape[1]
+    for j in range(size):
+        transformed[0, j] += real_rhs[j]
+        transformed[1, j] += complex_rhs[j].real
+        transformed[2, j] += complex_rhs[j].imag
+    for i in range(3):
+        for j in range(size):
+            increments[i, j] = (_T[i, 0] * transformed[0, j] + _T[i, 1] * transformed[1, j]
+                                + _T[i, 2] * transformed[2, j])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _error_norm(state, rate, h, increments, factors, absolute_tolerance, relative_tolerance,
+                new_state):
+    """The converged step's result into `new_state`, and its error norm: scipy's estimate
+    (E·Z/h + rate, filtered through the real factors), scaled entry by entry, RMS."""
+    size = state.shape[0]
     error = np.empty(size)
     for j in range(size):
         new_state[j] = state[j] + increments[2, j]
         error[j] = rate[j] + (_E[0] * increments[0, j] + _E[1] * increments[1, j]
                               + _E[2] * increments[2, j]) / h
-    lu_solve(real, real_pivots, error)
+    lu_solve(factors.real, factors.real_pivots, error)
     norm = 0.0
     for j in range(size):
         scale_j = absolute_tolerance[j] + relative_tolerance * max(abs(state[j]),
                                                                    abs(new_state[j]))
         norm += (error[j] / scale_j) ** 2
-    return math.sqrt(norm / size), iterations
+    return math.sqrt(norm / size)
 
 
 @njit(cache=True, error_model="numpy")

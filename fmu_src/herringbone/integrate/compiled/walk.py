@@ -42,14 +42,15 @@ it; and each contact interval starts with the step size its last entry settled o
 The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), the method's
 step (dop853.step, or `implicit_step` with its Jacobian and factors), `control_step` (accept
 or reject it, and the next step size), `crossed_event` and `grazing_check` (which event the
-step crossed; where a point may have lifted off and landed again inside it, `probe_inside`
-looks), then `finish_step` (no event: the step's end is the new start) or `end_segment` (the
+step crossed; where a point may have lifted off and landed again inside it, `grazing_probe`
+looks), then `finish_step` (no event: the step's end is the new start) or `cross_event` (the
 crossing located by `locate_event` to the event time tolerance, the next segment begun by
-`next_segment` and `begin_segment`). Trial steps (`trial_step`) serve the location, the probe
-and the debug check. They work on records laid out once: the stepper's settings (one float
-array, `Setting`), the run's arrays (its position), and its workspace, the scratch arrays that
-`allocate_workspace` makes once per run (rows named by `Vector` and `Values`, the loop's
-memory by `Counter` and `Memory`).
+`end_segment`). Trial steps (`trial_step`) serve the location, the probe and the debug check.
+They work on records laid out once: the stepper's settings (one float array, `Setting`), the
+run's arrays (`RunArrays`, its position), the mesh period (`equations.PeriodTable`) and the
+run's `Workspace`, the scratch arrays that `allocate_workspace` makes once per run (rows named
+by `Vector` and `Values`, the loop's memory by `Counter` and `Memory`). They come from Python
+as plain tuples, which `advance` names.
 
 Units: time and step sizes in s, angles in rad, the state as model.py lays it out, approaches
 in m (their rates in m/s), torques in N·m.
@@ -65,15 +66,15 @@ from numba import njit, types
 from numba.extending import overload
 
 from . import dop853, exponential, radau
-from .equations import approach_rates, approaches, derivative, outputs, unpack_system
-
-
-class Event(IntEnum):
-    """The event functions that end a segment, as indices into a row of event values."""
-
-    PHASE_END = 0  # φp − the interval's length (rad), rising: the next contact set begins
-    PHASE_START = 1  # φp (rad), falling: the previous contact set begins
-    CONTACT = 2  # CONTACT + i: point i's approach δ + η·δ̇ (m), where contact can be lost
+from .equations import (
+    Event,
+    PeriodTable,
+    approach_rates,
+    approaches,
+    derivative,
+    outputs,
+    unpack_system,
+)
 
 
 class Status(IntEnum):
@@ -133,9 +134,9 @@ class Values(IntEnum):
     SLOPES_AFTER = 7  # at its end
 
 
-class Segment(NamedTuple):
-    """What holds over a segment: the equations (contact set, its loaded points, the torques)
-    and the segment's events."""
+class CompiledSegment(NamedTuple):
+    """A segment (segments.Segment: a contact set and its loaded points) as the loop holds it:
+    its equations as equations.derivative takes them, with the torques, and its events."""
 
     points: np.ndarray  # the contact set's point table (equations.py's rows)
     point_count: int  # its number of points
@@ -165,11 +166,66 @@ class Memory(IntEnum):
     FACTORED_H = 0  # s: the step size Radau IIA's LU factors belong to; 0: none
 
 
-# Workspace: the tuple allocate_workspace returns, in this order (MATRICES, COMPLEX_FACTORS and
-# PIVOTS are Radau IIA's: None in the others'; EXACT the exponential method's tables, None in
-# the others')
-VECTORS, VALUES, MATRICES, COMPLEX_FACTORS, PIVOTS, COUNTERS, MEMORY, EXACT = range(8)
-JACOBIAN, REAL_FACTORS = 0, 1  # of MATRICES; PIVOTS: the real factors' row, the complex ones'
+class Workspace(NamedTuple):
+    """The scratch arrays of a run (`allocate_workspace`), reused by every call of `advance`,
+    whose results do not depend on what they held. Radau IIA's three are None in the other
+    methods' workspaces, the exponential method's tables None in the others': the method is so
+    a matter of the workspace's type, which numba compiles `advance` for, and the code of the
+    other methods is never compiled (`implicit_step`, `exact_step`)."""
+
+    vectors: np.ndarray  # rows by Vector, each as long as the state
+    values: np.ndarray  # rows by Values
+    matrices: np.ndarray | None  # Radau IIA's Jacobian and real LU factors (JACOBIAN, REAL_FACTORS)
+    complex_factors: np.ndarray | None  # Radau IIA's complex LU factors
+    pivots: np.ndarray | None  # Radau IIA's pivots: the real factors' row, the complex ones'
+    counters: np.ndarray  # by Counter
+    memory: np.ndarray  # by Memory
+    exact: tuple | None  # the exponential method's tables, as exponential.pack_tables packs them
+
+
+JACOBIAN, REAL_FACTORS = 0, 1  # rows of Workspace.matrices
+
+
+class RunArrays(NamedTuple):
+    """A run's position (integrate/compiled_stepper.py's Run), in the arrays `advance` reads
+    and writes back in place."""
+
+    clock: np.ndarray  # [time, step size to try next], s
+    place: np.ndarray  # [contact interval, mesh cycle]
+    state: np.ndarray  # [y, ẏ]
+    loaded: np.ndarray  # per point of the set (padded to the widest set): 1 loaded, 0 not
+    first_steps: np.ndarray  # per contact interval, the step size to start it with, s; 0: none
+    outputs: np.ndarray  # equations.outputs at the run's position
+
+
+class StepPlan(NamedTuple):
+    """A step to try (`plan_step`)."""
+
+    h_step: float  # its size, s
+    h_wanted: float  # the size the controller asked for (bounded by the max step), s
+    landing: bool  # whether it ends on the run's `end`
+    aimed: bool  # whether it is aimed to end just past a predicted phase event
+
+
+class StepRows(NamedTuple):
+    """Views of the rows of the workspace and the settings that every step uses, made once
+    per call of `advance` (`step_rows`): a view made at every step is an array numba
+    counts."""
+
+    rate: np.ndarray  # Vector.RATE
+    rate_after: np.ndarray  # Vector.RATE_AFTER
+    new_state: np.ndarray  # Vector.NEW_STATE
+    last_stage: np.ndarray  # DOP853's last stage: the rate at its step's end
+    stages: np.ndarray  # the rows from Vector.STAGES on
+    work: np.ndarray  # Vector.WORK
+    tolerance: np.ndarray  # the absolute tolerance, per state entry
+
+
+class Controller(NamedTuple):
+    """The explicit method's step-size controller's memory (`control_step`)."""
+
+    previous_error: float  # the last accepted step's error norm
+    rejected: bool  # whether the last step was rejected
 
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
 INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
@@ -196,6 +252,7 @@ PREDICTION_FLOOR = 1e-3
 # fraction as long
 EXACT_GROWTH = 4.0
 EXACT_SHRINK = 0.25
+NEVER = math.inf  # s: the time to an event that is not ahead
 
 # Inlining and speed. The helpers the loop runs at every step are inlined (inline="always"):
 # a compiled call hands over each array it is given by reference, which numba counts
@@ -228,37 +285,37 @@ def pack_settings(relative_tolerance: float, max_step: float, event_time_toleran
 def allocate_workspace(method: Method, size: int, max_points: int,
                        exact_tables: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                        ) -> tuple:
-    """The scratch arrays of a run of `method` with `size` state entries and sets of up to
-    `max_points` points, allocated once per run (CompiledStepper.start) and reused by every
-    call of `advance`, whose results do not depend on what they held: in the order VECTORS
-    (rows by Vector), VALUES (rows by Values), MATRICES (the Jacobian and the real LU factors
-    of Radau IIA), COMPLEX_FACTORS (its complex LU factors), PIVOTS (of the real and complex
-    factors), COUNTERS (by Counter), MEMORY (by Memory), EXACT (`exact_tables`, the
-    exponential method's tables as exponential.pack_tables packs them); the three of Radau
-    IIA are None but in its, EXACT but in the exponential method's.
-
-    The method is so a matter of the workspace's type, which numba compiles `advance` for:
-    the code of the other method is never compiled (`implicit_step`,
-    `implicit_trial_step`)."""
+    """The Workspace of a run of `method` with `size` state entries and sets of up to
+    `max_points` points, allocated once per run (CompiledStepper.start), as a plain tuple in
+    Workspace's order: numba types a plain tuple argument by its fast path, a named one by
+    Python code at every call (3 µs for four fields), so `advance` takes plain tuples and
+    names them. `exact_tables`: the exponential method's, as exponential.pack_tables packs
+    them."""
     implicit = method == Method.IMPLICIT
-    return (np.zeros((Vector.STAGES + dop853.STAGE_ROWS, size)),
-            np.zeros((len(Values), Event.CONTACT + max_points)),
-            np.zeros((2, size, size)) if implicit else None,
-            np.zeros((size, size), dtype=np.complex128) if implicit else None,
-            np.zeros((2, size), dtype=np.int64) if implicit else None,
-            np.zeros(len(Counter), dtype=np.int64),
-            np.zeros(len(Memory)),
-            exact_tables if method == Method.EXPONENTIAL else None)
+    return tuple(Workspace(
+        vectors=np.zeros((Vector.STAGES + dop853.STAGE_ROWS, size)),
+        values=np.zeros((len(Values), Event.CONTACT + max_points)),
+        matrices=np.zeros((2, size, size)) if implicit else None,
+        complex_factors=np.zeros((size, size), dtype=np.complex128) if implicit else None,
+        pivots=np.zeros((2, size), dtype=np.int64) if implicit else None,
+        counters=np.zeros(len(Counter), dtype=np.int64),
+        memory=np.zeros(len(Memory)),
+        exact=exact_tables if method == Method.EXPONENTIAL else None))
+
+
+def _lacks(record_type, field):
+    """Whether the named tuple type `record_type` (numba's) holds None as `field`."""
+    return isinstance(record_type[record_type.fields.index(field)], types.NoneType)
 
 
 def is_explicit(workspace):
     """Whether the workspace is DOP853's (a constant in compiled code)."""
-    return workspace[MATRICES] is None
+    return workspace.matrices is None
 
 
 @overload(is_explicit, inline="always")
 def _is_explicit(workspace):
-    explicit = isinstance(workspace[MATRICES], types.NoneType)
+    explicit = _lacks(workspace, "matrices")
     return lambda workspace: explicit
 
 
@@ -269,11 +326,10 @@ def exact_form(workspace, interval, count, loaded, state):
 
 @overload(exact_form, inline="always")
 def _exact_form(workspace, interval, count, loaded, state):
-    if isinstance(workspace[EXACT], types.NoneType):
+    if _lacks(workspace, "exact"):
         return lambda workspace, interval, count, loaded, state: -1
     return lambda workspace, interval, count, loaded, state: exponential.variant_of(
-        exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
-                                  workspace[EXACT][2]), interval, count, loaded, state)
+        exponential.unpack_tables(*workspace.exact), interval, count, loaded, state)
 
 
 def exact_step(system, segment, state, workspace, h, out):
@@ -283,11 +339,10 @@ def exact_step(system, segment, state, workspace, h, out):
 
 @overload(exact_step, inline="always")
 def _exact_step(system, segment, state, workspace, h, out):
-    if isinstance(workspace[EXACT], types.NoneType):
+    if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, h, out: False
     return lambda system, segment, state, workspace, h, out: exponential.step(
-        system, exponential.unpack_tables(workspace[EXACT][0], workspace[EXACT][1],
-                                  workspace[EXACT][2]), segment.exact, state,
+        system, exponential.unpack_tables(*workspace.exact), segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
         == exponential.ALL_LOADED else -1.0, out)
@@ -295,13 +350,13 @@ def _exact_step(system, segment, state, workspace, h, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def segment_of(system, mesh, interval, loaded, torques, exact):
-    """The Segment of contact interval `interval` of the mesh's period (lengths, counts,
-    tables: mesh.period_table), with the run's loaded points, the torques (N·m) and its exact
-    form (−1: none)."""
-    lengths, counts, tables = mesh
-    count = counts[interval]
-    return Segment(tables[interval], count, loaded, torques[0], torques[1], lengths[interval],
-                   Event.CONTACT + (count if system.contact_loss else 0), exact)
+    """The CompiledSegment of contact interval `interval` of the mesh's period (a
+    PeriodTable), with the run's loaded points, the torques (N·m) and its exact form (−1:
+    none)."""
+    count = mesh.counts[interval]
+    return CompiledSegment(mesh.tables[interval], count, loaded, torques[0], torques[1],
+                           mesh.lengths[interval],
+                           Event.CONTACT + (count if system.contact_loss else 0), exact)
 
 
 # --- the event functions ----------------------------------------------------------------------
@@ -394,12 +449,11 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     """A step of size h (s) from `state` (its rate in the workspace's RATE row) to `out`, taken
     only to look where an event lies: its error is not checked (it is shorter than a step
     already accepted). Radau IIA factorizes for h (and says so in the workspace's memory)."""
-    vectors = workspace[VECTORS]
+    vectors = workspace.vectors
     if segment.exact >= 0:
         exact_step(system, segment, state, workspace, h, out)
     elif is_explicit(workspace):
-        dop853.step(system, segment.points, segment.point_count, segment.loaded,
-                    segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+        dop853.step(system, segment, state, vectors[Vector.RATE], h,
                     settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
                     vectors[Vector.STAGES:], vectors[Vector.WORK], out)
     else:
@@ -413,7 +467,7 @@ def implicit_trial_step(system, segment, settings, state, workspace, h, out):
 
 @overload(implicit_trial_step)
 def _implicit_trial_step(system, segment, settings, state, workspace, h, out):
-    if isinstance(workspace[MATRICES], types.NoneType):
+    if _lacks(workspace, "matrices"):
         return lambda system, segment, settings, state, workspace, h, out: None
     return radau_trial_step
 
@@ -428,10 +482,15 @@ def radau_trial_step(system, segment, settings, state, workspace, h, out):
 def factorize_for(workspace, h):
     """Radau IIA's LU factors of the workspace's Jacobian for a step of h (s), and the record
     of the step size they belong to."""
-    matrices, pivots = workspace[MATRICES], workspace[PIVOTS]
-    radau.factorize(matrices[JACOBIAN], h, matrices[REAL_FACTORS], pivots[0],
-                    workspace[COMPLEX_FACTORS], pivots[1])
-    workspace[MEMORY][Memory.FACTORED_H] = h
+    radau.factorize(workspace.matrices[JACOBIAN], h, radau_factors(workspace))
+    workspace.memory[Memory.FACTORED_H] = h
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def radau_factors(workspace):
+    """Radau IIA's LU factors in the workspace, as a radau.Factors record."""
+    return radau.Factors(workspace.matrices[REAL_FACTORS], workspace.pivots[0],
+                         workspace.complex_factors, workspace.pivots[1])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -439,12 +498,10 @@ def factored_step(system, segment, settings, state, workspace, h, out):
     """Radau IIA's step of size h (s) from `state` (its rate in the RATE row) to `out`, on the
     factors made for h. Returns (the error norm, inf where Newton did not converge; Newton
     iterations)."""
-    vectors, matrices, pivots = workspace[VECTORS], workspace[MATRICES], workspace[PIVOTS]
-    return radau.step(system, segment.points, segment.point_count, segment.loaded,
-                      segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE], h,
+    vectors = workspace.vectors
+    return radau.step(system, segment, state, vectors[Vector.RATE], h,
                       settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
-                      matrices[REAL_FACTORS], pivots[0], workspace[COMPLEX_FACTORS], pivots[1],
-                      vectors[Vector.STAGES:], out)
+                      radau_factors(workspace), vectors[Vector.STAGES:], out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -454,8 +511,8 @@ def contact_violated_inside(system, segment, settings, state, workspace, h):
     above slack (penetration without load) anywhere there, slack being the settings' contact
     slack (m). It looks for what the event search (crossings at step ends, the cubic for a dip
     within a step) would have missed, by other means, at seven times the cost of a step."""
-    trial = workspace[VECTORS][Vector.TRIAL]
-    approach = workspace[VALUES][Values.APPROACH]
+    trial = workspace.vectors[Vector.TRIAL]
+    approach = workspace.values[Values.APPROACH]
     slack = settings[Setting.CONTACT_SLACK]
     loaded = segment.loaded
     for fraction in INSIDE_FRACTIONS:
@@ -534,7 +591,7 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
     fraction, grazing_suspect's) among PROBE_FRACTIONS, until one shows an event crossed. One
     that does becomes the bracket's end: its state goes to NEW_STATE, its event values to the
     AFTER row. Returns (the event crossed first, or −1; the bracket's end, s)."""
-    vectors, values = workspace[VECTORS], workspace[VALUES]
+    vectors, values = workspace.vectors, workspace.values
     trial = vectors[Vector.TRIAL]
     done = 0.0
     for _ in range(len(PROBE_FRACTIONS) + 1):
@@ -565,10 +622,9 @@ def plan_step(max_step, time, end, h, ahead):
     """The next step from `time` (s) with the controller's step size h (s): at most the
     settings' max step, stretched by a hair to land on `end` rather than leave a remainder of
     rounding size, or cut to end just past the phase event predicted `ahead` s from now
-    (phase_event_ahead; not for Radau IIA, inf for none). `max_step` (s): the settings' for
-    the segment's method. Returns (h_step, h_wanted, landing, aimed):
-    the step's size, the size the controller asked for (bounded), whether the step ends at
-    `end`, whether it is aimed at the phase event."""
+    (phase_event_ahead; inf for none, and for Radau IIA, whose error stopped falling with the
+    step size in the order test when its steps were aimed). `max_step` (s): the settings'
+    for the segment's method. Returns the StepPlan."""
     h_wanted = min(h, max_step)
     landing = end - time <= h_wanted * (1.0 + 1e-7)
     h_step = end - time if landing else h_wanted
@@ -576,8 +632,8 @@ def plan_step(max_step, time, end, h, ahead):
     # then located by a single trial step, and nothing of the step past it is thrown away
     passing = (1.0 + PREDICTION_MARGIN) * ahead
     if PREDICTION_FLOOR * h_step < passing < h_step:
-        return passing, h_wanted, False, True
-    return h_step, h_wanted, landing, False
+        return StepPlan(passing, h_wanted, False, True)
+    return StepPlan(h_step, h_wanted, landing, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -587,8 +643,7 @@ def step_allowed(steps, max_steps, time, plan):
     longer moves the time (s) but for rounding, else OK."""
     if steps >= max_steps:
         return Status.OVER_BUDGET
-    h_step, _, landing, _ = plan
-    if not landing and h_step <= 1e-15 * max(abs(time), 1.0):
+    if not plan.landing and plan.h_step <= 1e-15 * max(abs(time), 1.0):
         return Status.STEP_TOO_SMALL
     return Status.OK
 
@@ -602,7 +657,7 @@ def implicit_step(system, segment, settings, state, workspace, h):
 def _implicit_step(system, segment, settings, state, workspace, h):
     # radau_step itself, compiled as a call of its own (a wrapper that called it would count
     # every array it passes on: 5 % of a Radau IIA step)
-    if isinstance(workspace[MATRICES], types.NoneType):
+    if _lacks(workspace, "matrices"):
         return lambda system, segment, settings, state, workspace, h: (False, math.inf, 0)
     return radau_step
 
@@ -613,11 +668,10 @@ def radau_step(system, segment, settings, state, workspace, h):
     workspace's counters and memory record them. Returns (retry: Newton failed on an old
     Jacobian, which is dropped, and the step is to be tried again; the error norm, inf where
     Newton did not converge; Newton iterations)."""
-    vectors, counters, memory = workspace[VECTORS], workspace[COUNTERS], workspace[MEMORY]
+    vectors, counters, memory = workspace.vectors, workspace.counters, workspace.memory
     if counters[Counter.JACOBIAN_SEGMENT] != counters[Counter.SEGMENT]:
-        radau.jacobian_of(system, segment.points, segment.point_count, segment.loaded,
-                          segment.motor_torque, segment.load_torque, state, vectors[Vector.RATE],
-                          settings[Setting.ABSOLUTE_TOLERANCE:], workspace[MATRICES][JACOBIAN],
+        radau.jacobian_of(system, segment, state, vectors[Vector.RATE],
+                          settings[Setting.ABSOLUTE_TOLERANCE:], workspace.matrices[JACOBIAN],
                           vectors[Vector.TRIAL], vectors[Vector.WORK])
         counters[Counter.JACOBIAN_SEGMENT] = counters[Counter.SEGMENT]
         counters[Counter.JACOBIAN_FRESH] = 1
@@ -634,16 +688,16 @@ def radau_step(system, segment, settings, state, workspace, h):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def control_step(explicit, error, iterations, plan, controller):
-    """Accept the step of `plan` (plan_step's) with this error norm and Newton iterations, or
-    reject it, by the explicit or the implicit method's controller. `controller` = (the
-    explicit method's last accepted error norm, whether the last step was rejected). Returns
-    (accepted; the step size to try next, s; the controller)."""
-    previous_error, rejected = controller
-    h_step, h_wanted, landing, aimed = plan
+    """Accept the step of `plan` (a StepPlan) with this error norm and Newton iterations, or
+    reject it, by the explicit or the implicit method's controller (its memory a
+    Controller). Returns (accepted; the step size to try next, s; the Controller)."""
+    previous_error, rejected = controller.previous_error, controller.rejected
+    h_step, h_wanted, landing, aimed = plan.h_step, plan.h_wanted, plan.landing, plan.aimed
     if not error <= 1.0:  # too large, or NaN
         factor = (dop853.step_factor(error, previous_error, rejected) if explicit
                   else radau.step_factor(error, iterations, rejected))
-        return False, h_step * (factor if math.isfinite(error) else 0.5), (previous_error, True)
+        return (False, h_step * (factor if math.isfinite(error) else 0.5),
+                Controller(previous_error, True))
     if explicit:
         factor = dop853.step_factor(error, previous_error, rejected)
         if not (landing or aimed):  # a cut step's small error would hold the next one back
@@ -655,20 +709,20 @@ def control_step(explicit, error, iterations, plan, controller):
     h_next = h_step * factor
     if landing or aimed:  # a step cut short says little about the next one
         h_next = max(h_next, h_wanted)
-    return True, h_next, (previous_error, False)
+    return True, h_next, Controller(previous_error, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def control_exact_step(certified, plan, floor):
-    """Accept or reject an exact step of `plan` (plan_step's): a certified one is accepted and
+    """Accept or reject an exact step of `plan` (a StepPlan): a certified one is accepted and
     the next may be EXACT_GROWTH times longer; an uncertified one only at DOP853's step bound
     `floor` (s) or below, where the loop's checks of a step's ends and of grazing hold, and
     the next may grow up to `floor`; a longer one is rejected and tried EXACT_SHRINK times as
     long (not below `floor`). A step cut short (landing on the end, aimed at a phase event)
     says nothing of the next: it grows from the size the loop wanted. Returns (accepted; the
     step size to try next, s)."""
-    h_step, h_wanted, landing, aimed = plan
-    grown = (h_wanted if landing or aimed else h_step) * EXACT_GROWTH
+    h_step = plan.h_step
+    grown = (plan.h_wanted if plan.landing or plan.aimed else h_step) * EXACT_GROWTH
     if certified:
         return True, grown
     if h_step <= floor:
@@ -703,7 +757,7 @@ def grazing_check(system, segment, new_state, rate_after, values, h):
 def finish_step(state, workspace):
     """Make the accepted step's end, which crossed no event, the new start: state, rate,
     event values and approach slopes."""
-    vectors, values = workspace[VECTORS], workspace[VALUES]
+    vectors, values = workspace.vectors, workspace.values
     state[:] = vectors[Vector.NEW_STATE]
     vectors[Vector.RATE, :] = vectors[Vector.RATE_AFTER]
     values[Values.BEFORE, :] = values[Values.AFTER]
@@ -712,11 +766,12 @@ def finish_step(state, workspace):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
-    """The Segment of contact interval `interval` (segment_of), with the rate, event values and
-    (where contact can be lost) approach slopes at `state`, its start, in the workspace."""
+    """The CompiledSegment of contact interval `interval` (segment_of), with the rate, event
+    values and (where contact can be lost) approach slopes at `state`, its start, in the
+    workspace."""
     segment = segment_of(system, mesh, interval, loaded, torques,
-                         exact_form(workspace, interval, mesh[1][interval], loaded, state))
-    rate, values = workspace[VECTORS][Vector.RATE], workspace[VALUES]
+                         exact_form(workspace, interval, mesh.counts[interval], loaded, state))
+    rate, values = workspace.vectors[Vector.RATE], workspace.values
     derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
                rate)
     event_values(system, segment, state, values[Values.APPROACH], values[Values.BEFORE])
@@ -744,15 +799,13 @@ def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
-    by trial steps of the method. A phase event's function is φp less a constant, and its
-    slope, φp's rate, is part of the state: the first estimate is the zero of the cubic through
-    values and slopes at the step's ends (fifty times closer than the chord's), the next ones
-    Newton's from the latest trial. A contact event is found by secant steps. Trials are judged
-    against the bracket's low end, so that of several events crossed by one the earliest is
-    taken. A debug run (contact slack >= 0) then checks the step up to the crossing
-    (contact_violated_inside). Returns (the event; the bracket's high end, s, its state in
-    NEW_STATE; whether the debug check failed)."""
-    vectors, values = workspace[VECTORS], workspace[VALUES]
+    by trial steps of the method, to the event time tolerance. A phase event's first estimate
+    is the zero of the cubic through its values and slopes (φp's rate, in the state) at the
+    step's ends, fifty times closer than the chord's; the next ones are Newton's from the
+    latest trial. A contact event is found by secant steps. Trials are judged against the
+    bracket's low end, so that of several events crossed the earliest is taken. Returns
+    (the event; the bracket's high end, s, its state in NEW_STATE)."""
+    vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
     trial_values = values[Values.TRIAL]
@@ -764,15 +817,12 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     pinion_rate = state.shape[0] // 2 + system.pinion
     newer_slope = new_state[pinion_rate]
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
-    first_estimate = -1.0
-    if event < Event.CONTACT and high == h_step:
-        first_estimate = high * hermite_root(low_values[event], high_values[event],
-                                             high * state[pinion_rate], high * newer_slope)
+    estimate = (high * hermite_root(low_values[event], high_values[event],
+                                    high * state[pinion_rate], high * newer_slope)
+                if event < Event.CONTACT and high == h_step else -1.0)
     for _ in range(MAX_LOCATION_TRIALS):
         if high - low <= 2.0 * tolerance:
             break  # whatever crossed in between crossed together, to the tolerance
-        estimate = first_estimate
-        first_estimate = -1.0
         if estimate < 0.0:
             estimate = next_estimate(event, older_h, older_value, newer_h, newer_value,
                                      newer_slope)
@@ -787,29 +837,34 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
         else:
             # aim just past the estimate, so that a good estimate ends the search at once
             trial_h = estimate + tolerance
+        estimate = -1.0
         trial_step(system, segment, settings, state, workspace, trial_h, trial)
         event_values(system, segment, trial, values[Values.APPROACH], trial_values)
         crossed = first_crossing(low_values, trial_values, segment.events, segment.loaded)
-        if crossed >= 0:
-            if crossed != event:  # another event crosses first: locate that one
-                event = crossed
-                older_h, older_value = low, low_values[event]
-            else:
-                older_h, older_value = newer_h, newer_value
-            high = trial_h
+        if crossed < 0:
+            older_h, older_value, low = newer_h, newer_value, trial_h
+            low_values[:] = trial_values
+        else:
+            older_h, older_value = ((low, low_values[crossed]) if crossed != event
+                                    else (newer_h, newer_value))
+            event, high = crossed, trial_h  # (another event that crosses first is located)
             new_state[:] = trial
             high_values[:] = trial_values
-        else:
-            older_h, older_value = newer_h, newer_value
-            low = trial_h
-            low_values[:] = trial_values
         newer_h, newer_value, newer_slope = trial_h, trial_values[event], trial[pinion_rate]
-    # (a debug run looks inside the step to the event, where no other point may have
-    # crossed unseen; the event's own crossing lies within 2·tolerance of its end)
-    violated = (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
-                and high > 16.0 * tolerance and contact_violated_inside(
-                    system, segment, settings, state, workspace, high))
-    return event, high, violated
+    return event, high
+
+
+@njit(cache=True, error_model="numpy")
+def violated_before(system, segment, settings, state, workspace, high, h_step):
+    """A debug run's check of a step from `state` to a crossing located at `high` (s) in a
+    step of h_step (s), where no other point may have crossed unseen
+    (contact_violated_inside); the event's own crossing lies within two location
+    tolerances of `high`, so a step that short is not looked into. False in a run that is not
+    a debug run."""
+    tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)
+    return (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
+            and high > 16.0 * tolerance
+            and contact_violated_inside(system, segment, settings, state, workspace, high))
 
 
 # --- the segment's end --------------------------------------------------------------------------
@@ -833,17 +888,13 @@ def count_progress(counters, event, high, h_step):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def pass_event(state, workspace, clock, step, event):
-    """Move the run past the crossing of `event` located by the accepted step `step` = (time,
-    end, h_step, h_next, landing, high: the step's start, the run's end, its size and the next
-    one's, s; whether it lands on `end`; the crossing's bracket end, s from the step's start):
-    the state there (NEW_STATE), the time and the step size to try. Returns count_progress's
-    Status."""
-    time, end, h_step, h_next, landing, high = step
-    state[:] = workspace[VECTORS][Vector.NEW_STATE]
-    clock[0] = end if landing and high == h_step else time + high
-    clock[1] = h_next
-    return count_progress(workspace[COUNTERS], event, high, h_step)
+def pass_event(state, workspace, clock, time, end, plan, high, event):
+    """Move the run past the crossing of `event` located at `high` (s from the step's start)
+    by the accepted step of `plan` (a StepPlan) from `time` (s; the run's end: `end`): the
+    state there (NEW_STATE) and the time. Returns count_progress's Status."""
+    state[:] = workspace.vectors[Vector.NEW_STATE]
+    clock[0] = end if plan.landing and high == plan.h_step else time + high
+    return count_progress(workspace.counters, event, high, plan.h_step)
 
 
 @njit(cache=True, error_model="numpy")
@@ -851,18 +902,18 @@ def end_segment(system, mesh, run, workspace, torques, event):
     """Begin the segment that follows `event` at the run's state: the next contact set and its
     loaded points (next_segment, into the run's place and loaded points), the rate, event
     values and slopes there (begin_segment), and after a phase event into the next set, its
-    first step size. Returns the Segment. (It calls nothing that is not inlined and uses its
-    arrays on every path, so that numba need count none of them.)"""
-    clock, place, state, loaded, first_steps = run[0], run[1], run[2], run[3], run[4]
-    counters = workspace[COUNTERS]
+    first step size. Returns the CompiledSegment. (It calls nothing that is not inlined and
+    uses its arrays on every path, so that numba need count none of them.)"""
+    clock, place, state, loaded = run.clock, run.place, run.state, run.loaded
+    counters = workspace.counters
     place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
-                                      workspace[VALUES][Values.APPROACH])
+                                      workspace.values[Values.APPROACH])
     counters[Counter.SEGMENT] += 1
     interval = place[0]
     segment = begin_segment(system, mesh, interval, state, loaded, torques, workspace)
     # The switch sets off vibration that the step before it did not see: start the set as the
     # step taken after the last entry into it proposed (the mesh repeats).
-    entered, first = event == Event.PHASE_END, first_steps[interval]
+    entered, first = event == Event.PHASE_END, run.first_steps[interval]
     clock[1] = min(clock[1], first) if entered and first > 0.0 else clock[1]
     counters[Counter.OPENING] = interval if entered else counters[Counter.OPENING]
     return segment
@@ -878,7 +929,7 @@ def next_segment(system, mesh, event, interval, cycle, state, loaded, approach):
     zero in the same bracket as the located event (a whole train separating or landing at
     once) starts the segment on its own side, with its own event ahead of it. Updates state
     and loaded (`approach` is scratch); returns the new (interval, cycle)."""
-    lengths, counts, tables = mesh
+    lengths = mesh.lengths
     if event == Event.PHASE_END:
         state[system.pinion] -= lengths[interval]
         interval += 1
@@ -889,7 +940,8 @@ def next_segment(system, mesh, event, interval, cycle, state, loaded, approach):
         if interval < 0:
             interval, cycle = lengths.shape[0] - 1, cycle - 1
         state[system.pinion] += lengths[interval]
-    set_loaded_by_sign(system, tables[interval], counts[interval], state, approach, loaded)
+    set_loaded_by_sign(system, mesh.tables[interval], mesh.counts[interval], state, approach,
+                       loaded)
     return interval, cycle
 
 
@@ -921,113 +973,131 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
     run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
 
-    system_arrays: equations.pack_system's two arrays; mesh: (lengths, counts, tables) of
-    mesh.period_table; settings: pack_settings' record; workspace: allocate_workspace's arrays;
-    run: the run's arrays (clock, place, state, loaded, first_steps, outputs), its position:
-    clock = [time, step size to try], place = [contact interval, mesh cycle], `state`, `loaded`
-    and `first_steps` (per contact interval, the step size to start it with; 0: none yet), read
-    and written back, also where the run fails; `outputs` gets equations.outputs there."""
+    Its records come as plain tuples (allocate_workspace says why), in the order of the named
+    tuple each becomes here: system_arrays, equations.pack_system's two arrays; mesh, a
+    PeriodTable; settings, pack_settings' record; run, RunArrays (the run's position, read and
+    written back, also where the run fails; its `outputs` get equations.outputs there);
+    workspace, a Workspace."""
     system = unpack_system(system_arrays[0], system_arrays[1])
+    mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), Workspace(*workspace)
+    begin_walk(workspace)
     status, steps = walk(system, mesh, settings, run, workspace, end, torques, max_steps)
-    place, state, loaded, outputs_at_end = run[1], run[2], run[3], run[5]
-    lengths, counts, tables = mesh
-    interval = place[0]
-    outputs(system, tables[interval], counts[interval], loaded, state, outputs_at_end)
+    if status == Status.OK and not all_finite(run.state):
+        status = Status.NOT_FINITE
+    interval = run.place[0]
+    outputs(system, mesh.tables[interval], mesh.counts[interval], run.loaded, run.state,
+            run.outputs)
     return status.value, steps  # an int: numba hands an IntEnum member back at 0.8 µs a call
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
-    """advance's loop: steps, and segments ended at events, until the run's time is `end` or
-    the run fails. Returns (Status, accepted steps)."""
-    clock, state, loaded, first_steps = run[0], run[2], run[3], run[4]
-    vectors, values, counters = workspace[VECTORS], workspace[VALUES], workspace[COUNTERS]
-    rate, rate_after = vectors[Vector.RATE], vectors[Vector.RATE_AFTER]
-    new_state, last_stage = vectors[Vector.NEW_STATE], vectors[Vector.STAGES + dop853.N_STAGES]
-    stages, work, tolerance = (vectors[Vector.STAGES:], vectors[Vector.WORK],
-                               settings[Setting.ABSOLUTE_TOLERANCE:])
-    explicit = is_explicit(workspace)
-    debug = settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
-    begin_walk(workspace)
-    segment = begin_segment(system, mesh, run[1][0], state, loaded, torques, workspace)
-    points, steps, status, controller = segment.points, 0, Status.OK, (1e-4, False)
-    while clock[0] < end:
+    """advance's loop (after begin_walk): steps, and segments ended at events (cross_event),
+    until the run's time is `end` or the run fails. Returns (Status, accepted steps). What
+    runs at every step is written out here: an inlined helper given a record counts it."""
+    clock, state, first_steps = run.clock, run.state, run.first_steps
+    counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
+    explicit, rtol = is_explicit(workspace), settings[Setting.RELATIVE_TOLERANCE]
+    segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques, workspace)
+    steps, status, controller, h = 0, Status.OK, Controller(1e-4, False), clock[1]
+    while clock[0] < end and status == Status.OK:
         time, h = clock[0], clock[1]
-        # (Radau IIA's steps are not aimed: with them its error stopped falling with the step
-        # size in the order test, tests/test_integrator.py, and it steps to few events)
-        ahead = phase_event_ahead(system, state, rate, segment.length) if explicit else math.inf
-        exact = segment.exact >= 0
-        plan = plan_step(settings[Setting.EXACT_MAX_STEP] if exact else settings[Setting.MAX_STEP],
-                         time, end, h, ahead)
-        h_step, landing = plan[0], plan[2]
+        ahead = phase_event_ahead(system, state, rows.rate, segment.length) if explicit else NEVER
+        plan = plan_step(settings[Setting.EXACT_MAX_STEP if segment.exact >= 0
+                                  else Setting.MAX_STEP], time, end, h, ahead)
         status = step_allowed(steps, max_steps, time, plan)
         if status != Status.OK:
             break
         certified = False
-        if exact:
-            certified = exact_step(system, segment, state, workspace, h_step, new_state)
+        if segment.exact >= 0:
+            certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
             accepted, clock[1] = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
         else:
             if explicit:
                 error, iterations = dop853.step(
-                    system, points, segment.point_count, loaded, torques[0], torques[1], state,
-                    rate, h_step, tolerance, settings[Setting.RELATIVE_TOLERANCE], stages, work,
-                    new_state), 0
+                    system, segment, state, rows.rate, plan.h_step, rows.tolerance, rtol,
+                    rows.stages, rows.work, rows.new_state), 0
             else:
                 retry, error, iterations = implicit_step(system, segment, settings, state,
-                                                         workspace, h_step)
-                if retry:
+                                                         workspace, plan.h_step)
+                if retry:  # (Newton failed on an old Jacobian: again on a fresh one)
                     continue
             accepted, clock[1], controller = control_step(explicit, error, iterations, plan,
                                                           controller)
         if not accepted:
             continue
-        steps += 1
-        counters[Counter.JACOBIAN_FRESH] = 0
-        if counters[Counter.OPENING] >= 0 and not (landing or plan[3]):
+        steps, counters[Counter.JACOBIAN_FRESH] = steps + 1, 0
+        # (here, not in a helper: from an inlined one numba 0.68 dropped this store)
+        if counters[Counter.OPENING] >= 0 and not (plan.landing or plan.aimed):
             first_steps[counters[Counter.OPENING]] = clock[1]
         counters[Counter.OPENING] = -1
-        event, high = crossed_event(system, segment, new_state, values), h_step
-        if explicit and not exact:  # its last stage is the rate at the step's end
-            rate_after[:] = last_stage
+        event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
+        if explicit and segment.exact < 0:  # its last stage is the rate at the step's end
+            rows.rate_after[:] = rows.last_stage
         else:
-            derivative(system, points, segment.point_count, loaded, torques[0], torques[1],
-                       new_state, rate_after)
+            derivative(system, segment.points, segment.point_count, segment.loaded,
+                       segment.motor_torque, segment.load_torque, rows.new_state, rows.rate_after)
         if system.contact_loss and not certified:  # (a certified step has no grazing inside)
-            suspect = grazing_check(system, segment, new_state, rate_after, values, h_step)
-            if suspect > 0.0:
-                event, high = probe_inside(system, segment, settings, state, workspace, suspect,
-                                           h_step, event)
-        if event < 0:
-            if debug and contact_violated_inside(system, segment, settings, state, workspace,
-                                                 h_step):
-                clock[1], status = h, Status.CONTACT_VIOLATED
-                break
+            event, high = grazing_probe(system, segment, settings, state, workspace,
+                                        plan.h_step, event)
+        if event >= 0:
+            status, segment = cross_event(system, mesh, settings, run, workspace, torques,
+                                          segment, plan, end, event, high)
+        elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
+                contact_violated_inside(system, segment, settings, state, workspace, plan.h_step):
+            status = Status.CONTACT_VIOLATED
+        else:
             finish_step(state, workspace)
-            clock[0] = end if landing else time + h_step
-            counters[Counter.STALLED] = 0
-            continue
-        event, high, violated = locate_event(system, segment, settings, state, workspace,
-                                             event, high, h_step)
-        if violated:
-            clock[1], status = h, Status.CONTACT_VIOLATED
-            break
-        status = pass_event(state, workspace, clock, (time, end, h_step, clock[1], landing, high),
-                            event)
-        if status != Status.OK:
-            break
-        segment = end_segment(system, mesh, run, workspace, torques, event)
-        points = segment.points
-    if status == Status.OK and not all_finite(state):
-        status = Status.NOT_FINITE
+            clock[0], counters[Counter.STALLED] = end if plan.landing else time + plan.h_step, 0
+    clock[1] = h if status == Status.CONTACT_VIOLATED else clock[1]
     return status, steps
+
+
+@njit(cache=True, error_model="numpy")
+def grazing_probe(system, segment, settings, state, workspace, h_step, event):
+    """The grazing check of an accepted step of h_step (s) (grazing_check; the rate at its
+    end in RATE_AFTER), and where it finds a suspect, the probe (probe_inside). Returns (the
+    event crossed first, −1 for none; the bracket's high end, s)."""
+    vectors, values = workspace.vectors, workspace.values
+    suspect = grazing_check(system, segment, vectors[Vector.NEW_STATE],
+                            vectors[Vector.RATE_AFTER], values, h_step)
+    if suspect > 0.0:
+        return probe_inside(system, segment, settings, state, workspace, suspect, h_step, event)
+    return event, h_step
+
+
+@njit(cache=True, error_model="numpy")
+def cross_event(system, mesh, settings, run, workspace, torques, segment, plan, end, event,
+                high):
+    """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
+    crossed `event` by `high` (s from the step's start; its state in NEW_STATE): the crossing
+    located (locate_event), a debug run's check up to it (violated_before), the run moved
+    past it (pass_event; `end`: the run's end, s) and the next segment begun (end_segment).
+    Returns (Status; the segment the run is in)."""
+    state, h_step = run.state, plan.h_step
+    event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
+    if violated_before(system, segment, settings, state, workspace, high, h_step):
+        return Status.CONTACT_VIOLATED, segment
+    status = pass_event(state, workspace, run.clock, run.clock[0], end, plan, high, event)
+    if status != Status.OK:
+        return status, segment
+    return status, end_segment(system, mesh, run, workspace, torques, event)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def step_rows(workspace, settings):
+    """The StepRows of a workspace and its settings."""
+    vectors = workspace.vectors
+    return StepRows(vectors[Vector.RATE], vectors[Vector.RATE_AFTER], vectors[Vector.NEW_STATE],
+                    vectors[Vector.STAGES + dop853.N_STAGES], vectors[Vector.STAGES:],
+                    vectors[Vector.WORK], settings[Setting.ABSOLUTE_TOLERANCE:])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def begin_walk(workspace):
     """The loop's memory at the start of a call of `advance`."""
-    counters = workspace[COUNTERS]
+    counters = workspace.counters
     counters[:] = 0
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
-    workspace[MEMORY][Memory.FACTORED_H] = 0.0
+    workspace.memory[Memory.FACTORED_H] = 0.0
