@@ -47,6 +47,14 @@ COMPILED_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-2)
 REFERENCE_TOLERANCE = Range(TIGHTEST_TOLERANCE, 1e-5)
 COMPILED_METHODS = ("auto", "dop853", "radau", "exponential")  # compiled_stepper.METHODS
 REFERENCE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")  # scipy's solve_ivp
+SWEEP_METHODS = ("shooting", "time")  # analysis.sweep.METHODS
+# The defaults (here, so that the command line names them without loading the integrators).
+# The compiled integrator's, the FMU's too: the error per step, relative to the static mesh
+# force, that keeps every shipped scene within 1e-6 of it at communication steps from 1e-5 to
+# 1e-2 s (docs/integrator.md has the figures).
+COMPILED_DEFAULT_TOLERANCE = 1e-7
+# The reference's, over the run (reference_simulate, `herringbone run --reference`)
+REFERENCE_DEFAULT_TOLERANCE = 1e-10
 
 
 @dataclass(frozen=True)

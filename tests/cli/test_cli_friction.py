@@ -271,3 +271,17 @@ def test_a_speed_sweep_finds_the_periodic_branch_and_draws_no_waterfall(tmp_path
     assert written == ["reference_sweep_w0_pinion.csv", "reference_sweep_w0_pinion_resonance.png"]
     header = (tmp_path / "reference_sweep_w0_pinion.csv").read_text().splitlines()[0]
     assert "stability" in header and "w0_pinion [rad/s]" in header
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["sweep"], ["info"], ["stability"],
+                                     ["campbell"], ["build-fmu"], ["benchmark"]])
+def test_help_answers_without_loading_the_integrators(command):
+    """Asking a command for its help (or a bad option) loads neither numba nor scipy: the
+    command line names its defaults from arguments.py, and each command imports its work
+    where it runs it."""
+    code = ("import sys\nfrom herringbone.cli import main\ntry:\n"
+            f"    main({command + ['--help']!r})\nexcept SystemExit:\n    pass\n"
+            "print(sorted({'numba', 'scipy', 'matplotlib'} & set(sys.modules)))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True).stdout.strip().splitlines()[-1]
+    assert loaded == "[]", f"herringbone {' '.join(command)} --help loaded {loaded}"

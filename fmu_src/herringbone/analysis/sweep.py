@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..arguments import SWEEP_METHODS
 from ..model.parameters import INPUTS, unit_of, with_unit
 from ..optional import require
 from ..suggest import did_you_mean
@@ -114,7 +115,7 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     return table, [series for _, series in results]
 
 
-METHODS = ("shooting", "time")
+METHODS = SWEEP_METHODS  # its home: arguments.py
 
 
 def shooting_applies(scene, speeds, params, fmu) -> str | None:

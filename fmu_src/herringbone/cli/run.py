@@ -6,14 +6,14 @@ import time
 from pathlib import Path
 
 from ..arguments import (
+    COMPILED_DEFAULT_TOLERANCE,
     COMPILED_TOLERANCE_ARGUMENT,
     OUTPUT_INTERVAL,
+    REFERENCE_DEFAULT_TOLERANCE,
     REFERENCE_TOLERANCE_ARGUMENT,
     STOP_TIME,
     number,
 )
-from ..integrate.compiled_stepper import DEFAULT_TOLERANCE
-from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_DEFAULT_TOLERANCE
 from ..model.scene import load_scene
 from ..optional import require
 from .common import add_output, add_progress, add_scene, default_output, fail
@@ -39,8 +39,8 @@ def declare(parser) -> None:
     compiled, reference = COMPILED_TOLERANCE_ARGUMENT.allowed, REFERENCE_TOLERANCE_ARGUMENT.allowed
     parser.add_argument("--tolerance", type=number,
                         help="relative to the static mesh force: the error per step "
-                             f"{compiled.describe()} (default {DEFAULT_TOLERANCE:g}); with "
-                             f"--reference the error over the run {reference.describe()} "
+                             f"{compiled.describe()} (default {COMPILED_DEFAULT_TOLERANCE:g}); "
+                             f"with --reference the error over the run {reference.describe()} "
                              f"(default {REFERENCE_DEFAULT_TOLERANCE:g})")
     add_output(parser, "the outputs, one column per output with its unit; an existing file is "
                "replaced", "results/<scene>.csv", SUFFIXES)
@@ -54,7 +54,7 @@ def tolerance_of(args, parser) -> float:
     """--tolerance, checked against the range of the integrator chosen, or its default."""
     argument = REFERENCE_TOLERANCE_ARGUMENT if args.reference else COMPILED_TOLERANCE_ARGUMENT
     if args.tolerance is None:
-        return REFERENCE_DEFAULT_TOLERANCE if args.reference else DEFAULT_TOLERANCE
+        return REFERENCE_DEFAULT_TOLERANCE if args.reference else COMPILED_DEFAULT_TOLERANCE
     if argument.problem(args.tolerance) is not None:
         fail(parser, f"--tolerance {args.tolerance:g}: allowed: {argument.describe()}")
     return args.tolerance

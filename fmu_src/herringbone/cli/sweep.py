@@ -11,18 +11,18 @@ import argparse
 import time
 from pathlib import Path
 
-from ..analysis.sweep import METHODS
 from ..arguments import (
+    COMPILED_DEFAULT_TOLERANCE,
     COMPILED_TOLERANCE_ARGUMENT,
     SAMPLES_PER_PERIOD,
     SETTLE_RESIDUAL,
     SETTLE_TIME,
     SPEED_COUNT,
+    SWEEP_METHODS,
     WINDOW_PERIODS,
     existing_fmu,
     number,
 )
-from ..integrate.compiled_stepper import DEFAULT_TOLERANCE
 from ..model.parameters import INPUTS, PARAMETERS
 from ..model.scene import load_scene
 from ..optional import require
@@ -74,13 +74,13 @@ def declare(parser) -> None:
                              "FROM to TO, in its unit; twice, or with --speeds, for a grid")
     for argument, default in ((SETTLE_RESIDUAL, 1e-3), (SETTLE_TIME, None),
                               (WINDOW_PERIODS, 50), (SAMPLES_PER_PERIOD, 64),
-                              (COMPILED_TOLERANCE_ARGUMENT, DEFAULT_TOLERANCE)):
+                              (COMPILED_TOLERANCE_ARGUMENT, COMPILED_DEFAULT_TOLERANCE)):
         shown = "" if default is None else f"; default {default:g}"
         whole = "a whole number " if argument.whole else ""
         parser.add_argument(argument.option, type=argument.option_type, default=default,
                             help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
                                  f"{shown}")
-    parser.add_argument("--method", choices=METHODS, default=None,
+    parser.add_argument("--method", choices=SWEEP_METHODS, default=None,
                         help="shooting: the periodic steady state directly, followed in speed "
                              "through folds, stable and unstable branches (the default for a "
                              "speed sweep at balanced constant torques, not through an FMU); "

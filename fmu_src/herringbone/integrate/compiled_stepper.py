@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ..arguments import COMPILED_METHODS, check_compiled_run
+from ..arguments import COMPILED_DEFAULT_TOLERANCE, COMPILED_METHODS, check_compiled_run
 from ..model.assembly import GearTrainModel
 from .compiled import dop853, exponential, walk
 from .compiled.equations import pack_system
@@ -36,44 +36,32 @@ from .contract import IntegrationError, Position
 from .segments import Segment
 
 METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
-# The FMU's default: the error per step relative to the static mesh force that keeps every
-# shipped scene within 1e-6 of it at communication steps from 1e-5 to 1e-2 s. Measured (0.1 s,
-# against a run at 1e-12): at most 3.3e-7 (torsional scene, 1e-4 s steps); 1.5e-7 to 1.8e-7 for
-# the others. At 2e-7 the torsional scene came to 9.7e-7 (before the safety factor of 0.85).
-DEFAULT_TOLERANCE = 1e-7
+DEFAULT_TOLERANCE = COMPILED_DEFAULT_TOLERANCE  # its home: arguments.py
 # "auto" takes the implicit method when the fastest eigenvalue of the linearized train is this
 # many times faster than the fastest oscillating one: the excess is overdamped motion that an
-# explicit method must follow for stability alone (measured: benchmarks/extreme_scenes.py).
+# explicit method must follow for stability alone.
 STIFFNESS_RATIO = 10.0
 # "auto" takes the exponential method over DOP853 where at least this share of the contact sets
 # of the mesh period are exact (see choose_method)
 EXACT_SHARE = 0.5
-# DOP853's steps are held to h·|λ|max <= this. Its stability region reaches h·|λ| ≈ 5.9 on the
-# imaginary axis (6.4 on the real one), but its embedded error estimate follows the true error
-# of a mode only well inside it: with steps grown to h·|λ| ≈ 6 in the quiet stretches between
-# switches, the lead-error scene was 1e-6 off at tolerance 1e-7 (F_brg_pinion_left), against
-# 3.4e-7 with this bound. 3.5 leaves room for the stiffest contact set, about 20 % stiffer
-# than the mean the eigenvalues are taken at.
+# DOP853's steps are held to h·|λ|max <= this, well inside its stability region (about 5.9 on
+# the imaginary axis): near the region's edge its embedded error estimate no longer follows
+# the true error of the fastest mode. The margin covers the stiffest contact set, about 20 %
+# stiffer than the mean the eigenvalues are taken at.
 EXPLICIT_STEP_BOUND = 3.5
-# Within that bound the step is held where the method integrates every mode of the train true
-# to its own eigenvalue (`explicit_step_bound`). A mode rings for as long as its damping lets
-# it, so the method's error in its decay rate and frequency adds up over its ringing, not over
-# one step, and the per-step error estimate cannot see that: at h·|λ| = 3.5 DOP853 damps a mode
-# by 0.67 % a step, which is four times the physical damping of a stiff bearing mode with no
-# bearing damping (ζ = 0.0016), and such a scene came out 1.8e-4 of the force scale off at
-# tolerance 1e-7. The error of a mode's eigenvalue is allowed this fraction of its decay rate
-# per unit of the tolerance (3e-3 at the default 1e-7), plus the tolerance times its frequency,
-# which bounds an undamped mode. Measured (tests/test_integrator.py): that scene 1.8e-4 -> ...
+# Within that bound the step is held where the method integrates every mode true to its own
+# eigenvalue (`explicit_step_bound`): a mode rings for as long as its damping lets it, so the
+# method's error in its decay rate and frequency adds up over the ringing, where the per-step
+# error estimate cannot see it. A mode's eigenvalue may be off by this fraction of its decay
+# rate per unit of the tolerance, plus the tolerance times its frequency (which bounds an
+# undamped mode).
 EIGENVALUE_ERROR_PER_TOLERANCE = 3e4
 FREQUENCY_ERROR_PER_TOLERANCE = 1.0
-# The tolerance bounds the error a step makes; a mode adds its steps' errors up for as long as
-# it rings, about 1/ζ radians, so a train whose fast modes are lightly damped (undamped
-# bearings) ends up off by a thousand times the tolerance where a well damped one is off by a
-# few (measured on random scenes: 1e-4 to 3.4e-4 of the force scale at 1e-7, exactly a
-# hundredth of that at 1e-9). Its steps are taken at the tolerance times ζ/LIGHT_DAMPING, ζ the
-# least damping ratio of the oscillating modes within FAST_MODE_FRACTION of |λ|max (the ones
-# whose steps make the error), but no tighter than LEAST_RINGING_FACTOR times it. The shipped
-# scenes with damped bearings (ζ >= 0.024 there) are unchanged.
+# A step's error adds up over the ringing of the mode it lands in, about 1/ζ radians, so a
+# train whose fast modes are lightly damped takes its steps at the tolerance times
+# ζ/LIGHT_DAMPING, ζ the least damping ratio of the oscillating modes within
+# FAST_MODE_FRACTION of |λ|max (the ones whose steps make the error), but no tighter than
+# LEAST_RINGING_FACTOR times it.
 LIGHT_DAMPING = 0.02
 FAST_MODE_FRACTION = 0.1
 LEAST_RINGING_FACTOR = 0.03
@@ -256,7 +244,7 @@ class CompiledStepper:
         self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
                               if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
-        self.mesh = (self.lengths, self.counts, self.tables)  # as walk.advance takes them
+        self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
         self.system_arrays = pack_system(model.system)
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
                                            self.event_time_tolerance, self.contact_slack,

@@ -9,14 +9,12 @@ follows them by its own rule (segments.py, stepping.py), so that the two check e
 """
 from __future__ import annotations
 
-from ..arguments import check_reference_run
+from ..arguments import REFERENCE_DEFAULT_TOLERANCE, check_reference_run
 from ..model.assembly import GearTrainModel
 from .contract import simulate_with
 from .stepping import ScipyStepper
 
-# the reference's default error over the run, relative to the static mesh force (reference_simulate,
-# `herringbone run --reference`)
-DEFAULT_TOLERANCE = 1e-10
+DEFAULT_TOLERANCE = REFERENCE_DEFAULT_TOLERANCE  # its home: arguments.py
 
 
 def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
