@@ -3,6 +3,7 @@ stepping contract both integrators keep, no import cycles, an FMU runtime guard 
 nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`. The install
 itself (non-editable, commands run from a temporary folder) is .ci/installed_package's."""
 import ast
+import re
 import subprocess
 import sys
 import tomllib
@@ -212,3 +213,13 @@ def test_the_wheel_ships_the_scenes_and_examples():
                 for path in PACKAGE.rglob("__init__.py")}
     assert packages | {"herringbone.scenes", "herringbone.examples"} == set(setuptools["packages"])
     assert shipped.scene_files()["reference"].resolve() == (MODELS / "reference.toml").resolve()
+
+
+def test_the_package_tells_no_history():
+    """The package says what is and why, not what happened: no "issue N" (history goes to the
+    CHANGELOG, measurements to docs/)."""
+    cited = [f"{path.relative_to(PACKAGE)}:{number}"
+             for path in sorted(PACKAGE.rglob("*.py"))
+             for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+             if re.search(r"\bissues? \d+", line)]
+    assert not cited, cited

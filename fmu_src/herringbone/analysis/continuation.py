@@ -1,5 +1,5 @@
 """The branch of periodic steady states over a range of pinion speeds: pseudo-arclength
-continuation of the shooting problem of steady_state.py (issue 23).
+continuation of the shooting problem of steady_state.py.
 
 The unknowns are v = (z/Z, ω/W): the section's scaled state z (steady_state) in units of
 Z = `AMPLITUDE_UNIT` of the static mesh force, and the speed in units of W, the spacing of the

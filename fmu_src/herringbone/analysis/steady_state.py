@@ -1,4 +1,4 @@
-"""The periodic steady state directly: Newton shooting on the mesh period (issue 23).
+"""The periodic steady state directly: Newton shooting on the mesh period.
 
 Under constant torques that balance (M_load = u·M_motor) the train is autonomous: the mesh
 depends on the pinion angle φp, a state, not on time. The rigid rotation's momentum
