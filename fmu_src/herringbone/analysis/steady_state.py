@@ -209,6 +209,17 @@ class PeriodMap:
         """A position at time 0 on the section (points loaded by their approach)."""
         return Position(0.0, state, Segment(self.section_set, self.loaded(state)))
 
+    def reset_run(self, state: np.ndarray) -> None:
+        """The map's Run set, in place, to time 0 at `state` on the section (no step-size
+        memory carried over: the map depends on the state alone, as differences of it need)."""
+        run = self.run
+        run.clock[0], run.clock[1] = 0.0, self.stepper.first_step
+        run.place[0], run.place[1] = self.section_set.index, self.section_set.cycle
+        run.state[:] = state
+        run.loaded[:] = 0.0
+        run.loaded[:len(self.section_set)] = self.loaded(state)
+        run.first_steps[:] = 0.0
+
     def flow(self, state: np.ndarray, speed: float) -> tuple[np.ndarray, float]:
         """The state after T, re-expressed on the section's interval k periods on, and the
         offset of its φp from the section (rad; 0 on a periodic orbit). The period runs on
@@ -217,12 +228,7 @@ class PeriodMap:
         the state alone, as differences of it need)."""
         self.evaluations += 1
         run, stepper = self.run, self.stepper
-        run.clock[0], run.clock[1] = 0.0, stepper.first_step
-        run.place[0], run.place[1] = self.section_set.index, self.section_set.cycle
-        run.state[:] = state
-        run.loaded[:] = 0.0
-        run.loaded[:len(self.section_set)] = self.loaded(state)
-        run.first_steps[:] = 0.0
+        self.reset_run(state)
         period = self.period(speed)
         stepper.run_to(run, period, self.torques,
                        int(STEP_BUDGET_PER_FASTEST * period * stepper.fastest_rate)
@@ -274,7 +280,8 @@ class PeriodMap:
 
     def figures(self, state: np.ndarray, speed: float,
                 samples_per_period: int = SAMPLES_PER_PERIOD) -> dict[str, float]:
-        """window_figures over one orbit period, sampled at the time protocol's phases."""
+        """window_figures over one orbit period, sampled at the time protocol's phases (on the
+        map's own Run, from `state` as `flow` starts, each sample the compiled outputs)."""
         scene = self.scene.with_parameters(w0_pinion=speed)
         model = self.model
         start = start_position(model, self.torques[0])
@@ -284,17 +291,18 @@ class PeriodMap:
         count = self.mesh_periods * samples_per_period
         offsets = theta_start + np.arange(count) * self.pitch / samples_per_period - theta_section
         times = np.sort(np.mod(offsets / speed, period))
-        window: dict[str, list[float]] = {name: [] for name in model.output_names}
-
-        def record(t, outputs):
-            for name, value in outputs.items():
-                window[name].append(value)
-
+        samples = np.empty((count, len(self.run.outputs)))
         self.evaluations += 1
-        self.stepper.advance(self.start(state), period, self.torques, times, record)
-        if len(window["F_mesh"]) != count:  # a sample time at T rounds to the period's end
-            raise IntegrationError("orbit samples lost to rounding")
-        return window_figures({k: np.array(v) for k, v in window.items()},
+        self.reset_run(state)
+        run = self.run
+        run.outputs[:] = model.output_vector(state, self.section_set,
+                                             run.loaded[:len(self.section_set)])
+        budget = int(STEP_BUDGET_PER_FASTEST * period * self.stepper.fastest_rate) \
+            + LEAST_STEP_BUDGET
+        for k, t in enumerate(times):
+            self.stepper.run_to(run, t, self.torques, budget)
+            samples[k] = run.outputs
+        return window_figures({name: samples[:, i] for name, i in model.output_layout},
                               static_mesh_force(scene))
 
 
