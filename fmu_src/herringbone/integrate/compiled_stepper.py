@@ -350,9 +350,44 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
 
 def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
              method="auto", max_step=math.inf):
-    """reference_simulate's twin on the compiled integrator (what the FMU runs): a scene's
-    outputs every output_interval, {"time": …, output name: …}. Arguments outside
-    arguments.check_compiled_run's ranges raise ValueError before any work."""
+    """Simulate a scene with the compiled integrator, what the FMU runs (reference_simulate's
+    twin).
+
+    Parameters
+    ----------
+    scene : Scene
+    stop_time, output_interval : float or None
+        Simulated seconds, and seconds between samples (at most stop_time); None: the scene's.
+    tolerance : float
+        The error allowed per internal step in the forces, relative to the force scale (the
+        static mesh force); [1e-12, 1e-2]. Steps are held tighter where the train's fast modes
+        ring long (docs/integrator.md).
+    method : str
+        "auto" (the default: `choose_method` says which), "dop853", "radau" or "exponential".
+    max_step : float
+        The longest internal step, s (inf: no bound beyond the method's own).
+
+    Returns
+    -------
+    Result
+        {"time": …, output name: …} sampled every output_interval, SI units.
+
+    Raises
+    ------
+    ValueError
+        An argument outside arguments.check_compiled_run's ranges, before any work
+        (SceneError, a ValueError, for something that is not a Scene).
+    IntegrationError
+        The run cannot go on (it says where and why); StepBudgetExceeded is one.
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> scene = herringbone.load_scene("models/reference.toml")
+    >>> result = herringbone.simulate(scene, stop_time=0.01)  # doctest: +SKIP
+    >>> result.units["F_mesh"], float(result["F_mesh"].max())  # doctest: +SKIP
+    ('N', 34...)
+    """
     from .contract import simulate_with
 
     check_compiled_run(scene, stop_time, output_interval, tolerance, method, max_step)
