@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..integrate.contract import IntegrationError
+from ..model.parameters import RPM_PER_RAD_S
 from .steady_state import (
     NEWTON_TOLERANCE,
     SHOOTING_TOLERANCE,
@@ -89,7 +90,7 @@ class Branch:
             orbit = point.orbit
             largest = float(np.abs(orbit.multipliers).max()) if orbit else math.nan
             rows.append({
-                "w0_pinion": point.speed, "speed_rpm": point.speed * 30.0 / math.pi,
+                "w0_pinion": point.speed, "speed_rpm": point.speed * RPM_PER_RAD_S,
                 **point.figures,
                 "floquet_max": largest,
                 "floquet_exponent_per_s": orbit.largest_exponent if orbit else math.nan,
