@@ -1,4 +1,4 @@
-"""Issue 15: property tests over random scenes, and the regression scenes they leave behind.
+"""Property tests over random scenes, and the regression scenes they leave behind.
 
 Every random scene (random_scenes.scenes(): 8-60 teeth, helix 5°-40°, bearings 1e8-1e11 N/m,
 damping down to zero, 1-2500 rad/s, light loads, torque steps, lead errors, stagger, edge ramps;
@@ -7,9 +7,11 @@ compiled against reference within 1e-4 of the force scale at the default toleran
 1e-9, against a reference at 1e-12), no tension, finite outputs, angular momentum following the
 torques to 1e-9, the same n_contacts away from switches.
 
-CI runs a few dozen examples, derandomized (the same scenes on every run) and without shrinking
-(a failure is reported as drawn, so a failing CI run stays within its few minutes). The `slow`
-tests draw many more, at random, and shrink what fails:
+Every run checks a few dozen seeded scenes (scene_distribution's NumPy sampler): the same
+scenes on every run and machine. (Hypothesis's derandomized draw is not the same: it mixes in
+the literals of every local module imported so far, so its scenes changed with the session's
+imports and with every edit of the code.) The `slow` tests draw many more with Hypothesis, at
+random, and shrink what fails:
 
     pytest -m slow tests/integrate/test_properties.py                         # 300 examples each
     HERRINGBONE_PROPERTY_EXAMPLES=2000 pytest -m slow tests/integrate/test_properties.py
@@ -26,13 +28,10 @@ import numpy as np
 import pytest
 from helpers.random_scenes import random_scene, scenes
 from helpers.scene_distribution import LOW_SPEED
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, given, settings
 
 import herringbone
 
-CI = settings(derandomize=True, database=None, deadline=None, print_blob=True,
-              phases=(Phase.explicit, Phase.generate),
-              suppress_health_check=[HealthCheck.too_slow])
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
 REGRESSION_SCENES = sorted(checks.REGRESSION_DIR.glob("*.toml"))
@@ -43,6 +42,10 @@ DISAGREEMENTS = {
                         "bearings is about 1800 times its tolerance (1.8e-4 of the force scale "
                         "at 1e-7, 1.8e-7 at 1e-10: it converges, but its step tolerance does not "
                         "cover these lightly damped modes)",
+    "found_59825caa1e": "a rattling train with no mesh damping (contact lost and regained at "
+                        "531 rad/s): neither integrator has converged at its tight tolerance "
+                        "(compiled 1e-9 against 1e-11: 2.4e-2 of the force scale; reference "
+                        "1e-10 against 1e-12: 2.5e-3)",
     "found_4c2831d756": "a rattling train (light load, no motor, rigid bearings, contact lost "
                         "and regained): the reference at 1e-10 does not agree with the "
                         "reference of the previous release by more than the force scale, and "
@@ -76,17 +79,30 @@ def check_tight(scene):
                        reference_tolerance=1e-12)
 
 
-# about 0.5 s a scene on one core (at most ~2 s): the two CI tests take about a minute
-@settings(CI, max_examples=40)
-@given(scenes())
-def test_random_scene_at_the_default_tolerance(scene):
-    checks.check_scene(scene)
+# Seeded scenes the integrators disagree on, each a fault not yet cured (strict xfails)
+SEED_DISAGREEMENTS = {
+    34: "the compiled integrator at its default tolerance is 8e-4 of the force scale off (a "
+        "light train at 1.2 rad/s with edge ramps and contact loss); at 1e-10 it is 2e-6 from "
+        "the reference: its step tolerance misses what this slow train needs",
+}
 
 
-@settings(CI, max_examples=12)
-@given(scenes())
-def test_random_scene_at_a_tight_tolerance(scene):
-    check_tight(scene)
+def seeded_cases(seeds):
+    """random_scene(seed) for each seed, a known disagreement as a strict xfail naming it."""
+    return [pytest.param(seed, id=f"seed_{seed}", marks=[pytest.mark.xfail(
+        strict=True, reason=SEED_DISAGREEMENTS[seed])] if seed in SEED_DISAGREEMENTS else [])
+        for seed in seeds]
+
+
+# about 0.5 s a scene on one core (at most ~2 s): the two tests take about two minutes
+@pytest.mark.parametrize("seed", seeded_cases(range(40)))
+def test_random_scene_at_the_default_tolerance(seed):
+    checks.check_scene(random_scene(seed))
+
+
+@pytest.mark.parametrize("seed", seeded_cases(range(40, 52)))
+def test_random_scene_at_a_tight_tolerance(seed):
+    check_tight(random_scene(seed))
 
 
 @pytest.mark.slow
