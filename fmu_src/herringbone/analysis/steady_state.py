@@ -158,6 +158,7 @@ class PeriodMap:
         self.evaluations = 0  # period integrations done, for benchmarks
         self.contact_band = contact_band(model)
         self.run = self.stepper.start(start_position(model, self.torques[0]))
+        self.static_force: float | None = None  # the figures' yardstick, M_motor/Rp
 
     # --- coordinates --------------------------------------------------------------------
 
@@ -282,8 +283,8 @@ class PeriodMap:
                 samples_per_period: int = SAMPLES_PER_PERIOD) -> dict[str, float]:
         """window_figures over one orbit period, sampled at the time protocol's phases (on the
         map's own Run, from `state` as `flow` starts, each sample the compiled outputs)."""
-        scene = self.scene.with_parameters(w0_pinion=speed)
         model = self.model
+        static_force = self.static_force = self.static_force or static_mesh_force(self.scene)
         start = start_position(model, self.torques[0])
         theta_start = self.rigid_angle(start.state, start.segment.contact_set)
         theta_section = self.rigid_angle(state, self.section_set)
@@ -303,7 +304,7 @@ class PeriodMap:
             self.stepper.run_to(run, t, self.torques, budget)
             samples[k] = run.outputs
         return window_figures({name: samples[:, i] for name, i in model.output_layout},
-                              static_mesh_force(scene))
+                              static_force)
 
 
 def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,
