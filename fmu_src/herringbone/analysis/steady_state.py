@@ -221,6 +221,11 @@ class PeriodMap:
         run.loaded[:len(self.section_set)] = self.loaded(state)
         run.first_steps[:] = 0.0
 
+    def step_budget(self, period: float) -> int:
+        """The most steps one integration over `period` (s) may take before it gives up."""
+        return int(STEP_BUDGET_PER_FASTEST * period * self.stepper.fastest_rate) \
+            + LEAST_STEP_BUDGET
+
     def flow(self, state: np.ndarray, speed: float) -> tuple[np.ndarray, float]:
         """The state after T, re-expressed on the section's interval k periods on, and the
         offset of its φp from the section (rad; 0 on a periodic orbit). The period runs on
@@ -231,9 +236,7 @@ class PeriodMap:
         run, stepper = self.run, self.stepper
         self.reset_run(state)
         period = self.period(speed)
-        stepper.run_to(run, period, self.torques,
-                       int(STEP_BUDGET_PER_FASTEST * period * stepper.fastest_rate)
-                       + LEAST_STEP_BUDGET)
+        stepper.run_to(run, period, self.torques, self.step_budget(period))
         end_set = self.model.mesh.contact_set(int(run.place[1]), int(run.place[0]))
         target = self.model.mesh.interval_start(self.mesh_periods, 0) + self.section_phase
         offset = end_set.pinion_angle + run.state[self.pinion] - target
@@ -298,8 +301,7 @@ class PeriodMap:
         run = self.run
         run.outputs[:] = model.output_vector(state, self.section_set,
                                              run.loaded[:len(self.section_set)])
-        budget = int(STEP_BUDGET_PER_FASTEST * period * self.stepper.fastest_rate) \
-            + LEAST_STEP_BUDGET
+        budget = self.step_budget(period)
         for k, t in enumerate(times):
             self.stepper.run_to(run, t, self.torques, budget)
             samples[k] = run.outputs
