@@ -80,7 +80,8 @@ def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance
     `stages`, STAGE_ROWS rows of the state's size (row k the stage k + 1 derivative, row
     N_STAGES the new state's), and `trial`, one state. Returns the error norm (≤ 1:
     acceptable)."""
-    stages[0, :] = rate
+    for j in range(rate.shape[0]):
+        stages[0, j] = rate[j]
     # one call site of the (inlined) derivative: thirteen copies would crowd the code cache
     for stage in range(1, N_STAGES):
         _stage_state(stage, state, h, stages, trial)

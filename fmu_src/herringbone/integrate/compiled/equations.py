@@ -174,7 +174,7 @@ def _matrix(buffer, ints, k):
     return buffer[start:start + rows * columns].reshape((rows, columns))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def unpack_system(floats, ints):
     """pack_system's inverse: a System whose arrays are views of the two buffers. Argument k
     of System reads field k with the reader of its shape (scalar, vector, matrix) from its
@@ -236,7 +236,7 @@ def point_approach(system, motion, lever_arm, lead_error):
             + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def point_geometry(system, points, count, pinion_travel_angle):
     """Stiffness (N/m), lever arm (m) and lead error (m) of the first `count` points of the
     table `points`, as three new arrays, once the pinion has turned `pinion_travel_angle` (rad)
@@ -320,7 +320,7 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
                                                 * state[n + k])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def outputs(system, points, count, loaded, state, out):
     """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness
     (N/m) and force (N), in all and per half, n_contacts (loaded points of nonzero stiffness),

@@ -290,7 +290,7 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 # --- the kernels ---------------------------------------------------------------------------------
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def unpack_tables(complexes, floats, ints):
     """pack_tables' inverse: ExactTables whose arrays are views of the three buffers."""
     intervals, variants, size, width, slow, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], \
@@ -351,10 +351,13 @@ def variant_of(tables, interval, count, loaded, state):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _to_modal(tables, interval, variant, state, motor_torque, load_torque):
-    """L·[state; u] into tables.modal."""
+    """L·[state; u] into tables.modal. (Here and below the tables are indexed entry by entry:
+    a view such as left[interval, variant] costs two counts on the heap's reference, as much
+    as a row of this product.)"""
     size = state.shape[0]
-    augmented, modal, left = tables.augmented, tables.modal, tables.left[interval, variant]
-    augmented[:size] = state
+    augmented, modal, left = tables.augmented, tables.modal, tables.left
+    for j in range(size):
+        augmented[j] = state[j]
     augmented[size] = motor_torque
     augmented[size + 1] = load_torque
     augmented[size + 2] = 1.0
@@ -362,8 +365,15 @@ def _to_modal(tables, interval, variant, state, motor_torque, load_torque):
     for i in range(width):
         total = 0.0j
         for j in range(width):
-            total += left[i, j] * augmented[j]
+            total += left[interval, variant, i, j] * augmented[j]
         modal[i] = total
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def magnitude(z):
+    """|z| without hypot's guard against overflow, which these sizes never come near: libm's
+    hypot took a tenth of the method's time."""
+    return math.sqrt(z.real * z.real + z.imag * z.imag)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -396,18 +406,18 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     unloaded) over it."""
     interval, variant = exact // VARIANTS, exact % VARIANTS
     _to_modal(tables, interval, variant, state, motor_torque, load_torque)
-    modal, rates = tables.modal, tables.rates[interval, variant]
+    modal, rates = tables.modal, tables.rates
     slow_count = tables.slow_count[interval, variant]
     # bounds: each function is its slow polynomial plus the fast modes' sum
-    speed_row, approach_row = tables.pinion_rate[interval, variant], tables.approach[interval,
-                                                                                      variant]
+    speed_row, approach_row = tables.pinion_rate, tables.approach
     speed_swing = approach_swing = 0.0
     for k in range(slow_count, modal.shape[0]):
-        speed_swing += abs(speed_row[k] * modal[k])
-        approach_swing += abs(approach_row[k] * modal[k])
-        modal[k] *= np.exp(rates[k] * h)
+        size = magnitude(modal[k])
+        speed_swing += magnitude(speed_row[interval, variant, k]) * size
+        approach_swing += magnitude(approach_row[interval, variant, k]) * size
+        modal[k] *= np.exp(rates[interval, variant, k] * h)
     speed0, approach0, speed_drift, approach_drift = _slow_series(
-        tables, interval, variant, modal, h, speed_row, approach_row)
+        tables, interval, variant, modal, h)
     momentum, moment = _momentum(system, state)
     _from_modal(tables, interval, variant, out)
     # The rounding of the modal round trip, about 1e-13 of Â, leaves the rigid rotation a bias
@@ -430,37 +440,39 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slow_series(tables, interval, variant, modal, h, speed_row, approach_row):
+def _slow_series(tables, interval, variant, modal, h):
     """Propagate the slow block of `modal` over h by its series (exp(T_slow·h) applied term by
     term; the block is nilpotent but for rounding, so the series ends after a few terms).
     Returns the slow parts of the pinion speed and of the approach at the step's start, and
     bounds of how far each moves over the step (the sum of its terms' magnitudes)."""
     slow_count = tables.slow_count[interval, variant]
-    block, term, following = tables.slow[interval, variant], tables.series[0], tables.series[1]
+    block, series = tables.slow, tables.series
+    speed_row, approach_row = tables.pinion_rate, tables.approach
     speed0 = approach0 = 0.0
     largest = 0.0
     for k in range(slow_count):
-        speed0 += (speed_row[k] * modal[k]).real
-        approach0 += (approach_row[k] * modal[k]).real
-        term[k] = modal[k]
-        largest = max(largest, abs(modal[k]))
+        speed0 += (speed_row[interval, variant, k] * modal[k]).real
+        approach0 += (approach_row[interval, variant, k] * modal[k]).real
+        series[0, k] = modal[k]
+        largest = max(largest, magnitude(modal[k]))
     speed_drift = approach_drift = 0.0
-    for order in range(1, MAX_SERIES_TERMS):
+    for order in range(1, MAX_SERIES_TERMS):  # series[0]: the term, series[1]: the next
         size = 0.0
         for i in range(slow_count):
             total = 0.0j
             for j in range(slow_count):
-                total += block[i, j] * term[j]
-            following[i] = total * (h / order)
+                total += block[interval, variant, i, j] * series[0, j]
+            series[1, i] = total * (h / order)
         speed_change = approach_change = 0.0j
         for i in range(slow_count):
-            term[i] = following[i]
-            modal[i] += following[i]
-            speed_change += speed_row[i] * following[i]
-            approach_change += approach_row[i] * following[i]
-            size = max(size, abs(following[i]))
-        speed_drift += abs(speed_change)
-        approach_drift += abs(approach_change)
+            following = series[1, i]
+            series[0, i] = following
+            modal[i] += following
+            speed_change += speed_row[interval, variant, i] * following
+            approach_change += approach_row[interval, variant, i] * following
+            size = max(size, magnitude(following))
+        speed_drift += magnitude(speed_change)
+        approach_drift += magnitude(approach_change)
         if size <= SERIES_FLOOR * largest:
             break
     return speed0, approach0, speed_drift, approach_drift
@@ -469,9 +481,10 @@ def _slow_series(tables, interval, variant, modal, h, speed_row, approach_row):
 @njit(cache=True, error_model="numpy", inline="always")
 def _from_modal(tables, interval, variant, out):
     """out = Re(R·modal)."""
-    right, modal = tables.right[interval, variant], tables.modal
+    right, modal = tables.right, tables.modal
     for i in range(out.shape[0]):
         total = 0.0
         for k in range(modal.shape[0]):
-            total += right[i, k].real * modal[k].real - right[i, k].imag * modal[k].imag
+            entry = right[interval, variant, i, k]
+            total += entry.real * modal[k].real - entry.imag * modal[k].imag
         out[i] = total

@@ -180,7 +180,9 @@ class Workspace(NamedTuple):
     pivots: np.ndarray | None  # Radau IIA's pivots: the real factors' row, the complex ones'
     counters: np.ndarray  # by Counter
     memory: np.ndarray  # by Memory
-    exact: tuple | None  # the exponential method's tables, as exponential.pack_tables packs them
+    # the exponential method's tables: as exponential.pack_tables packs them in Python, as
+    # exponential.ExactTables inside `advance` (open_workspace)
+    exact: tuple | None
 
 
 JACOBIAN, REAL_FACTORS = 0, 1  # rows of Workspace.matrices
@@ -319,6 +321,21 @@ def _is_explicit(workspace):
     return lambda workspace: explicit
 
 
+def open_workspace(workspace):
+    """The Workspace of `advance`'s plain tuple, the exponential method's tables taken apart
+    (exponential.unpack_tables) once per call: each of their array views costs a count on
+    the heap's reference, which at every step was a third of the method's time."""
+
+
+@overload(open_workspace, inline="always")
+def _open_workspace(workspace):
+    if isinstance(workspace[Workspace._fields.index("exact")], types.NoneType):
+        return lambda workspace: Workspace(*workspace)
+    return lambda workspace: Workspace(
+        workspace[0], workspace[1], workspace[2], workspace[3], workspace[4], workspace[5],
+        workspace[6], exponential.unpack_tables(*workspace[7]))
+
+
 def exact_form(workspace, interval, count, loaded, state):
     """exponential.variant_of where the workspace is the exponential method's; −1 (a constant
     in compiled code) in the others'."""
@@ -329,7 +346,7 @@ def _exact_form(workspace, interval, count, loaded, state):
     if _lacks(workspace, "exact"):
         return lambda workspace, interval, count, loaded, state: -1
     return lambda workspace, interval, count, loaded, state: exponential.variant_of(
-        exponential.unpack_tables(*workspace.exact), interval, count, loaded, state)
+        workspace.exact, interval, count, loaded, state)
 
 
 def exact_step(system, segment, state, workspace, h, out):
@@ -342,7 +359,7 @@ def _exact_step(system, segment, state, workspace, h, out):
     if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, h, out: False
     return lambda system, segment, state, workspace, h, out: exponential.step(
-        system, exponential.unpack_tables(*workspace.exact), segment.exact, state,
+        system, workspace.exact, segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
         == exponential.ALL_LOADED else -1.0, out)
@@ -609,8 +626,8 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
         found = first_crossing(values[Values.BEFORE], values[Values.TRIAL], segment.events,
                                segment.loaded)
         if found >= 0:  # crossed by then: the bracket shrinks to the probe
-            vectors[Vector.NEW_STATE, :] = trial
-            values[Values.AFTER, :] = values[Values.TRIAL]
+            copy_into(vectors[Vector.NEW_STATE], trial)
+            copy_into(values[Values.AFTER], values[Values.TRIAL])
             return found, fraction * h
     return event, h
 
@@ -758,10 +775,10 @@ def finish_step(state, workspace):
     """Make the accepted step's end, which crossed no event, the new start: state, rate,
     event values and approach slopes."""
     vectors, values = workspace.vectors, workspace.values
-    state[:] = vectors[Vector.NEW_STATE]
-    vectors[Vector.RATE, :] = vectors[Vector.RATE_AFTER]
-    values[Values.BEFORE, :] = values[Values.AFTER]
-    values[Values.SLOPES_BEFORE, :] = values[Values.SLOPES_AFTER]
+    copy_into(state, vectors[Vector.NEW_STATE])
+    copy_into(vectors[Vector.RATE], vectors[Vector.RATE_AFTER])
+    copy_into(values[Values.BEFORE], values[Values.AFTER])
+    copy_into(values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -810,8 +827,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
     trial_values = values[Values.TRIAL]
     low = 0.0
-    low_values[:] = values[Values.BEFORE]
-    high_values[:] = values[Values.AFTER]
+    copy_into(low_values, values[Values.BEFORE])
+    copy_into(high_values, values[Values.AFTER])
     older_h, older_value = low, low_values[event]  # the two latest points, for the secant
     newer_h, newer_value = high, high_values[event]
     pinion_rate = state.shape[0] // 2 + system.pinion
@@ -843,13 +860,13 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
         crossed = first_crossing(low_values, trial_values, segment.events, segment.loaded)
         if crossed < 0:
             older_h, older_value, low = newer_h, newer_value, trial_h
-            low_values[:] = trial_values
+            copy_into(low_values, trial_values)
         else:
             older_h, older_value = ((low, low_values[crossed]) if crossed != event
                                     else (newer_h, newer_value))
             event, high = crossed, trial_h  # (another event that crosses first is located)
-            new_state[:] = trial
-            high_values[:] = trial_values
+            copy_into(new_state, trial)
+            copy_into(high_values, trial_values)
         newer_h, newer_value, newer_slope = trial_h, trial_values[event], trial[pinion_rate]
     return event, high
 
@@ -892,12 +909,12 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
     """Move the run past the crossing of `event` located at `high` (s from the step's start)
     by the accepted step of `plan` (a StepPlan) from `time` (s; the run's end: `end`): the
     state there (NEW_STATE) and the time. Returns count_progress's Status."""
-    state[:] = workspace.vectors[Vector.NEW_STATE]
+    copy_into(state, workspace.vectors[Vector.NEW_STATE])
     clock[0] = end if plan.landing and high == plan.h_step else time + high
     return count_progress(workspace.counters, event, high, plan.h_step)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def end_segment(system, mesh, run, workspace, torques, event):
     """Begin the segment that follows `event` at the run's state: the next contact set and its
     loaded points (next_segment, into the run's place and loaded points), the rate, event
@@ -959,6 +976,14 @@ def set_loaded_by_sign(system, points, count, state, approach, loaded):
 # --- the loop ---------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy", inline="always")
+def copy_into(target, source):
+    """target[:] = source, entry by entry: a slice assignment may copy through a buffer from
+    the heap, which `advance` (compiled without the heap's reference counts) cannot use."""
+    for j in range(source.shape[0]):
+        target[j] = source[j]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def all_finite(state):
     """Whether every entry of `state` is finite."""
     for j in range(state.shape[0]):
@@ -967,7 +992,7 @@ def all_finite(state):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_steps):
     """Integrate a run to exactly `end` (s) with the torques (motor, load; N·m) held. Returns
     (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
@@ -979,7 +1004,7 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     written back, also where the run fails; its `outputs` get equations.outputs there);
     workspace, a Workspace."""
     system = unpack_system(system_arrays[0], system_arrays[1])
-    mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), Workspace(*workspace)
+    mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), open_workspace(workspace)
     begin_walk(workspace)
     status, steps = walk(system, mesh, settings, run, workspace, end, torques, max_steps)
     if status == Status.OK and not all_finite(run.state):
@@ -1033,7 +1058,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
         counters[Counter.OPENING] = -1
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
         if explicit and segment.exact < 0:  # its last stage is the rate at the step's end
-            rows.rate_after[:] = rows.last_stage
+            copy_into(rows.rate_after, rows.last_stage)
         else:
             derivative(system, segment.points, segment.point_count, segment.loaded,
                        segment.motor_torque, segment.load_torque, rows.new_state, rows.rate_after)
@@ -1066,7 +1091,7 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event):
     return event, h_step
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
 def cross_event(system, mesh, settings, run, workspace, torques, segment, plan, end, event,
                 high):
     """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
