@@ -24,6 +24,8 @@ from typing import Annotated, NamedTuple, get_origin, get_type_hints
 import numpy as np
 from numba import njit
 
+from .counting import COUNTED
+
 # rows of a contact-point table: HALF 0 (left) or 1 (right); stiffness (N/m), lever arm (m) and
 # lead error (m) each as its value where the set began plus its slope per m of axial travel
 HALF, STIFFNESS0, STIFFNESS_SLOPE, LEVER_ARM0, LEVER_ARM_SLOPE, LEAD_ERROR0, LEAD_ERROR_SLOPE \
@@ -174,7 +176,7 @@ def _matrix(buffer, ints, k):
     return buffer[start:start + rows * columns].reshape((rows, columns))
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def unpack_system(floats, ints):
     """pack_system's inverse: a System whose arrays are views of the two buffers. Argument k
     of System reads field k with the reader of its shape (scalar, vector, matrix) from its
@@ -236,7 +238,7 @@ def point_approach(system, motion, lever_arm, lead_error):
             + system.mesh_damping_factor * (base_rate + lever_arm * tilt_rate))
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def point_geometry(system, points, count, pinion_travel_angle):
     """Stiffness (N/m), lever arm (m) and lead error (m) of the first `count` points of the
     table `points`, as three new arrays, once the pinion has turned `pinion_travel_angle` (rad)
@@ -320,7 +322,7 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
                                                 * state[n + k])
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def outputs(system, points, count, loaded, state, out):
     """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness
     (N/m) and force (N), in all and per half, n_contacts (loaded points of nonzero stiffness),

@@ -44,6 +44,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
+from .counting import COUNTED
 from .equations import (
     LEAD_ERROR0,
     LEAD_ERROR_SLOPE,
@@ -290,7 +291,7 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 # --- the kernels ---------------------------------------------------------------------------------
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def unpack_tables(complexes, floats, ints):
     """pack_tables' inverse: ExactTables whose arrays are views of the three buffers."""
     intervals, variants, size, width, slow, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], \

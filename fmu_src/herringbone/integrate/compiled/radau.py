@@ -31,13 +31,14 @@ from scipy.integrate._ivp.radau import (
     T,
 )
 
+from .counting import COUNTED
 from .equations import derivative
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 _TI_REAL, _TI_COMPLEX, _T, _E = (np.ascontiguousarray(a) for a in (TI_REAL, TI_COMPLEX, T, E))
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def lu_factor(matrix, pivots):
     """In place: LU with partial pivoting (real or complex). The systems here are at most
     16 × 16, so a plain loop beats calling LAPACK through numba's allocating wrappers."""
@@ -58,7 +59,7 @@ def lu_factor(matrix, pivots):
                     matrix[row, k] -= matrix[row, column] * matrix[column, k]
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def lu_solve(matrix, pivots, vector):
     """In place: `vector` becomes the solution x of A·x = vector, `matrix` and `pivots` being
     the factors lu_factor made of A."""
@@ -73,7 +74,7 @@ def lu_solve(matrix, pivots, vector):
         vector[i] /= matrix[i, i]
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def jacobian_of(system, segment, state, rate, scale, jacobian, trial, column):
     """The Jacobian ∂(derivative)/∂(state) of the segment (its equations as `step` takes them)
     at `state` (whose derivative is `rate`) into `jacobian`, by forward differences of size
@@ -101,7 +102,7 @@ class Factors(NamedTuple):
     complex_pivots: np.ndarray
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def factorize(jacobian, h, factors):
     """The LU factors `step` takes for step size h (s) into `factors` (a Factors record):
     (MU_REAL/h·I − J) and (MU_COMPLEX/h·I − J). `jacobian` is not changed."""
@@ -117,7 +118,7 @@ def factorize(jacobian, h, factors):
     lu_factor(complex_, factors.complex_pivots)
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance, factors,
          stages, new_state):
     """One Radau IIA step of size h (s) from `state`, whose derivative is `rate`, with the

@@ -66,6 +66,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from . import dop853, exponential, radau
+from .counting import COUNTED, UNCOUNTED
 from .equations import (
     Event,
     PeriodTable,
@@ -914,13 +915,13 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
     return count_progress(workspace.counters, event, high, plan.h_step)
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def end_segment(system, mesh, run, workspace, torques, event):
     """Begin the segment that follows `event` at the run's state: the next contact set and its
     loaded points (next_segment, into the run's place and loaded points), the rate, event
     values and slopes there (begin_segment), and after a phase event into the next set, its
-    first step size. Returns the CompiledSegment. (It calls nothing that is not inlined and
-    uses its arrays on every path, so that numba need count none of them.)"""
+    first step size. Returns the CompiledSegment (a record of arrays: so compiled COUNTED,
+    counting.py)."""
     clock, place, state, loaded = run.clock, run.place, run.state, run.loaded
     counters = workspace.counters
     place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
@@ -992,7 +993,7 @@ def all_finite(state):
     return True
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(**UNCOUNTED)
 def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_steps):
     """Integrate a run to exactly `end` (s) with the torques (motor, load; N·m) held. Returns
     (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
@@ -1002,7 +1003,8 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     tuple each becomes here: system_arrays, equations.pack_system's two arrays; mesh, a
     PeriodTable; settings, pack_settings' record; run, RunArrays (the run's position, read and
     written back, also where the run fails; its `outputs` get equations.outputs there);
-    workspace, a Workspace."""
+    workspace, a Workspace. Compiled UNCOUNTED (counting.py): its body neither allocates nor
+    copies by slices."""
     system = unpack_system(system_arrays[0], system_arrays[1])
     mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), open_workspace(workspace)
     begin_walk(workspace)
@@ -1091,7 +1093,7 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event):
     return event, h_step
 
 
-@njit(cache=True, error_model="numpy", _nrt=True)  # (compiled/__init__.py)
+@njit(**COUNTED)
 def cross_event(system, mesh, settings, run, workspace, torques, segment, plan, end, event,
                 high):
     """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
