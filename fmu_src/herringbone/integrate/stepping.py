@@ -101,6 +101,10 @@ class ScipyStepper:
         self.max_step = max_step
         self.check_tension = check_tension
         self.fractions = np.linspace(0.0, 1.0, INTERIOR_NODES + 2)
+        # The record of what this stepper has met (results never depend on it): segments
+        # without a loaded point followed by one with, each a landing of a lifted-off mesh,
+        # where a train may amplify every earlier error (global_error.py reads it)
+        self.landings = 0
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
@@ -124,7 +128,9 @@ class ScipyStepper:
                     raise IntegrationError(f"stuck at t = {reached:.9g} s: {CHATTER_MESSAGE}")
             time = reached
             if event is not None:
+                lifted = not segment.loaded.any()
                 segment, state = segments.after(self.model, segment, event, state, torques)
+                self.landings += lifted and bool(segment.loaded.any())
         return Position(time, state, segment, hint)
 
     def _integrate_segment(self, time, state, segment, hint, end, torques, samples, on_sample):
