@@ -12,9 +12,9 @@ reference_simulate at 1e-10 and at 1e-12; the figure is max |F(1e-10) − F(1e-1
 the bearing forces, in units of GearTrainModel.force_scale(). Prints one line per run and a
 summary: the largest figure, the median, how many are beyond 1e-8 (issue 25's bar), and the
 seconds each run took. A run that lands is checked (herringbone/integrate/global_error.py): its
-line adds, at each tolerance, the runs the check made, its estimate of the delivered run's error
-and "warned" where it gave a ReferenceAccuracyWarning. Needs numpy, scipy and a herringbone
-source tree on PYTHONPATH.
+line adds, at each tolerance, the runs the check made, the step tolerance of the run delivered,
+its estimate of that run's error and "warned" where it gave a ReferenceAccuracyWarning. Needs
+numpy, scipy and a herringbone source tree on PYTHONPATH.
 """
 from __future__ import annotations
 
@@ -64,7 +64,8 @@ def agreement(scene) -> tuple[float, list[float], list[str]]:
         warned = ", warned" if any(issubclass(w.category, ReferenceAccuracyWarning)
                                    for w in caught) else ""
         checks.append("" if check.estimate is None else
-                      f"[{check.runs} runs, est {check.estimate:.1e}{warned}]")
+                      f"[{check.runs} runs to {check.step_tolerance:.1e}, "
+                      f"est {check.estimate:.1e}{warned}]")
     scale = GearTrainModel(scene).force_scale()
     error = max(np.abs(runs[0][k] - runs[1][k]).max() for k in FORCES if k in runs[0]) / scale
     return float(error), seconds, checks
