@@ -122,7 +122,7 @@ def checked_run(run: Callable[[float], tuple[Result, int]], model: GearTrainMode
     """
     result, landings = run(step)
     if landings < LANDINGS_CHECKED:
-        return result, Check(step, None, 1, landings)
+        return result, Check(float(step), None, 1, landings)
     if step / TIGHTENING >= FINEST_STEP_TOLERANCE:
         runs = [(step, result), (step / TIGHTENING, run(step / TIGHTENING)[0])]
     else:  # scipy takes no steps that much tighter: the estimate needs a looser run
@@ -140,7 +140,7 @@ def checked_run(run: Callable[[float], tuple[Result, int]], model: GearTrainMode
             f"at {estimate:.1e} of the force scale, beyond its tolerance {tolerance:.0e}, at "
             f"step tolerance {tightest:.1e} (the train lifts off and lands {landings} times, "
             "and amplifies small errors from landing to landing)"), stacklevel=3)
-    return runs[-1][1], Check(tightest, estimate, len(runs), landings)
+    return runs[-1][1], Check(float(tightest), estimate, len(runs), landings)
 
 
 def _estimate(runs: list[tuple[float, Result]], model: GearTrainModel) -> float:
@@ -148,5 +148,5 @@ def _estimate(runs: list[tuple[float, Result]], model: GearTrainModel) -> float:
     falling): the largest that its difference from any earlier run gives (estimated_error),
     since the error follows the step tolerance only on average."""
     step, result = runs[-1]
-    return max(estimated_error(force_difference(other, result, model), looser, step)
-               for looser, other in runs[:-1])
+    return float(max(estimated_error(force_difference(other, result, model), looser, step)
+                     for looser, other in runs[:-1]))
