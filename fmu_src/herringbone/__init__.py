@@ -14,7 +14,8 @@ The package by concept:
 The public API: `load_scene`, `scene_from_dict` and `Scene` (SceneError for a bad scene);
 `simulate` (the compiled integrator, what the FMU runs) and `reference_simulate` (scipy's),
 which give a `Result` and raise ValueError for a bad argument, IntegrationError
-(StepBudgetExceeded among them) for a run that cannot go on; `sweep`; `scene_inputs` (a scene's
+(StepBudgetExceeded among them) for a run that cannot go on (the reference warns with
+ReferenceAccuracyWarning where it cannot hold its tolerance); `sweep`; `scene_inputs` (a scene's
 input table for fmpy).
 
 The public API is loaded on first use, so that `import herringbone.fmu.runtime` (which the FMU
@@ -34,6 +35,7 @@ _API = {
     # what a run gives and what it raises (besides ValueError for a bad argument)
     "Result": ".integrate.contract", "IntegrationError": ".integrate.contract",
     "StepBudgetExceeded": ".integrate.compiled_stepper", "MissingDependency": ".optional",
+    "ReferenceAccuracyWarning": ".integrate.global_error",
     # a scene's input table for fmpy, held between its rows
     "scene_inputs": ".fmu.run",
 }
@@ -41,7 +43,7 @@ _SUBMODULES = ("model", "integrate", "analysis", "fmu", "arguments", "shipped", 
                "suggest")
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "reference_simulate",
            "simulate", "sweep", "Result", "IntegrationError", "StepBudgetExceeded",
-           "MissingDependency", "scene_inputs", "__version__"]
+           "MissingDependency", "ReferenceAccuracyWarning", "scene_inputs", "__version__"]
 
 
 def __getattr__(name):

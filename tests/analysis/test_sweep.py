@@ -286,6 +286,20 @@ def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 10_000
 
 
+def test_the_progress_bar_follows_the_references_check_with_the_same_numbers(capsys):
+    """2 ms of the jump scene lift the mesh off and land it twice: reference_simulate runs it
+    again ten times tighter (integrate/global_error.py), and so does the run with the bar,
+    which starts again named as the check."""
+    from herringbone.analysis.run_progress import reference_simulate_with_progress
+
+    scene = herringbone.load_scene(MODELS / "jump_resonance.toml")
+    plain = herringbone.reference_simulate(scene, stop_time=0.002, output_interval=1e-4)
+    watched = reference_simulate_with_progress(scene, stop_time=0.002, output_interval=1e-4)
+    for name in plain:
+        assert np.array_equal(plain[name], watched[name]), name
+    assert "check jump_resonance (steps to 5e-12)" in capsys.readouterr().err
+
+
 def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
     """A branch table: stable stretches solid, unstable dashed (each stretch joined to the next
     point), folds crossed, time sweeps as triangles; the picture is written."""

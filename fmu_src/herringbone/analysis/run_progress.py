@@ -9,6 +9,7 @@ import sys
 
 from ..arguments import check_compiled_run, check_reference_run
 from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_TOLERANCE
+from ..integrate.reference import checked_reference_run
 from ..optional import require
 
 
@@ -56,7 +57,8 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     stop_time, output_interval : float or None
         Seconds; None: the scene's.
     tolerance : float or None
-        Error per step relative to the static mesh force; None: the integrator's default.
+        Relative to the static mesh force: the compiled integrator's error per step, the
+        reference's over the run; None: the integrator's default.
     reference : bool
         Run the scipy reference instead of the compiled integrator.
     progress : bool
@@ -67,24 +69,31 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     dict
         {"time": …, output name: …}, the same numbers to the bit as without the bar.
     """
-    from ..integrate.contract import Stepper, simulate_with
+    from ..integrate.contract import simulate_with
     from ..model.assembly import GearTrainModel
 
-    stepper: Stepper
     stop = scene.experiment.stop_time if stop_time is None else stop_time
     if reference:
-        from ..integrate.stepping import ScipyStepper
-
         tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
         check_reference_run(scene, stop_time, output_interval, tolerance)
-        stepper = ScipyStepper(GearTrainModel(scene), tolerance, horizon=stop)
-    else:
-        from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
-        from ..integrate.first_start import announce_compiles
+        with progress_bar(stop, f"run {scene.name}", progress) as bar:
+            return checked_reference_run(scene, stop_time, output_interval, tolerance,
+                                         wrap=lambda stepper: _watched(stepper, bar, scene))[0]
+    from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+    from ..integrate.first_start import announce_compiles
 
-        tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
-        check_compiled_run(scene, stop_time, output_interval, tolerance)
-        announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
-        stepper = CompiledStepper(GearTrainModel(scene), tolerance)
+    tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    check_compiled_run(scene, stop_time, output_interval, tolerance)
+    announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
+    stepper = CompiledStepper(GearTrainModel(scene), tolerance)
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         return simulate_with(ProgressStepper(stepper, bar), scene, stop_time, output_interval)
+
+
+def _watched(stepper, bar, scene) -> ProgressStepper:
+    """The stepper of one of the reference's runs on the bar: a run that checks the first
+    (integrate/global_error.py) starts the bar again, named as the check."""
+    if bar.n > 0:
+        bar.reset()
+        bar.set_description(f"check {scene.name} (steps to {stepper.step_tolerance:.0e})")
+    return ProgressStepper(stepper, bar)
