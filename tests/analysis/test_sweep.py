@@ -270,14 +270,21 @@ def test_campbell_crossings_are_the_resonance_speeds_of_info(tmp_path, capsys):
     assert capsys.readouterr().err.startswith("herringbone campbell: --speeds")
 
 
-def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
+def assert_the_bar_leaves_the_reference_unchanged(scene, stop_time, output_interval):
+    """The reference's run with the progress bar gives its numbers to the bit."""
     from herringbone.analysis.run_progress import reference_simulate_with_progress
 
-    scene = herringbone.load_scene(MODELS / "contact_loss.toml")
-    plain = herringbone.reference_simulate(scene, stop_time=0.004, output_interval=2e-5)
-    watched = reference_simulate_with_progress(scene, stop_time=0.004, output_interval=2e-5)
+    plain = herringbone.reference_simulate(scene, stop_time=stop_time,
+                                           output_interval=output_interval)
+    watched = reference_simulate_with_progress(scene, stop_time=stop_time,
+                                               output_interval=output_interval)
     for name in plain:
         assert np.array_equal(plain[name], watched[name]), name
+
+
+def test_run_plot_and_progress_leave_the_numbers_unchanged(tmp_path, capsys):
+    scene = herringbone.load_scene(MODELS / "contact_loss.toml")
+    assert_the_bar_leaves_the_reference_unchanged(scene, 0.004, 2e-5)
     assert "s simulated" in capsys.readouterr().err
     csv = tmp_path / "run.csv"
     assert cli.main(["run", str(MODELS / "contact_loss.toml"), "--stop-time", "0.004",
@@ -290,13 +297,8 @@ def test_the_progress_bar_follows_the_references_check_with_the_same_numbers(cap
     """2 ms of the jump scene lift the mesh off and land it twice: reference_simulate runs it
     again ten times tighter (integrate/global_error.py), and so does the run with the bar,
     which starts again named as the check."""
-    from herringbone.analysis.run_progress import reference_simulate_with_progress
-
     scene = herringbone.load_scene(MODELS / "jump_resonance.toml")
-    plain = herringbone.reference_simulate(scene, stop_time=0.002, output_interval=1e-4)
-    watched = reference_simulate_with_progress(scene, stop_time=0.002, output_interval=1e-4)
-    for name in plain:
-        assert np.array_equal(plain[name], watched[name]), name
+    assert_the_bar_leaves_the_reference_unchanged(scene, 0.002, 1e-4)
     assert "check jump_resonance (steps to 5e-12)" in capsys.readouterr().err
 
 

@@ -34,6 +34,7 @@ sampled at the same phases of θ as the time protocol samples: its samples lie a
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -158,7 +159,6 @@ class PeriodMap:
         self.evaluations = 0  # period integrations done, for benchmarks
         self.contact_band = contact_band(model)
         self.run = self.stepper.start(start_position(model, self.torques[0]))
-        self.static_force: float | None = None  # the figures' yardstick, M_motor/Rp
 
     # --- coordinates --------------------------------------------------------------------
 
@@ -220,6 +220,12 @@ class PeriodMap:
         run.loaded[:] = 0.0
         run.loaded[:len(self.section_set)] = self.loaded(state)
         run.first_steps[:] = 0.0
+
+    @functools.cached_property
+    def static_force(self) -> float:
+        """The figures' yardstick, M_motor/Rp (N), worked out once per map (it raises for a
+        scene without motor torque, so only where figures are asked for)."""
+        return static_mesh_force(self.scene)
 
     def step_budget(self, period: float) -> int:
         """The most steps one integration over `period` (s) may take before it gives up."""
@@ -287,7 +293,6 @@ class PeriodMap:
         """window_figures over one orbit period, sampled at the time protocol's phases (on the
         map's own Run, from `state` as `flow` starts, each sample the compiled outputs)."""
         model = self.model
-        static_force = self.static_force = self.static_force or static_mesh_force(self.scene)
         start = start_position(model, self.torques[0])
         theta_start = self.rigid_angle(start.state, start.segment.contact_set)
         theta_section = self.rigid_angle(state, self.section_set)
@@ -306,7 +311,7 @@ class PeriodMap:
             self.stepper.run_to(run, t, self.torques, budget)
             samples[k] = run.outputs
         return window_figures({name: samples[:, i] for name, i in model.output_layout},
-                              static_force)
+                              self.static_force)
 
 
 def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,

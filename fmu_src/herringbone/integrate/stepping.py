@@ -130,7 +130,8 @@ class ScipyStepper:
             if event is not None:
                 lifted = not segment.loaded.any()
                 segment, state = segments.after(self.model, segment, event, state, torques)
-                self.landings += lifted and bool(segment.loaded.any())
+                if lifted and segment.loaded.any():
+                    self.landings += 1
         return Position(time, state, segment, hint)
 
     def _integrate_segment(self, time, state, segment, hint, end, torques, samples, on_sample):

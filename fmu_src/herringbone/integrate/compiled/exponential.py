@@ -352,9 +352,9 @@ def variant_of(tables, interval, count, loaded, state):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _to_modal(tables, interval, variant, state, motor_torque, load_torque):
-    """L·[state; u] into tables.modal. (Here and below the tables are indexed entry by entry:
-    a view such as left[interval, variant] costs two counts on the heap's reference, as much
-    as a row of this product.)"""
+    """L·[state; u] into tables.modal. (Here and below the tables are indexed entry by entry,
+    not through views such as left[interval, variant]: a view is a record built at every step,
+    and where this is compiled with numba's reference counts, two atomic counts.)"""
     size = state.shape[0]
     augmented, modal, left = tables.augmented, tables.modal, tables.left
     for j in range(size):
