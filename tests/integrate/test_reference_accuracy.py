@@ -1,5 +1,7 @@
 """The reference holds its tolerance over a whole run where the train rings long (issue 25):
-lightly damped and undamped trains, whose step errors add up over the radians the modes ring."""
+lightly damped and undamped trains, whose step errors add up over the radians the modes ring;
+and trains that rattle, whose runs check their own error (integrate/global_error.py) and warn
+where scipy's finest step tolerance cannot hold it."""
 import math
 import warnings
 
