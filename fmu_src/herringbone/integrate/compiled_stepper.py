@@ -31,7 +31,6 @@ import numpy as np
 from ..arguments import COMPILED_DEFAULT_TOLERANCE, COMPILED_METHODS, check_compiled_run
 from ..model.assembly import GearTrainModel
 from .compiled import dop853, exponential, walk
-from .compiled.equations import pack_system
 from .contract import IntegrationError, Position
 from .segments import Segment
 
@@ -245,7 +244,7 @@ class CompiledStepper:
                               if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
-        self.system_arrays = pack_system(model.system)
+        self.system_arrays = model.packed_system
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
                                            self.event_time_tolerance, self.contact_slack,
                                            self.absolute_tolerance, float(max_step))

@@ -165,9 +165,8 @@ class ScipyStepper:
 
     def _solver(self, segment, torques, time, state, end, first_step):
         """A scipy solver for the segment from (time, state) towards `end`."""
-        model = self.model
         return self.solver_class(
-            lambda t, x: model.derivative(x, segment.contact_set, segment.loaded, *torques),
+            self.model.rate_function(segment.contact_set, segment.loaded, *torques),
             time, state, end, rtol=self.step_tolerance, atol=self.absolute_tolerance,
             max_step=self.max_step, first_step=first_step)
 

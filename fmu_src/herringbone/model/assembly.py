@@ -58,6 +58,7 @@ class GearTrainModel:
         self._assemble_rows(p)
         self._damp_the_mesh(p)
         self.system = self._compiled_system()
+        self.packed_system = equations.pack_system(self.system)
         self.output_names = output_names(scene)
         self._mean_stiffness = None
         self.output_layout = self._output_layout()
@@ -238,9 +239,21 @@ class GearTrainModel:
 
     def derivative(self, state, contact_set, loaded, motor_torque, load_torque):
         """d(state)/dt for state = [y, ẏ] with the contact set and loaded points held fixed."""
-        rate = np.empty_like(state)
-        equations.derivative(self.system, contact_set.table, len(contact_set), loaded,
-                             float(motor_torque), float(load_torque), state, rate)
+        return self.rate_function(contact_set, loaded, motor_torque, load_torque)(0.0, state)
+
+    def rate_function(self, contact_set, loaded, motor_torque, load_torque):
+        """f(t, state) = d(state)/dt with the contact set, loaded points and torques bound, as
+        scipy's solvers call it: its arguments are converted once here, not at every stage."""
+        floats, ints = self.packed_system
+        table, count = contact_set.table, len(contact_set)
+        loaded = np.asarray(loaded, dtype=float)
+        motor_torque, load_torque = float(motor_torque), float(load_torque)
+        kernel = equations.packed_derivative
+
+        def rate(_time, state):
+            out = np.empty_like(state)
+            kernel(floats, ints, table, count, loaded, motor_torque, load_torque, state, out)
+            return out
         return rate
 
     def outputs(self, state, contact_set, loaded) -> dict[str, float]:
