@@ -33,7 +33,10 @@ from ..model.mesh import ContactSet
 from .compiled import equations
 from .compiled.equations import Event
 
-PHASE_END, PHASE_START, CONTACT = Event.PHASE_END, Event.PHASE_START, Event.CONTACT
+# plain ints: numpy asks an index that is an IntEnum for its array interfaces, through the
+# enum's own attribute lookup, every time it indexes with one
+PHASE_END, PHASE_START, CONTACT = (int(event) for event in
+                                   (Event.PHASE_END, Event.PHASE_START, Event.CONTACT))
 # An approach within this fraction of the force scale's approach of one point (force scale /
 # c_point) is at rounding level: a located crossing leaves about |rate|·(time's rounding), some
 # 1e-19 m on the shipped scenes, against a band of 1e-14 m; a point in the band carries at most
@@ -152,6 +155,18 @@ def event_values(model: GearTrainModel, segment: Segment, states: np.ndarray) ->
         signs = 1.0 - 2.0 * segment.loaded  # loaded: watch −approach rise through zero
         values[CONTACT:] = signs[:, None] * model.point_approaches(states, contact_set)
     return values
+
+
+def event_value(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray) -> float:
+    """h of event number `event` alone at one state (a vector): event_values' entry, computed
+    without the others, since a root search reads one event many times."""
+    if event == PHASE_END:
+        return float(state[model.pinion] - segment.contact_set.length)
+    if event == PHASE_START:
+        return float(-state[model.pinion])
+    point = event - CONTACT
+    sign = 1.0 - 2.0 * segment.loaded[point]
+    return float(sign * model.point_approach(state, segment.contact_set, point))
 
 
 def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray,

@@ -233,8 +233,7 @@ class ScipyStepper:
         """The time in [left, right] where event function `event` first rises through zero;
         None if it does not (a bump that stays below zero)."""
         def function(t):
-            state = step.dense(t)[:, None]
-            return segments.event_values(self.model, segment, state)[event, 0] - offsets[event]
+            return segments.event_value(self.model, segment, event, step.dense(t)) - offsets[event]
 
         if bump or function(left) >= 0.0:
             # the top of the bulge (or, from a start on zero, the dip before the rise)
