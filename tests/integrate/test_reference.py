@@ -9,7 +9,7 @@ from helpers import MODELS, REGRESSION, force_error
 from helpers.independent_model import radii
 
 import herringbone
-from herringbone.integrate import contract, stepping
+from herringbone.integrate import contract, segments, stepping
 from herringbone.integrate.compiled import walk
 from herringbone.model.assembly import GearTrainModel
 
@@ -213,3 +213,23 @@ def test_a_loss_and_landing_between_two_nodes_of_a_step_is_located(reference_sce
         assert event is None and reached == 1.0
     else:
         assert event >= 2 and reached == pytest.approx(loss_at, abs=1e-12)
+
+
+def test_one_event_alone_reads_as_the_row_of_all_of_them():
+    """segments.event_value, which the root search calls, gives each event's value at a state
+    to the bit as event_values' row does at that state alone, for every event of a
+    contact-loss scene's set with points loaded and unloaded, at states spread over the set's
+    interval."""
+    scene = herringbone.load_scene(MODELS / "separation.toml")
+    model = GearTrainModel(scene)
+    contact_set = model.mesh.contact_set(0, 0)
+    segment = segments.Segment(contact_set, (np.arange(len(contact_set)) % 2).astype(float))
+    rng = np.random.default_rng(3)
+    states = rng.normal(scale=1e-6, size=(2 * model.size, 5))
+    states[model.pinion] = np.linspace(-0.1, 1.1, 5) * contact_set.length
+    for column in range(states.shape[1]):
+        values = segments.event_values(model, segment, states[:, column:column + 1])[:, 0]
+        assert len(values) == segments.CONTACT + len(contact_set)
+        for event, value in enumerate(values):
+            alone = segments.event_value(model, segment, event, states[:, column])
+            assert alone == value, (event, column)
