@@ -83,6 +83,18 @@ def test_torque_branch_keeps_the_train_balanced(reference_scene):
         {"M_motor": 500.0, "M_load": 500.0 * ratio})
 
 
+def test_a_time_sweep_of_one_torque_keeps_a_balanced_train_balanced(reference_scene):
+    """The time protocol's point of one swept torque: the other follows where the scene's
+    torques balance (as the continuation's), and stays where they do not."""
+    from herringbone.analysis.sweep import Point, scene_at
+
+    ratio = GearTrainModel(reference_scene).geometry.ratio
+    point = Point(0, (("M_motor", 300.0),))
+    assert scene_at(reference_scene, point).inputs.at(0.0) == pytest.approx((300.0, 300 * ratio))
+    unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=1000.0)
+    assert scene_at(unbalanced, point).inputs.at(0.0) == (300.0, 1000.0)
+
+
 def test_damping_branch_of_the_jump_scene_passes_two_folds(jump_scene, damping_branch):
     """At 2420 rad/s the jump scene's response is S-shaped in the mesh damping: from the upper
     branch (teeth apart a third of each period) at 0.03 the continuation passes a fold near
