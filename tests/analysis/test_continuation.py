@@ -137,12 +137,17 @@ def test_damping_branch_agrees_with_time_runs_of_the_jump_scene(jump_scene, damp
 
 def test_sweep_of_one_parameter_continues_by_default(jump_scene, tmp_path, capsys):
     """sweep(params={name: values}, speeds=[one]) is a branch (folds in attrs, the continued
-    name); method="time" runs the time protocol; the command likewise, with --speed."""
-    values = [0.03, 0.05, 0.07]
+    name); at 0.04, where Newton from the static deflection does not converge (contact lost
+    on the only orbit), it starts from the time protocol's run there, on the upper branch;
+    method="time" runs the time protocol; the command likewise, with --speed."""
+    values = [0.04, 0.05, 0.06]
+    first = jump_scene.with_parameters(w0_pinion=JUMP_SPEED, zeta_mesh=values[0])
+    assert not periodic_orbit(first, JUMP_SPEED).converged
     table = sweep(jump_scene, speeds=[JUMP_SPEED], params={"zeta_mesh": values},
                   progress=False)
     assert table.attrs["continued"] == "zeta_mesh" and len(table.attrs["folds"]) == 2
     assert set(table["stability"]) == {"stable", "unstable"}
+    assert set(table["method"]) == {"shooting"} and table["contact_lost_share"].iloc[0] > 0.3
     assert list(table.columns[:4]) == ["zeta_mesh", "speed_rpm", "mesh_frequency_Hz",
                                        "static_mesh_force_N"]
     short = Protocol(settle_time=0.05, window_periods=4, floquet=False)
@@ -150,7 +155,7 @@ def test_sweep_of_one_parameter_continues_by_default(jump_scene, tmp_path, capsy
                   protocol=short, method="time", workers=0, progress=False)
     assert list(timed["method"]) == ["time"] * 3
     code = cli.main(["sweep", str(MODELS / "jump_resonance.toml"), "--param", "zeta_mesh",
-                     "0.03", "0.07", "3", "--speed", str(JUMP_SPEED), "--no-progress", "-o",
+                     "0.04", "0.06", "3", "--speed", str(JUMP_SPEED), "--no-progress", "-o",
                      str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0 and "folds (jumps) in zeta_mesh at 0.05" in out

@@ -394,13 +394,33 @@ class Continuation:
         return True
 
     def by_time(self, value):
-        """A requested value that shooting could not reach: sweep_point's time protocol."""
-        from .sweep_point import run_window, static_mesh_force, window_figures
+        """A requested value that shooting could not reach: sweep_point's time protocol.
+        Returns the time run's end position."""
+        from .sweep_point import run_window_from, static_mesh_force, window_figures
 
         at = self.axis.scene_at(value)
-        figures = window_figures(run_window(at, self.protocol), static_mesh_force(at))
+        window, end = run_window_from(at, self.protocol)
+        figures = window_figures(window, static_mesh_force(at))
         self.points.append(BranchPoint(value, self.axis.speed_at(value), None, "time", True,
                                        (), figures, follows=self.axis.follows(value)))
+        return end
+
+    def begin_at(self, value, unknowns=None) -> bool:
+        """start_at `value` from `unknowns` (None: the static deflection); where Newton fails
+        there, the time protocol's point, and Newton again from where that run next reaches
+        the section (its transient settled, it is near an orbit: contact lost far from the
+        static state, say); where that converges, the orbit replaces the time point."""
+        if self.start_at(value, unknowns):
+            return True
+        end = self.by_time(value)
+        try:
+            settled = self.axis.map_at(value).section_unknowns(end, self.axis.speed_at(value))
+        except STEP_FAILURES:
+            return False
+        if settled is None or not self.start_at(value, settled):
+            return False
+        del self.points[-2]  # the time point, now an orbit
+        return True
 
     def target(self):
         """The next requested value in the branch's direction, or None."""
@@ -485,10 +505,11 @@ class Continuation:
 
 
 def follow(run: Continuation, progress: bool = False) -> Branch:
-    """The branch from the first requested value at which an orbit converges (the ones before
-    it run by time integration) up past the last, through folds; where the continuation
-    cannot go on, the next requested values are run by time integration until shooting
-    starts again at one of them from the last orbit."""
+    """The branch from the first requested value at which an orbit converges (Continuation.
+    begin_at; the ones before it run by time integration) up past the last, through folds;
+    where the continuation cannot go on, the next requested values are run by time
+    integration until shooting starts again at one of them (from the last orbit, or the time
+    run's state)."""
     from tqdm import tqdm
 
     grid, slack = run.grid, 1e-9 * run.unit
@@ -500,8 +521,7 @@ def follow(run: Continuation, progress: bool = False) -> Branch:
                                            side="right")) - bar.n)
 
         index = 0
-        while index < len(grid) and not run.start_at(grid[index]):
-            run.by_time(grid[index])
+        while index < len(grid) and not run.begin_at(grid[index]):
             index += 1
         while run.v is not None and len(run.points) < most:
             moved()
@@ -516,9 +536,8 @@ def follow(run: Continuation, progress: bool = False) -> Branch:
             run.v = run.previous_v = None
             for value in ahead:
                 run.step = 1.0
-                if run.start_at(value, z):
+                if run.begin_at(value, z):
                     break
-                run.by_time(value)
         moved()
     return Branch(run.points, run.folds, run.axis.evaluations, run.axis.name)
 

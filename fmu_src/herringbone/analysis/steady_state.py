@@ -263,6 +263,22 @@ class PeriodMap:
         offset = end_set.pinion_angle + run.state[self.pinion] - target
         return run.state.copy(), float(offset)
 
+    def section_unknowns(self, position: Position, speed: float) -> np.ndarray | None:
+        """The unknowns where a run of this scene from `position` (anywhere in a period, e.g.
+        a time run's end) next reaches the section: integrated for the time the rigid rotation
+        at ω takes to bring φp there (the vibration moves the crossing's φp by its small share,
+        which Newton takes up); None where the run ends outside the section's interval."""
+        mesh = self.model.mesh
+        here = position.segment.contact_set
+        angle = here.pinion_angle + position.state[self.pinion]
+        target = mesh.interval_start(here.cycle + 1, 0) + self.section_phase
+        duration = (target - angle) / speed
+        run = self.stepper.start(Position(0.0, position.state, position.segment))
+        self.stepper.run_to(run, duration, self.torques, self.step_budget(duration))
+        if int(run.place[0]) != self.section_set.index:
+            return None
+        return self.unknowns(run.state)
+
     def residual(self, unknowns: np.ndarray, speed: float):
         """G = z(T) − z (scaled), the end state and its φp offset."""
         end, offset = self.flow(self.state(unknowns, speed), speed)
