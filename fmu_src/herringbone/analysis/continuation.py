@@ -152,9 +152,11 @@ def continued_problem(scene, name: str) -> str | None:
     if name not in scene.parameters:
         return (f"{name} is not a parameter of scene {scene.name}; allowed: "
                 f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
-    if PARAMETERS[name].kind is not float:
-        return (f"{name} takes whole numbers; continuation follows a quantity that varies "
-                "continuously (any other parameter, M_motor, M_load)")
+    kind = PARAMETERS[name].kind
+    if kind is not float:
+        return (f"{name} takes {'whole numbers' if kind is int else 'true or false'}; "
+                "continuation follows a quantity that varies continuously (a parameter in a "
+                "unit, M_motor, M_load)")
     return None
 
 
@@ -232,8 +234,11 @@ class ParameterAxis:
 
     def difference_step(self, value: float) -> float:
         """h of the forward difference ∂G/∂p, in p's unit: DIFFERENCE_STEP of |p| or of the
-        requested spacing, the larger (a parameter may be 0: a lead error)."""
-        return DIFFERENCE_STEP * max(abs(value), self.unit)
+        requested spacing, the larger (a parameter may be 0: a lead error); backwards where p
+        + h is beyond the parameter's range (a value at its bound)."""
+        step = DIFFERENCE_STEP * max(abs(value), self.unit)
+        allowed = PARAMETERS[self.name].allowed if self.name in PARAMETERS else None
+        return -step if allowed is not None and not allowed.contains(value + step) else step
 
     def follows(self, value: float) -> dict:
         """The other torque's column where a torque is continued."""
