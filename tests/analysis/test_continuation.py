@@ -187,5 +187,7 @@ def test_bad_continued_quantities_are_refused_by_name(reference_scene):
         continue_in_parameter(reference_scene, "w0_pinion", [300, 400])
     with pytest.raises(ValueError, match="zeta_mesh"):
         continue_in_parameter(reference_scene, "zeta_mesh", [0.05, -0.01])
+    with pytest.raises(ValueError, match="M_load: values 0, 1800 N·m; allowed: all > 0 or all < 0"):
+        continue_in_parameter(reference_scene, "M_load", [0.0, 1800.0])
     with pytest.raises(ValueError, match="pinion_speed"):
         continue_in_parameter(reference_scene, "zeta_mesh", [0.05], pinion_speed=0.0)

@@ -199,17 +199,19 @@ class ParameterAxis:
     """A scene parameter or input torque continued at a fixed pinion speed (rad/s). Each value
     has its own PeriodMap, built on first use (20-50 ms on the reference scene: the compiled
     integrator's tables) and kept for the last MAPS_KEPT values; every one takes the first
-    value's unknown scales (z is the same state at every value) and integration method (a
-    switch of method along the branch would move the map by its tolerance). A torque moves
-    the other with it (steady_state.balanced_torques)."""
+    requested value's unknown scales (z is the same state at every value) and integration
+    method (a switch of method along the branch would move the map by its tolerance). A
+    torque moves the other with it (steady_state.balanced_torques)."""
 
-    def __init__(self, scene, name: str, speed: float, tolerance: float, unit: float):
+    def __init__(self, scene, name: str, speed: float, tolerance: float, unit: float,
+                 first_value: float):
         self.scene = scene.with_parameters(w0_pinion=speed)
         self.name, self.speed, self.tolerance, self.unit = name, speed, tolerance, unit
-        first = PeriodMap(self.scene, tolerance)
+        first = PeriodMap(self.scene_at(first_value), tolerance)
         self.scales, self.method = first.scales, first.stepper.method
-        self.maps: dict[float, PeriodMap] = {}  # value -> map, least recently used first
-        self.retired = first.evaluations  # period integrations of maps no longer kept
+        # value -> map, least recently used first
+        self.maps: dict[float, PeriodMap] = {first_value: first}
+        self.retired = 0  # period integrations of maps no longer kept
 
     def scene_at(self, value: float):
         """The scene at the value (SceneError where it is out of the parameter's range)."""
@@ -583,9 +585,13 @@ def continue_in_parameter(scene, name: str, values, pinion_speed: float | None =
     grid = np.sort(np.atleast_1d(np.asarray(values, dtype=float)))
     if grid.ndim != 1 or not len(grid) or not np.all(np.isfinite(grid)):
         raise ValueError(f"{name}: values must be finite numbers, got {values!r}")
+    if name in INPUTS and not (np.all(grid > 0) or np.all(grid < 0)):
+        raise ValueError(f"{name}: values {', '.join(f'{v:g}' for v in grid)} N·m; allowed: "
+                         "all > 0 or all < 0 (at 0 there is no static mesh force to measure "
+                         "the dynamic factor by)")
     speed = float(check_speeds([scene.parameters[SPEED] if pinion_speed is None
                                 else pinion_speed], "pinion_speed")[0])
-    axis = ParameterAxis(scene, name, speed, tolerance, value_unit(grid))
     for value in grid:  # out of the parameter's range: SceneError here, before any work
-        axis.scene_at(float(value))
+        scene.with_parameters(**({} if name in INPUTS else {name: float(value)}))
+    axis = ParameterAxis(scene, name, speed, tolerance, value_unit(grid), float(grid[0]))
     return follow(Continuation(axis, grid, newton_tolerance, protocol), progress)
