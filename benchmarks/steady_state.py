@@ -2,15 +2,17 @@
 
     python benchmarks/steady_state.py                 # reference scene, 200 speeds 100-3000 rad/s
     python benchmarks/steady_state.py --time-points 5 --scene models/reference.toml
+    python benchmarks/steady_state.py --param zeta_mesh 0.02 0.1 20 --speed 500
+                                                      # a parameter at one speed
 
 Prints, side by side, one core's CPU time (process time, this process alone: the points run
 here one after the other) of
-- the branch by continuation (analysis/continuation.py) over all the speeds, and its period
-  integrations a point;
+- the branch by continuation (analysis/continuation.py) over all the speeds (or values of
+  --param at --speed), and its period integrations a point;
 - the time sweep (sweep_point's protocol, `sweep(..., method="time", workers=0)`) over an
-  evenly spread subset of the speeds, extrapolated to all of them by its mean time a point (and
-  labelled so: a time point costs what its settle costs, which does not depend on the others);
-and, at the subset's speeds, how far the time sweep's K_v and dte peak-to-peak lie from the
+  evenly spread subset of them, extrapolated to all by its mean time a point (and labelled
+  so: a time point costs what its settle costs, which does not depend on the others);
+and, at the subset's values, how far the time sweep's K_v and dte peak-to-peak lie from the
 orbits' (the time protocol stops its settle at a residual of 1e-3 of the start's transient).
 The compiled integrator is loaded (or compiled) before anything is timed.
 """
@@ -35,54 +37,71 @@ def timed(function, *args, **kwargs):
     return result, time.process_time() - cpu, time.perf_counter() - wall
 
 
-def main(argv=None) -> int:
+def arguments(argv):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", type=Path, default=ROOT / "models" / "reference.toml")
     parser.add_argument("--speeds", nargs=3, type=float, default=[100.0, 3000.0, 200],
                         metavar=("LO", "HI", "N"))
+    parser.add_argument("--param", nargs=4, metavar=("NAME", "LO", "HI", "N"),
+                        help="continue in this parameter (or M_motor, M_load) instead, at "
+                             "--speed")
+    parser.add_argument("--speed", type=float, default=500.0, help="rad/s, with --param")
     parser.add_argument("--time-points", type=int, default=10,
-                        help="speeds of the subset the time sweep runs (evenly spread)")
-    args = parser.parse_args(argv)
+                        help="values of the subset the time sweep runs (evenly spread)")
+    return parser.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = arguments(argv)
 
     import herringbone
-    from herringbone.analysis.continuation import continue_in_speed
+    from herringbone.analysis.continuation import continue_in_parameter, continue_in_speed
     from herringbone.analysis.distributed_run import load_integrator
     from herringbone.analysis.steady_state import periodic_orbit
     from herringbone.analysis.sweep import sweep
 
     scene = herringbone.load_scene(args.scene)
-    low, high, count = args.speeds
-    speeds = np.linspace(low, high, int(count))
+    if args.param:
+        name, (low, high, count), unit = args.param[0], map(float, args.param[1:]), ""
+        values = np.linspace(low, high, int(count))
+        continued = (continue_in_parameter, scene, name, values, args.speed)
+    else:
+        name, (low, high, count), unit = "w0_pinion", args.speeds, " rad/s"
+        values = np.linspace(low, high, int(count))
+        continued = (continue_in_speed, scene, values)
     load_integrator(scene)
-    periodic_orbit(scene, speeds[0])  # the numba functions this path calls, loaded
+    periodic_orbit(scene, args.speed if args.param else values[0])  # its numba functions loaded
 
-    branch, branch_cpu, branch_wall = timed(continue_in_speed, scene, speeds)
+    branch, branch_cpu, branch_wall = timed(*continued)
     table = branch.table()
     grid = table[table["on_grid"]]
-    subset = speeds[np.linspace(0, len(speeds) - 1, args.time_points).round().astype(int)]
-    timed_table, time_cpu, time_wall = timed(sweep, scene, speeds=subset, method="time",
-                                             workers=0, progress=False)
+    subset = values[np.linspace(0, len(values) - 1, args.time_points).round().astype(int)]
+    timed_table, time_cpu, time_wall = timed(
+        sweep, scene, **({"speeds": [args.speed], "params": {name: subset}} if args.param
+                         else {"speeds": subset}), method="time", workers=0, progress=False)
     per_time_point = time_cpu / len(subset)
 
-    print(f"scene {scene.name}: {len(speeds)} speeds {low:g}-{high:g} rad/s, one core")
+    at = f" at {args.speed:g} rad/s" if args.param else ""
+    print(f"scene {scene.name}: {len(values)} values of {name} {low:g}-{high:g}{unit}{at}, "
+          "one core")
     print(f"{'':38s}{'continuation':>16s}{'time sweep':>16s}")
-    print(f"{'CPU s, all speeds':38s}{branch_cpu:16.3f}"
-          f"{per_time_point * len(speeds):16.1f}  (extrapolated from {len(subset)} points)")
-    print(f"{'CPU ms a requested speed':38s}{1e3 * branch_cpu / len(speeds):16.2f}"
+    print(f"{'CPU s, all values':38s}{branch_cpu:16.3f}"
+          f"{per_time_point * len(values):16.1f}  (extrapolated from {len(subset)} points)")
+    print(f"{'CPU ms a requested value':38s}{1e3 * branch_cpu / len(values):16.2f}"
           f"{1e3 * per_time_point:16.1f}")
     print(f"{'wall s (this machine, shared)':38s}{branch_wall:16.3f}"
-          f"{time_wall / len(subset) * len(speeds):16.1f}")
-    print(f"{'points (branch) / requested speeds':38s}{len(table):>10d} / {len(grid):<5d}")
+          f"{time_wall / len(subset) * len(values):16.1f}")
+    print(f"{'points (branch) / requested values':38s}{len(table):>10d} / {len(grid):<5d}")
     print(f"{'period integrations a branch point':38s}"
           f"{branch.evaluations / len(table):16.1f}")
     methods = dict(zip(*np.unique(table["method"], return_counts=True)))
     stabilities = dict(zip(*np.unique(table["stability"], return_counts=True)))
     print(f"branch: {methods}, stability {stabilities}, "
-          f"folds {[round(f, 1) for f in branch.folds]}")
-    merged = grid.set_index("w0_pinion").loc[subset]
-    for name in ("K_v", "dte_p2p_um"):
-        spread = np.abs(timed_table[name].to_numpy() / merged[name].to_numpy() - 1.0)
-        print(f"time sweep against the orbits, {name}: relative difference "
+          f"folds {[float(f'{f:.6g}') for f in branch.folds]}")
+    for figure in ("K_v", "dte_p2p_um"):  # against the nearest orbit at the value
+        spread = np.array([np.abs(grid.loc[grid[name] == value, figure] / timed - 1.0).min()
+                           for value, timed in zip(subset, timed_table[figure])])
+        print(f"time sweep against the orbits, {figure}: relative difference "
               f"max {spread.max():.2e}, median {np.median(spread):.2e}")
     return 0
 

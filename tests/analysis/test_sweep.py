@@ -203,10 +203,16 @@ def test_shooting_is_the_default_and_agrees_with_settled_time_points(reference_s
 
 
 def test_shooting_where_it_does_not_apply_is_refused_by_name(reference_scene):
-    """method="shooting" on a parameter sweep or unbalanced torques: one message naming why
-    and what is allowed; the default then runs the time protocol."""
-    with pytest.raises(ValueError, match="other quantities than the speed.*method='time'"):
-        sweep(reference_scene, params={"zeta_mesh": [0.05]}, method="shooting")
+    """method="shooting" on a grid of two quantities, a tooth count or unbalanced torques: one
+    message naming why and what is allowed; the default then runs the time protocol."""
+    with pytest.raises(ValueError, match="two quantities.*method='time'"):
+        sweep(reference_scene, params={"zeta_mesh": [0.05], "dbeta_right": [0.0]},
+              method="shooting")
+    with pytest.raises(ValueError, match="two quantities"):
+        sweep(reference_scene, speeds=[300.0, 400.0], params={"zeta_mesh": [0.05]},
+              method="shooting")
+    with pytest.raises(ValueError, match="z_pinion takes whole numbers"):
+        sweep(reference_scene, params={"z_pinion": [10, 11]}, method="shooting")
     unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=1000.0)
     with pytest.raises(ValueError, match="does not balance"):
         sweep(unbalanced, speeds=[300.0], method="shooting")

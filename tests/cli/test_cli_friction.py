@@ -244,7 +244,8 @@ def test_the_stability_chart_reports_progress_and_keeps_its_numbers():
 
 
 @pytest.mark.parametrize("arguments, culprit", [
-    (["--param", "stagger", "0", "0.5", "3", "--method", "shooting"], "--method shooting"),
+    (["--param", "stagger", "0", "0.5", "3", "--param", "eps_q", "0.5", "0.6", "2",
+      "--method", "shooting"], "--method shooting"),
     (["--param", "stagger", "0", "0.5", "3", "--time-sweeps"], "--time-sweeps"),
     (["--speeds", "100", "200", "3", "--method", "time", "--time-sweeps"], "--time-sweeps"),
 ])

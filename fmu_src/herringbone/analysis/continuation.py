@@ -1,25 +1,34 @@
-"""The branch of periodic steady states over a range of pinion speeds: pseudo-arclength
-continuation of the shooting problem of steady_state.py.
+"""The branch of periodic steady states over a range of one quantity: pseudo-arclength
+continuation of the shooting problem of steady_state.py in the pinion speed, or at a fixed
+pinion speed in a scene parameter or an input torque.
 
-The unknowns are v = (z/Z, ω/W): the section's scaled state z (steady_state) in units of
-Z = `AMPLITUDE_UNIT` of the static mesh force, and the speed in units of W, the spacing of the
-requested speeds, so that a step of length 1 moves the speed by one requested spacing or the
-state by Z. From a solved point with tangent t (the null vector of [∂G/∂z·Z, ∂G/∂ω·W]):
+The continued quantity p is the speed ω (`SpeedAxis`: one PeriodMap serves every speed) or a
+parameter (`ParameterAxis`: a PeriodMap per value, each with the first one's unknown scales, so
+that z is the same state at every value). A torque keeps the train balanced: the other torque
+follows it, M_load = u·M_motor (steady_state.balanced_torques): the transmitted torque is what
+is continued, set by either end.
 
-- predictor v + s·t; where the branch runs along the speed (|t_ω| >= `ALONG_SPEED`) and the next
-  requested speed in its direction is within the step, the step lands on it and the corrector
-  holds the speed there (natural continuation: a row at every requested speed); elsewhere —
-  near a fold — the corrector holds tᵀ·(v − v_pred) = 0 (pseudo-arclength), which passes folds;
+The unknowns are v = (z/Z, p/W): the section's scaled state z (steady_state) in units of
+Z = `AMPLITUDE_UNIT` of the static mesh force, and p in units of W, the spacing of the
+requested values, so that a step of length 1 moves p by one requested spacing or the state by
+Z. From a solved point with tangent t (the null vector of [∂G/∂z·Z, ∂G/∂p·W], ∂G/∂p by a
+forward difference of the map at p and p + h):
+
+- where no real multiplier of the last orbit lies within `FOLD_PROXIMITY` of +1, the step goes
+  to the next requested value in the branch's direction and the corrector holds p there
+  (natural continuation: a row at every requested value); elsewhere — near a fold — the
+  predictor is v + s·t and the corrector holds tᵀ·(v − v_pred) = 0 (pseudo-arclength), which
+  passes folds;
 - corrector: chord Newton with the last point's Jacobian, updated by Broyden's rank-one rule, at
   most `CORRECTOR_ITERATIONS` iterations; then the Jacobian afresh at the solution (the Floquet
   multipliers and the next tangent need it);
 - step control: the step grows by 1.5 after a corrector of at most 2 iterations, shrinks by 0.6
   after one of 5 or more, halves on failure; below `SMALLEST_STEP` the continuation gives up
-  on this stretch: the next requested speed is run by time integration (steady_state's section
+  on this stretch: the next requested value is run by time integration (steady_state's section
   is not needed for that: sweep_point's protocol) and marked so, and shooting starts again at
   the following one from the last orbit.
 
-What is flagged on the point past it: a fold where t_ω changes sign (a multiplier through +1),
+What is flagged on the point past it: a fold where t_p changes sign (a multiplier through +1),
 a period doubling where a real multiplier passes −1, a torus (Neimark–Sacker) where a complex
 pair leaves or enters the unit circle. The period-1 branch is followed through all three; past
 a period doubling or torus it is unstable, and the motion a time run shows there is not on it.
@@ -32,57 +41,71 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..integrate.contract import IntegrationError
-from ..model.parameters import RPM_PER_RAD_S
+from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S
+from ..model.scene import SceneError
 from .steady_state import (
+    DIFFERENCE_STEP,
     NEWTON_TOLERANCE,
     SHOOTING_TOLERANCE,
     UNIT_CIRCLE_BAND,
     PeriodicOrbit,
     PeriodMap,
+    balanced_torques,
     newton,
     orbit_record,
 )
 
+SPEED = "w0_pinion"
 AMPLITUDE_UNIT = 1.0  # Z: fraction of the static mesh force that one unit of step moves z
-ALONG_SPEED = 0.3  # |t_ω| above which a step may land on a requested speed
 CORRECTOR_ITERATIONS = 6
-REUSE_DISTANCE = 3e-2  # see SpeedContinuation.accept
-FOLD_PROXIMITY = 0.05  # see SpeedContinuation.near_fold
+REUSE_DISTANCE = 3e-2  # see Continuation.accept
+FOLD_PROXIMITY = 0.05  # see Continuation.near_fold
 CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's step
-NATURAL_HALVINGS = 5  # see SpeedContinuation.advance
+NATURAL_HALVINGS = 5  # see Continuation.advance
 REFRESHES = 1  # fresh Jacobians a corrector may take where the chord contracts slowly
 SMALLEST_STEP = 1e-3
-LARGEST_STEP = 3.0  # three spacings of the requested speeds
+LARGEST_STEP = 3.0  # three spacings of the requested values
 MOST_POINTS = 2000  # the continuation gives up past this many points, and past
-MOST_POINTS_PER_SPEED = 8  # this many per requested speed where that is more
+MOST_POINTS_PER_SPEED = 8  # this many per requested value where that is more
+MAPS_KEPT = 8  # a parameter's PeriodMaps kept (see ParameterAxis)
+# a failed period integration, a singular Jacobian, or a corrector's value out of the
+# parameter's range: the step fails and is retried shorter
+STEP_FAILURES = (IntegrationError, np.linalg.LinAlgError, SceneError)
 
 
 @dataclass
 class BranchPoint:
-    """One point of a branch: its orbit (None for a time-integration point), how it was
-    found, and what happened between it and the point before."""
+    """One point of a branch: the continued quantity's value and the pinion speed, its orbit
+    (None for a time-integration point), how it was found, and what happened between it and
+    the point before."""
 
+    value: float  # the continued quantity (Branch.name), in its unit
     speed: float  # rad/s
     orbit: PeriodicOrbit | None
     method: str  # "shooting" or "time"
-    on_grid: bool  # at one of the requested speeds
+    on_grid: bool  # at one of the requested values
     events: tuple[str, ...] = ()  # "fold", "period doubling", "torus"
     figures: dict = field(default_factory=dict)
-    tangent_speed: float = math.nan  # t_ω at the point (its sign: the branch's direction)
+    tangent_value: float = math.nan  # t_p at the point (its sign: the branch's direction)
+    follows: dict = field(default_factory=dict)  # columns that follow p (the other torque)
 
 
 @dataclass
 class Branch:
-    """The points in the order of the branch (arclength), and the speeds of its folds."""
+    """The points in the order of the branch (arclength), the values of its folds, and the
+    name of the continued quantity (w0_pinion, a parameter, M_motor or M_load)."""
 
     points: list[BranchPoint]
     folds: list[float]
     evaluations: int = 0  # period integrations it took (Jacobians, residuals, figures)
+    name: str = SPEED
 
     def table(self):
-        """A pandas DataFrame, a row a point in branch order: w0_pinion, the sweep figures,
-        floquet_max (|λ|max of the orbit), floquet_exponent_per_s, stability ('stable',
-        'unstable' or 'time' where no orbit converged), method, on_grid, event."""
+        """A pandas DataFrame, a row a point in branch order: the continued quantity (its
+        name), speed_rpm, the torque that follows a continued torque (M_load_Nm or
+        M_motor_Nm), the sweep figures, floquet_max (|λ|max of the orbit),
+        floquet_exponent_per_s, stability ('stable', 'unstable' or 'time' where no orbit
+        converged), method, on_grid, event."""
         import pandas as pd
 
         rows = []
@@ -90,8 +113,8 @@ class Branch:
             orbit = point.orbit
             largest = float(np.abs(orbit.multipliers).max()) if orbit else math.nan
             rows.append({
-                "w0_pinion": point.speed, "speed_rpm": point.speed * RPM_PER_RAD_S,
-                **point.figures,
+                self.name: point.value, "speed_rpm": point.speed * RPM_PER_RAD_S,
+                **point.follows, **point.figures,
                 "floquet_max": largest,
                 "floquet_exponent_per_s": orbit.largest_exponent if orbit else math.nan,
                 "stability": ("time" if orbit is None else
@@ -113,20 +136,136 @@ def crossings(before: np.ndarray, after: np.ndarray) -> tuple[str, ...]:
     return (("period doubling",) if flip else ()) + (("torus",) if torus else ())
 
 
-class SpeedContinuation:
-    """The continuation's state: the last point (scaled unknowns v, Jacobian, tangent), the
-    step, and the branch so far (module docstring)."""
+def value_unit(grid: np.ndarray) -> float:
+    """W: the median spacing of the requested values (sorted); for one value a hundredth of
+    it (1e-2 where it is 0)."""
+    if len(grid) > 1:
+        return float(np.median(np.diff(grid)))
+    return 0.01 * abs(float(grid[0])) or 0.01
 
-    def __init__(self, scene, speeds, tolerance=SHOOTING_TOLERANCE,
-                 newton_tolerance=NEWTON_TOLERANCE, protocol=None):
+
+def continued_problem(scene, name: str) -> str | None:
+    """Why `name` cannot be continued on this scene, or None: a parameter of the scene that
+    varies continuously (not a tooth count), or M_motor or M_load."""
+    if name in INPUTS:
+        return None
+    if name not in scene.parameters:
+        return (f"{name} is not a parameter of scene {scene.name}; allowed: "
+                f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
+    kind = PARAMETERS[name].kind
+    if kind is not float:
+        return (f"{name} takes {'whole numbers' if kind is int else 'true or false'}; "
+                "continuation follows a quantity that varies continuously (a parameter in a "
+                "unit, M_motor, M_load)")
+    return None
+
+
+class SpeedAxis:
+    """The pinion speed continued (rad/s): one map serves every speed."""
+
+    name = SPEED
+
+    def __init__(self, scene, tolerance: float):
+        self.scene = scene
+        self.period_map = PeriodMap(scene, tolerance)
+
+    def map_at(self, value: float) -> PeriodMap:
+        """The period map at a speed: the one map."""
+        return self.period_map
+
+    def speed_at(self, value: float) -> float:
+        """The pinion speed at a value: the value."""
+        return value
+
+    def difference_step(self, value: float) -> float:
+        """h of the forward difference ∂G/∂ω (rad/s)."""
+        return DIFFERENCE_STEP * value
+
+    def scene_at(self, value: float):
+        """The scene at a speed (for a time-integration point)."""
+        return self.scene.with_parameters(w0_pinion=value)
+
+    def follows(self, value: float) -> dict:
+        """No column follows the speed."""
+        return {}
+
+    @property
+    def evaluations(self) -> int:
+        """Period integrations so far."""
+        return self.period_map.evaluations
+
+
+class ParameterAxis:
+    """A scene parameter or input torque continued at a fixed pinion speed (rad/s). Each value
+    has its own PeriodMap, built on first use (20-50 ms on the reference scene: the compiled
+    integrator's tables) and kept for the last MAPS_KEPT values; every one takes the first
+    requested value's unknown scales (z is the same state at every value) and integration
+    method (a switch of method along the branch would move the map by its tolerance). A
+    torque moves the other with it (steady_state.balanced_torques)."""
+
+    def __init__(self, scene, name: str, speed: float, tolerance: float, unit: float,
+                 first_value: float):
+        self.scene = scene.with_parameters(w0_pinion=speed)
+        self.name, self.speed, self.tolerance, self.unit = name, speed, tolerance, unit
+        first = PeriodMap(self.scene_at(first_value), tolerance)
+        self.scales, self.method = first.scales, first.stepper.method
+        # value -> map, least recently used first
+        self.maps: dict[float, PeriodMap] = {first_value: first}
+        self.retired = 0  # period integrations of maps no longer kept
+
+    def scene_at(self, value: float):
+        """The scene at the value (SceneError where it is out of the parameter's range)."""
+        if self.name in INPUTS:
+            return self.scene.with_inputs(**balanced_torques(self.scene, self.name, value))
+        return self.scene.with_parameters(**{self.name: value})
+
+    def map_at(self, value: float) -> PeriodMap:
+        """The period map at a value: kept, or built (and the least recently used dropped)."""
+        period_map = self.maps.pop(value, None)
+        if period_map is None:
+            period_map = PeriodMap(self.scene_at(value), self.tolerance, scales=self.scales,
+                                   method=self.method)
+            if len(self.maps) == MAPS_KEPT:
+                self.retired += self.maps.pop(next(iter(self.maps))).evaluations
+        self.maps[value] = period_map
+        return period_map
+
+    def speed_at(self, value: float) -> float:
+        """The pinion speed at a value: the branch's fixed speed."""
+        return self.speed
+
+    def difference_step(self, value: float) -> float:
+        """h of the forward difference ∂G/∂p, in p's unit: DIFFERENCE_STEP of |p| or of the
+        requested spacing, the larger (a parameter may be 0: a lead error); backwards where p
+        + h is beyond the parameter's range (a value at its bound)."""
+        step = DIFFERENCE_STEP * max(abs(value), self.unit)
+        allowed = PARAMETERS[self.name].allowed if self.name in PARAMETERS else None
+        return -step if allowed is not None and not allowed.contains(value + step) else step
+
+    def follows(self, value: float) -> dict:
+        """The other torque's column where a torque is continued."""
+        if self.name not in INPUTS:
+            return {}
+        other = "M_load" if self.name == "M_motor" else "M_motor"
+        return {f"{other}_Nm": balanced_torques(self.scene, self.name, value)[other]}
+
+    @property
+    def evaluations(self) -> int:
+        """Period integrations so far, over every map built."""
+        return self.retired + sum(m.evaluations for m in self.maps.values())
+
+
+class Continuation:
+    """The continuation's state: the last point (scaled unknowns v, Jacobian, tangent), the
+    step, and the branch so far (module docstring), along a SpeedAxis or ParameterAxis."""
+
+    def __init__(self, axis, grid, newton_tolerance=NEWTON_TOLERANCE, protocol=None):
         from .sweep_point import Protocol
 
-        self.scene = scene
-        self.grid = np.sort(np.asarray(speeds, dtype=float))
-        self.period_map = PeriodMap(scene, tolerance)
-        self.size = len(self.period_map.unknown_entries)
-        spacing = np.diff(self.grid)
-        self.speed_unit = float(np.median(spacing)) if len(spacing) else 0.01 * self.grid[0]
+        self.axis = axis
+        self.grid = np.sort(np.asarray(grid, dtype=float))
+        self.size = len(axis.map_at(self.grid[0]).unknown_entries)
+        self.unit = value_unit(self.grid)
         self.newton_tolerance = newton_tolerance
         self.protocol = protocol or Protocol()
         self.points: list[BranchPoint] = []
@@ -136,23 +275,35 @@ class SpeedContinuation:
         self.previous_v = None  # the point before the last, where that was a shooting point
         self.step = 1.0
 
-    # --- v <-> (z, ω) ---------------------------------------------------------------------
+    # --- v <-> (z, p) ---------------------------------------------------------------------
 
     def split(self, v):
-        """(z, ω) of the scaled unknowns v."""
-        return v[:self.size] * AMPLITUDE_UNIT, float(v[self.size] * self.speed_unit)
+        """(z, p) of the scaled unknowns v; p within rounding (1e-12 W) of a requested value
+        is that value, exactly as requested (the table's rows, the maps kept by value)."""
+        value = float(v[self.size] * self.unit)
+        nearest = float(self.grid[np.abs(self.grid - value).argmin()])
+        if abs(nearest - value) <= 1e-12 * abs(self.unit):
+            value = nearest
+        return v[:self.size] * AMPLITUDE_UNIT, value
+
+    def map_residual(self, z, value):
+        """steady_state's residual tuple (G, end state, φp offset) at (z, p)."""
+        return self.axis.map_at(value).residual(z, self.axis.speed_at(value))
 
     def residual(self, v):
         """G(v) (fraction of the static mesh force) and steady_state's base tuple."""
-        base = self.period_map.residual(*self.split(v))
+        base = self.map_residual(*self.split(v))
         return base[0], base
 
     def full_jacobian(self, v, base):
-        """[∂G/∂z·Z, ∂G/∂ω·W] afresh, and the fixed-time images and phase row."""
-        z, speed = self.split(v)
-        images, phase_row, speed_column = self.period_map.jacobian(z, speed, base, True)
+        """[∂G/∂z·Z, ∂G/∂p·W] afresh, and the fixed-time images and phase row."""
+        z, value = self.split(v)
+        images, phase_row = self.axis.map_at(value).jacobian(
+            z, self.axis.speed_at(value), base)
+        step = self.axis.difference_step(value)
+        value_column = (self.map_residual(z, value + step)[0] - base[0]) / step
         jacobian = np.hstack([(images - np.eye(self.size)) * AMPLITUDE_UNIT,
-                              speed_column[:, None] * self.speed_unit])
+                              value_column[:, None] * self.unit])
         return jacobian, images, phase_row
 
     def new_tangent(self, jacobian, previous):
@@ -192,7 +343,7 @@ class SpeedContinuation:
                 else:
                     matrix += np.outer(new_r - r - matrix @ change, change) / (change @ change)
                 r = new_r
-        except (IntegrationError, np.linalg.LinAlgError):
+        except STEP_FAILURES:
             return None
         return None
 
@@ -201,8 +352,9 @@ class SpeedContinuation:
         corrector took serves where it was taken within REUSE_DISTANCE of the solution and no
         point of the orbit lost contact (the map is then affine in z to rounding, bar the
         pinion angle's weak say in the stiffness); else it is taken afresh here."""
-        z, speed = self.split(v)
-        figures = self.period_map.figures(self.period_map.state(z, speed), speed)
+        z, value = self.split(v)
+        period_map, speed = self.axis.map_at(value), self.axis.speed_at(value)
+        figures = period_map.figures(period_map.state(z, speed), speed)
         where, jacobian, images, phase_row = fresh
         self.distances.append(float(np.abs(v - where).max() * AMPLITUDE_UNIT))
         if (np.abs(v - where).max() * AMPLITUDE_UNIT > REUSE_DISTANCE
@@ -210,30 +362,34 @@ class SpeedContinuation:
             jacobian, images, phase_row = self.full_jacobian(v, base)
         self.jacobian = jacobian
         self.tangent = self.new_tangent(jacobian, previous_tangent)
-        orbit = orbit_record(self.period_map, z, speed, float(np.abs(base[0]).max()),
+        orbit = orbit_record(period_map, z, speed, float(np.abs(base[0]).max()),
                              iterations, True, images, phase_row, figures=False)
         events: tuple[str, ...] = ()
         last = self.points[-1] if self.points else None
         if last is not None and last.orbit is not None:
-            if np.sign(last.tangent_speed) != np.sign(self.tangent[-1]):
+            if np.sign(last.tangent_value) != np.sign(self.tangent[-1]):
                 events += ("fold",)
-                t0, t1 = last.tangent_speed, self.tangent[-1]
-                self.folds.append(last.speed + (speed - last.speed) * t0 / (t0 - t1))
+                t0, t1 = last.tangent_value, self.tangent[-1]
+                self.folds.append(last.value + (value - last.value) * t0 / (t0 - t1))
             events += crossings(last.orbit.multipliers, orbit.multipliers)
         self.previous_v, self.v = self.v, v
-        self.points.append(BranchPoint(speed, orbit, "shooting", on_grid, events,
-                                       figures, float(self.tangent[-1])))
+        self.points.append(BranchPoint(value, speed, orbit, "shooting", on_grid, events,
+                                       figures, float(self.tangent[-1]),
+                                       self.axis.follows(value)))
 
-    def start_at(self, speed, unknowns) -> bool:
-        """Newton at a fixed speed from `unknowns` (z); on success the branch goes on from
-        there, heading up in speed."""
+    def start_at(self, value, unknowns=None) -> bool:
+        """Newton at a fixed value from `unknowns` (z; None: the static deflection there); on
+        success the branch goes on from there, heading up in the continued quantity."""
         try:
+            period_map = self.axis.map_at(value)
+            if unknowns is None:
+                unknowns = period_map.static_unknowns()
             z, norm, taken, converged, (_, _, base) = newton(
-                self.period_map, unknowns, speed, self.newton_tolerance)
+                period_map, unknowns, self.axis.speed_at(value), self.newton_tolerance)
             if converged:
-                v = np.append(z / AMPLITUDE_UNIT, speed / self.speed_unit)
+                v = np.append(z / AMPLITUDE_UNIT, value / self.unit)
                 fresh = (v, *self.full_jacobian(v, base))
-        except (IntegrationError, np.linalg.LinAlgError):
+        except STEP_FAILURES:
             return False
         if not converged:
             return False
@@ -244,25 +400,46 @@ class SpeedContinuation:
             self.points[-1].events = ()  # no continuity with the point before a gap
         return True
 
-    def by_time(self, speed):
-        """A requested speed that shooting could not reach: sweep_point's time protocol."""
-        from .sweep_point import run_window, static_mesh_force, window_figures
+    def by_time(self, value):
+        """A requested value that shooting could not reach: sweep_point's time protocol.
+        Returns the time run's end position."""
+        from .sweep_point import run_window_from, static_mesh_force, window_figures
 
-        at = self.scene.with_parameters(w0_pinion=speed)
-        figures = window_figures(run_window(at, self.protocol), static_mesh_force(at))
-        self.points.append(BranchPoint(speed, None, "time", True, (), figures))
+        at = self.axis.scene_at(value)
+        window, end = run_window_from(at, self.protocol)
+        figures = window_figures(window, static_mesh_force(at))
+        self.points.append(BranchPoint(value, self.axis.speed_at(value), None, "time", True,
+                                       (), figures, follows=self.axis.follows(value)))
+        return end
+
+    def begin_at(self, value, unknowns=None) -> bool:
+        """start_at `value` from `unknowns` (None: the static deflection); where Newton fails
+        there, the time protocol's point, and Newton again from where that run next reaches
+        the section (its transient settled, it is near an orbit: contact lost far from the
+        static state, say); where that converges, the orbit replaces the time point."""
+        if self.start_at(value, unknowns):
+            return True
+        end = self.by_time(value)
+        try:
+            settled = self.axis.map_at(value).section_unknowns(end, self.axis.speed_at(value))
+        except STEP_FAILURES:
+            return False
+        if settled is None or not self.start_at(value, settled):
+            return False
+        del self.points[-2]  # the time point, now an orbit
+        return True
 
     def target(self):
-        """The next requested speed in the branch's direction, or None."""
-        speed = self.v[-1] * self.speed_unit
-        slack = 1e-9 * self.speed_unit
-        ahead = (self.grid[self.grid > speed + slack] if self.tangent[-1] > 0
-                 else self.grid[self.grid < speed - slack][::-1])
+        """The next requested value in the branch's direction, or None."""
+        value = self.v[-1] * self.unit
+        slack = 1e-9 * self.unit
+        ahead = (self.grid[self.grid > value + slack] if self.tangent[-1] > 0
+                 else self.grid[self.grid < value - slack][::-1])
         return float(ahead[0]) if len(ahead) else None
 
     def near_fold(self) -> bool:
         """A real multiplier of the last orbit within FOLD_PROXIMITY of +1: ∂G/∂z is nearly
-        singular, and a step at fixed speed may find no solution (or jump across a fold)."""
+        singular, and a step at a fixed value may find no solution (or jump across a fold)."""
         orbit = self.points[-1].orbit
         if orbit is None:
             return True
@@ -270,38 +447,38 @@ class SpeedContinuation:
         real = np.abs(values.imag) <= 1e-9 * np.abs(values)
         return bool(np.any(real & (np.abs(values - 1.0) < FOLD_PROXIMITY)))
 
-    def along_speed(self, speed):
-        """The predictor at a (scaled) speed: z quadratic in the speed through the last two
-        points with the last one's slope t_z/t_ω, where the last step was at fixed speed
-        (the branch a graph over the speed there); else the tangent's line."""
+    def along_axis(self, value):
+        """The predictor at a (scaled) value: z quadratic in p through the last two points
+        with the last one's slope t_z/t_p, where the last step was at a fixed value (the
+        branch a graph over p there); else the tangent's line."""
         slope = self.tangent[:-1] / self.tangent[-1]
-        change = speed - self.v[-1]
+        change = value - self.v[-1]
         z = self.v[:-1] + slope * change
         if self.previous_v is not None and self.points[-1].on_grid:
             back = self.previous_v[-1] - self.v[-1]
             if back != 0.0:
                 curvature = (self.previous_v[:-1] - self.v[:-1] - slope * back) / back ** 2
                 z = z + curvature * change ** 2
-        return np.append(z, speed)
+        return np.append(z, value)
 
     def advance(self) -> bool:
-        """One step along the branch. Away from folds, at fixed speed: to the next requested
-        speed, or where that fails to halfway there (an intermediate point), down to
+        """One step along the branch. Away from folds, at a fixed value: to the next requested
+        value, or where that fails to halfway there (an intermediate point), down to
         1/2^NATURAL_HALVINGS of the way; near a fold or past that, a pseudo-arclength step
         (halved until the corrector converges). False where it cannot go on with steps down
         to SMALLEST_STEP."""
         target = self.target()
         natural = target is not None and not self.near_fold()
-        goal = None if target is None else target / self.speed_unit
+        goal = None if target is None else target / self.unit
         halvings = 0
         while self.step >= SMALLEST_STEP:
             if natural:
                 constraint = np.zeros(self.size + 1)
                 constraint[-1] = 1.0
-                predicted = self.along_speed(goal)
+                predicted = self.along_axis(goal)
             else:
                 step, constraint = self.step, self.tangent
-                if goal is not None:  # stop short of the next requested speed, not past it
+                if goal is not None:  # stop short of the next requested value, not past it
                     landing = (goal - self.v[-1]) / self.tangent[-1]
                     if 0.0 < landing:
                         step = min(step, 0.9 * landing)
@@ -320,7 +497,7 @@ class SpeedContinuation:
                 else:
                     self.step *= 0.5
                 continue
-            # a step at fixed speed keeps the direction in speed (no fold near): its two ends'
+            # a step at a fixed value keeps the direction in p (no fold near): its two ends'
             # tangents may be far from parallel in z over a long step
             heading = self.tangent
             if natural:
@@ -334,6 +511,44 @@ class SpeedContinuation:
         return False
 
 
+def follow(run: Continuation, progress: bool = False) -> Branch:
+    """The branch from the first requested value at which an orbit converges (Continuation.
+    begin_at; the ones before it run by time integration) up past the last, through folds;
+    where the continuation cannot go on, the next requested values are run by time
+    integration until shooting starts again at one of them (from the last orbit, or the time
+    run's state)."""
+    from tqdm import tqdm
+
+    grid, slack = run.grid, 1e-9 * run.unit
+    most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
+    with tqdm(total=len(grid), unit="value", desc=f"continuation in {run.axis.name}",
+              disable=not progress, smoothing=0.0) as bar:
+        def moved():
+            bar.update(int(np.searchsorted(grid, run.points[-1].value + slack,
+                                           side="right")) - bar.n)
+
+        index = 0
+        while index < len(grid) and not run.begin_at(grid[index]):
+            index += 1
+        while run.v is not None and len(run.points) < most:
+            moved()
+            if run.tangent[-1] > 0 and run.points[-1].value >= grid[-1] - slack:
+                break
+            if run.tangent[-1] < 0 and run.target() is None:
+                break  # the branch left the range below its first value
+            if run.advance():
+                continue
+            ahead = grid[grid > max(p.value for p in run.points) + slack]
+            z = run.split(run.v)[0]
+            run.v = run.previous_v = None
+            for value in ahead:
+                run.step = 1.0
+                if run.begin_at(value, z):
+                    break
+        moved()
+    return Branch(run.points, run.folds, run.axis.evaluations, run.axis.name)
+
+
 def continue_in_speed(scene, speeds, tolerance=SHOOTING_TOLERANCE,
                       newton_tolerance=NEWTON_TOLERANCE, protocol=None,
                       progress: bool = False) -> Branch:
@@ -342,40 +557,41 @@ def continue_in_speed(scene, speeds, tolerance=SHOOTING_TOLERANCE,
     between them the points that passing a fold took. Where shooting fails the requested speed
     is run by time integration (sweep_point's `protocol`) and marked method = "time"; shooting
     starts again at the next requested speed from the last orbit found."""
-    from tqdm import tqdm
-
     from ..arguments import check_scene, check_speeds
 
     check_scene(scene)
     grid = np.sort(check_speeds(speeds))
-    run = SpeedContinuation(scene, grid, tolerance, newton_tolerance, protocol)
-    most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
-    with tqdm(total=len(grid), unit="speed", desc="continuation", disable=not progress,
-              smoothing=0.0) as bar:
-        def moved():
-            bar.update(int(np.searchsorted(grid, run.points[-1].speed * (1 + 1e-12),
-                                           side="right")) - bar.n)
+    axis = SpeedAxis(scene, tolerance)
+    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress)
 
-        index = 0
-        start = run.period_map.static_unknowns()
-        while index < len(grid) and not run.start_at(grid[index], start):
-            run.by_time(grid[index])
-            index += 1
-        while run.v is not None and len(run.points) < most:
-            moved()
-            if run.tangent[-1] > 0 and run.points[-1].speed >= grid[-1] * (1 - 1e-12):
-                break
-            if run.tangent[-1] < 0 and run.target() is None:
-                break  # the branch left the range below its first speed
-            if run.advance():
-                continue
-            ahead = grid[grid > max(p.speed for p in run.points) * (1 + 1e-12)]
-            z = run.split(run.v)[0]
-            run.v = run.previous_v = None
-            for speed in ahead:
-                run.step = 1.0
-                if run.start_at(speed, z):
-                    break
-                run.by_time(speed)
-        moved()
-    return Branch(run.points, run.folds, run.period_map.evaluations)
+
+def continue_in_parameter(scene, name: str, values, pinion_speed: float | None = None,
+                          tolerance=SHOOTING_TOLERANCE, newton_tolerance=NEWTON_TOLERANCE,
+                          protocol=None, progress: bool = False) -> Branch:
+    """The branch of period-1 steady states over the requested values of a scene parameter
+    (in its unit) or input torque (N·m) at a fixed pinion speed (rad/s; None: the scene's
+    w0_pinion), as continue_in_speed's over speeds: a point at every requested value the
+    branch passes, the points that passing a fold took, time integration where shooting
+    fails. A torque is the transmitted torque: the other one follows it so that the train
+    stays balanced (M_load = u·M_motor), and the table shows it (M_load_Nm or M_motor_Nm).
+    Branch.folds are values of the parameter."""
+    from ..arguments import check_scene, check_speeds
+
+    check_scene(scene)
+    problem = continued_problem(scene, name) if name != SPEED else (
+        "w0_pinion is the pinion speed; allowed: continue_in_speed")
+    if problem:
+        raise ValueError(problem)
+    grid = np.sort(np.atleast_1d(np.asarray(values, dtype=float)))
+    if grid.ndim != 1 or not len(grid) or not np.all(np.isfinite(grid)):
+        raise ValueError(f"{name}: values must be finite numbers, got {values!r}")
+    if name in INPUTS and not (np.all(grid > 0) or np.all(grid < 0)):
+        raise ValueError(f"{name}: values {', '.join(f'{v:g}' for v in grid)} N·m; allowed: "
+                         "all > 0 or all < 0 (at 0 there is no static mesh force to measure "
+                         "the dynamic factor by)")
+    speed = float(check_speeds([scene.parameters[SPEED] if pinion_speed is None
+                                else pinion_speed], "pinion_speed")[0])
+    for value in grid:  # out of the parameter's range: SceneError here, before any work
+        scene.with_parameters(**({} if name in INPUTS else {name: float(value)}))
+    axis = ParameterAxis(scene, name, speed, tolerance, value_unit(grid), float(grid[0]))
+    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress)

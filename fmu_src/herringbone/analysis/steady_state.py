@@ -116,6 +116,16 @@ def check_balanced(scene) -> tuple[float, float]:
     return motor, load
 
 
+def balanced_torques(scene, name: str, value: float) -> dict[str, float]:
+    """Both input torques where one of them (`name`, "M_motor" or "M_load") is set to `value`
+    and the other follows so that they balance (M_load = u·M_motor): the transmitted torque
+    set by either end, as a sweep or continuation in a torque of a balanced scene takes it."""
+    ratio = GearTrainModel(scene).geometry.ratio
+    if name == "M_motor":
+        return {"M_motor": value, "M_load": ratio * value}
+    return {"M_motor": value / ratio, "M_load": value}
+
+
 def unknown_scales(model: GearTrainModel) -> np.ndarray:
     """For each state entry, the change that moves its generalized elastic force by the
     static mesh force's share in that coordinate: F·Rp on the motor and pinion angles, F·Rw on
@@ -138,18 +148,23 @@ def unknown_scales(model: GearTrainModel) -> np.ndarray:
 class PeriodMap:
     """z -> z(T) on the section, and its derivatives, for one scene (any speed)."""
 
-    def __init__(self, scene, tolerance: float = SHOOTING_TOLERANCE, mesh_periods: int = 1):
+    def __init__(self, scene, tolerance: float = SHOOTING_TOLERANCE, mesh_periods: int = 1,
+                 scales: np.ndarray | None = None, method: str = "auto"):
+        """scales: the unknowns' scales (default `unknown_scales` of this scene; a
+        continuation in a parameter gives every value's map the first one's, so that z is the
+        same state at every value); method: the compiled integrator's (CompiledStepper)."""
         check_scene(scene)
         self.torques = check_balanced(scene)
         self.scene = scene
         self.model = model = GearTrainModel(scene)
-        self.stepper = CompiledStepper(model, tolerance)
+        self.stepper = CompiledStepper(model, tolerance, method)
         self.mesh_periods = int(mesh_periods)
         self.size = n = model.size
         self.pinion = model.pinion
         self.free = np.array([i for i in range(n) if i != model.pinion])
         self.unknown_entries = np.concatenate([self.free, n + self.free])
-        self.scales = unknown_scales(model)[self.unknown_entries]
+        self.scales = (unknown_scales(model)[self.unknown_entries] if scales is None
+                       else np.asarray(scales, dtype=float))
         weights = model.mass * model.rigid_rotation
         self.rigid_inertia = float(weights @ model.rigid_rotation)  # R
         self.momentum_weights = weights[self.free] / self.rigid_inertia  # M_i·r_i/R, i ≠ p
@@ -248,14 +263,30 @@ class PeriodMap:
         offset = end_set.pinion_angle + run.state[self.pinion] - target
         return run.state.copy(), float(offset)
 
+    def section_unknowns(self, position: Position, speed: float) -> np.ndarray | None:
+        """The unknowns where a run of this scene from `position` (anywhere in a period, e.g.
+        a time run's end) next reaches the section: integrated for the time the rigid rotation
+        at ω takes to bring φp there (the vibration moves the crossing's φp by its small share,
+        which Newton takes up); None where the run ends outside the section's interval."""
+        mesh = self.model.mesh
+        here = position.segment.contact_set
+        angle = here.pinion_angle + position.state[self.pinion]
+        target = mesh.interval_start(here.cycle + 1, 0) + self.section_phase
+        duration = (target - angle) / speed
+        run = self.stepper.start(Position(0.0, position.state, position.segment))
+        self.stepper.run_to(run, duration, self.torques, self.step_budget(duration))
+        if int(run.place[0]) != self.section_set.index:
+            return None
+        return self.unknowns(run.state)
+
     def residual(self, unknowns: np.ndarray, speed: float):
         """G = z(T) − z (scaled), the end state and its φp offset."""
         end, offset = self.flow(self.state(unknowns, speed), speed)
         return self.unknowns(end) - unknowns, end, offset
 
-    def jacobian(self, unknowns: np.ndarray, speed: float, base=None, with_speed=False):
-        """∂z(T)/∂z (A, scaled), ∂φp(T)/∂z (row), and with_speed ∂G/∂ω, by forward
-        differences from `base` (residual's result at the point, computed if not given)."""
+    def jacobian(self, unknowns: np.ndarray, speed: float, base=None):
+        """∂z(T)/∂z (A, scaled) and ∂φp(T)/∂z (row), by forward differences from `base`
+        (residual's result at the point, computed if not given)."""
         if base is None:
             base = self.residual(unknowns, speed)
         residual, end, offset = base
@@ -268,12 +299,7 @@ class PeriodMap:
             moved, moved_offset = self.flow(self.state(shifted, speed), speed)
             images[:, j] = (self.unknowns(moved) - self.unknowns(end)) / DIFFERENCE_STEP
             phase_row[j] = (moved_offset - offset) / DIFFERENCE_STEP
-        speed_column = None
-        if with_speed:
-            step = DIFFERENCE_STEP * speed
-            moved = self.residual(unknowns, speed + step)[0]
-            speed_column = (moved - residual) / step
-        return images, phase_row, speed_column
+        return images, phase_row
 
     def multipliers(self, images: np.ndarray, phase_row: np.ndarray,
                     state: np.ndarray) -> np.ndarray:
@@ -324,7 +350,7 @@ def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,
     taken = 0
     images = phase_row = None
     while taken < iterations:
-        images, phase_row, _ = period_map.jacobian(z, speed, base)
+        images, phase_row = period_map.jacobian(z, speed, base)
         if norm <= tolerance:
             break
         z = z - np.linalg.solve(images - np.eye(len(z)), base[0])
@@ -334,7 +360,7 @@ def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,
         if not np.isfinite(norm):
             break
     else:
-        images, phase_row, _ = period_map.jacobian(z, speed, base)
+        images, phase_row = period_map.jacobian(z, speed, base)
     converged = bool(norm <= tolerance)
     return z, norm, taken, converged, (images, phase_row, base)
 

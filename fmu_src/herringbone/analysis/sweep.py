@@ -1,11 +1,14 @@
-"""Sweeps: a scene run at every point of a grid of one or two parameters (pinion speed, any
-scene parameter, or an input torque), each point by the protocol of sweep_point, as a tidy table.
+"""Sweeps: a scene over one or two quantities (pinion speed, any scene parameter, or an input
+torque) as a tidy table: the branch of periodic steady states by continuation where one
+quantity is swept (analysis/continuation.py), else every point of the grid by the time
+protocol of sweep_point.
 
     table = herringbone.sweep(scene, speeds=np.linspace(100, 3000, 30))
-    table = herringbone.sweep(scene, params={"dbeta_right": np.linspace(-1e-4, 1e-4, 9)},
-                              workers=2)
+    table = herringbone.sweep(scene, params={"dbeta_right": np.linspace(-1e-4, 1e-4, 9)})
+    table = herringbone.sweep(scene, speeds=[300, 600], params={"M_motor": [250, 500]},
+                              workers=2)     # a grid: the time protocol
 
-Every point is a task, run here (`workers=0`), on a Dask LocalCluster on this machine
+Every time point is a task, run here (`workers=0`), on a Dask LocalCluster on this machine
 (`workers=N`, default: one per core) or on an existing Dask cluster (`scheduler="tcp://…"`),
 with the same numbers whichever (distributed_run.py). `fmu=PATH` runs each point through that
 FMU with fmpy instead of the package's integrator.
@@ -73,9 +76,19 @@ def grid(axes: dict[str, np.ndarray]) -> list[Point]:
 
 def scene_at(scene, point: Point):
     """The scene with the point's values; a parameter out of its range raises SceneError
-    (a ValueError) naming it and what is allowed."""
+    (a ValueError) naming it and what is allowed. One torque swept on a scene whose torques
+    balance sets the transmitted torque: the other follows (steady_state.balanced_torques),
+    as a continuation in it does, so that the train runs steadily at every point."""
+    from .steady_state import ShootingError, balanced_torques, check_balanced
+
     params = {k: v for k, v in point.values if k not in INPUTS}
     torques = {k: v for k, v in point.values if k in INPUTS}
+    if len(torques) == 1:
+        try:
+            check_balanced(scene)
+            torques = balanced_torques(scene, *next(iter(torques.items())))
+        except ShootingError:
+            pass  # unbalanced already: the swept torque alone changes
     changed = scene.with_parameters(**params) if params else scene
     return changed.with_inputs(**torques) if torques else changed
 
@@ -120,14 +133,21 @@ METHODS = SWEEP_METHODS  # its home: arguments.py
 
 def shooting_applies(scene, speeds, params, fmu) -> str | None:
     """Why the periodic steady state cannot be computed directly for this sweep, or None: it
-    needs a sweep of speeds alone, run by the package (not through an FMU), at constant
-    torques that balance."""
+    needs one swept quantity — the speed, or a parameter that varies continuously or a torque
+    at one speed —, run by the package (not through an FMU), at constant torques that
+    balance."""
+    from .continuation import continued_problem
     from .steady_state import ShootingError, check_balanced
 
-    if speeds is None or params:
-        return "it sweeps other quantities than the speed (--param)"
+    names = [name for name in (params or {}) if name != SPEED]
+    if len(names) > 1 or (names and speeds is not None and np.size(speeds) > 1):
+        return ("it sweeps two quantities (a grid); continuation follows one: the speed, or "
+                "a parameter or torque at one speed")
     if fmu is not None:
         return "it runs through an FMU"
+    problem = continued_problem(scene, names[0]) if names else None
+    if problem:
+        return problem
     try:
         check_balanced(scene)
     except ShootingError as error:
@@ -147,14 +167,15 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         Pinion speeds w0_pinion, rad/s.
     params : dict or None
         {parameter name (or "M_motor", "M_load"): values, in its unit}; with `speeds`, at
-        most two quantities in all (a grid).
+        most two quantities (a grid). One torque swept with balanced torques: the other follows.
     protocol : Protocol
         How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
     method : {"shooting", "time"} or None
-        "shooting" (None's choice where it applies: a sweep of speeds alone at balanced
-        constant torques, not through an FMU): the branch of periodic steady states by
-        continuation (analysis.continuation); elsewhere it is refused with the reason. "time"
-        (None's choice elsewhere): each point from its static start past its transient.
+        "shooting" (None's choice where it applies: one quantity — the speed, or a continuous
+        parameter or torque at one speed or none — at balanced constant torques, no FMU): the
+        branch of periodic steady states by continuation (analysis.continuation); elsewhere
+        refused with the reason. "time" (None's choice elsewhere): each point from its static
+        start past its transient.
     **options
         workers (0: here, one point after the other; None: one Dask process per core),
         scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU):
@@ -166,11 +187,12 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         "time": a row per point in grid order: the swept values, then speed_rpm, K_v, forces
         (N), dte (µm), contact_lost_share, floquet_max (the columns name their units), method
         and stability "time". "shooting": a row per branch point in branch order (a row at
-        each requested speed the branch passes, several where it folds back over it, and the
-        points that passing a fold took, on_grid False), the same figures, floquet_max and
-        floquet_exponent_per_s (1/s) of the orbit, stability ("stable", "unstable", or "time"
-        where no orbit converged and the point was run by time integration), method, on_grid,
-        event ("fold", "period doubling", "torus"); attrs["folds"]: the folds' speeds, rad/s.
+        each requested value the branch passes, several where it folds back over it, and the
+        points that passing a fold took, on_grid False): the continued quantity, speed_rpm,
+        the torque following a swept one (M_load_Nm, M_motor_Nm), the same figures, the
+        orbit's floquet_max and floquet_exponent_per_s (1/s), stability ("stable", "unstable",
+        "time": no orbit converged, run by time integration), method, on_grid, event ("fold",
+        "period doubling", "torus"); attrs: "continued" (its name), "folds" (values there).
 
     Raises
     ------
@@ -183,6 +205,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     if method not in (None, *METHODS):
         raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
     require("pandas", "a sweep's table")  # before any work, whichever method runs
+    sweep_axes(scene, speeds, params)
     why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
     if method == "shooting" and why_not:
         raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
@@ -190,24 +213,41 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     if method == "time" or why_not:
         table = run_sweep(scene, speeds, params, protocol, **options)[0]
         return table.assign(stability="time", method="time")
-    return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True))
+    return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True),
+                          params=params)
 
 
-def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True):
-    """The branch table of `sweep`'s method "shooting" (each row's static force and mesh
-    frequency added, as the time table has them)."""
+def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True,
+                   params=None):
+    """The branch table of `sweep`'s method "shooting": in speed, or in the one parameter or
+    torque of `params` at the one speed of `speeds` (None: the scene's w0_pinion); each row's
+    mesh frequency and static force added after speed_rpm, as the time table has them."""
     import math
 
-    from .continuation import continue_in_speed
+    from .continuation import continue_in_parameter, continue_in_speed
     from .sweep_point import static_mesh_force
 
-    checked = sweep_axes(scene, speeds=speeds)[SPEED]
-    branch = continue_in_speed(scene, checked, protocol=protocol, progress=progress)
+    checked = sweep_axes(scene, speeds, params)
+    speed_values = checked.pop(SPEED, None)
+    if checked:
+        (name, values), = checked.items()
+        speed = None if speed_values is None else float(speed_values[0])
+        branch = continue_in_parameter(scene, name, values, speed, protocol=protocol,
+                                       progress=progress)
+    else:
+        name = SPEED
+        branch = continue_in_speed(scene, speed_values, protocol=protocol, progress=progress)
     table = branch.table()
-    table.insert(2, "mesh_frequency_Hz",
-                 table[SPEED] * scene.parameters["z_pinion"] / (2.0 * math.pi))
-    table.insert(3, "static_mesh_force_N", static_mesh_force(scene))
+    speeds_of_points = np.array([point.speed for point in branch.points])
+    forces = (static_mesh_force(scene) if name == SPEED else  # M_motor/Rp: Rp, M_motor may vary
+              [static_mesh_force(scene_at(scene, Point(0, ((name, value),))))
+               for value in table[name]])
+    after = table.columns.get_loc("speed_rpm") + 1
+    table.insert(after, "mesh_frequency_Hz",
+                 speeds_of_points * scene.parameters["z_pinion"] / (2.0 * math.pi))
+    table.insert(after + 1, "static_mesh_force_N", forces)
     table.attrs["folds"] = list(branch.folds)
+    table.attrs["continued"] = name
     return table
 
 

@@ -21,11 +21,11 @@ def is_branch(table) -> bool:
     return "stability" in table and table["stability"].isin(["stable", "unstable"]).any()
 
 
-def draw_branch(axes, table, columns) -> None:
-    """The branch in its order on each panel (one a column of `columns`): stable stretches
-    solid, unstable dashed, points found by time integration as open circles, folds as
-    crosses; rows in branch order (a fold makes the speed turn back)."""
-    rpm = table["speed_rpm"].to_numpy()
+def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
+    """The branch in its order on each panel (one a column of `columns`) against the column
+    `along`: stable stretches solid, unstable dashed, points found by time integration as open
+    circles, folds as crosses; rows in branch order (a fold makes the speed turn back)."""
+    abscissa = table[along].to_numpy()
     stability = table["stability"].to_numpy()
     for panel, (column, colour) in zip(axes, columns):
         values = table[column].to_numpy()
@@ -33,15 +33,15 @@ def draw_branch(axes, table, columns) -> None:
             # each stretch drawn to the next point, so that stretches join
             shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
             masked = np.where(shown, values, np.nan)
-            panel.plot(rpm, masked, style, color=colour, lw=1.3,
+            panel.plot(abscissa, masked, style, color=colour, lw=1.3,
                        label=f"{column}, {kind} orbits")
         timed = stability == "time"
         if timed.any():
-            panel.plot(rpm[timed], values[timed], "o", mfc="none", color=colour, ms=5,
+            panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,
                        label=f"{column}, time integration (no orbit converged)")
         folds = table["event"].str.contains("fold").to_numpy()
         if folds.any():
-            panel.plot(rpm[folds], values[folds], "x", color="C3", ms=9, mew=2,
+            panel.plot(abscissa[folds], values[folds], "x", color="C3", ms=9, mew=2,
                        label="fold (jump)")
 
 
@@ -106,12 +106,16 @@ def mark_resonances(axes, natural, z_pinion, low, high) -> None:
 
 
 def plot_parameter_sweep(table, axes_names, path, title) -> None:
-    """K_v against one swept quantity (a curve) or over two (a coloured grid map)."""
+    """K_v against one swept quantity (a curve; a branch table as `draw_branch` draws it) or
+    over two (a coloured grid map)."""
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(9, 5))
     if len(axes_names) == 1:
         name = axes_names[0]
-        axes.plot(table[name], table["K_v"], "o-", color="k", ms=3, label="K_v")
+        if is_branch(table):
+            draw_branch([axes], table, [("K_v", "k")], along=name)
+        else:
+            axes.plot(table[name], table["K_v"], "o-", color="k", ms=3, label="K_v")
         axes.set_xlabel(name)
         axes.set_ylabel("dynamic factor K_v")
         axes.legend()

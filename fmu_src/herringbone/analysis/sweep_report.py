@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..model.parameters import RPM_PER_RAD_S, name_with_unit
+from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
 from .sweep_plots import (
@@ -84,5 +84,7 @@ def _branch_lines(table) -> list[str]:
              f"stable, {counts.get('unstable', 0)} unstable orbits, "
              f"{counts.get('time', 0)} points by time integration (no orbit converged)"]
     if len(folds):
-        lines.append("folds (jumps) at " + ", ".join(f"{speed:.1f} rad/s" for speed in folds))
+        name = table.attrs.get("continued", SPEED)
+        lines.append(f"folds (jumps) in {name} at " + ", ".join(
+            with_unit(f"{value:.6g}", unit_of(name)) for value in folds))
     return lines

@@ -23,7 +23,7 @@ from ..arguments import (
     existing_fmu,
     number,
 )
-from ..model.parameters import INPUTS, PARAMETERS
+from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S
 from ..model.scene import load_scene
 from ..optional import require
 from ..suggest import did_you_mean
@@ -68,6 +68,9 @@ def declare(parser) -> None:
     """The options of `sweep`: one declaration each."""
     add_scene(parser)
     add_speeds(parser, None, "sweep the pinion speed w0_pinion")
+    parser.add_argument("--speed", type=number, metavar="W",
+                        help="with one --param: the pinion speed it is swept at, rad/s (rpm "
+                             "with --rpm); default the scene's w0_pinion")
     parser.add_argument("--param", nargs=4, action=_ParamAction, default=[],
                         metavar=("NAME", "FROM", "TO", "COUNT"),
                         help="sweep a parameter (or M_motor, M_load) over COUNT values from "
@@ -81,11 +84,12 @@ def declare(parser) -> None:
                             help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
                                  f"{shown}")
     parser.add_argument("--method", choices=SWEEP_METHODS, default=None,
-                        help="shooting: the periodic steady state directly, followed in speed "
-                             "through folds, stable and unstable branches (the default for a "
-                             "speed sweep at balanced constant torques, not through an FMU); "
-                             "time: each point from its static start past its transient (the "
-                             "default elsewhere)")
+                        help="shooting: the periodic steady state directly, followed in the "
+                             "swept quantity through folds, stable and unstable branches (the "
+                             "default for a sweep of one quantity at balanced constant "
+                             "torques: the speed, or one --param at one speed or none, not "
+                             "through an FMU); time: each point from its static start past "
+                             "its transient (the default elsewhere, a grid of two among them)")
     parser.add_argument("--time-sweeps", action="store_true",
                         help="with shooting: also sweep up and down by time integration, each "
                              "point from the last one's end state, and draw both over the "
@@ -110,10 +114,14 @@ def execute(args, parser) -> int:
 
     if args.workers is not None and (args.workers < 0 or args.workers != int(args.workers)):
         fail(parser, f"--workers {args.workers:g}: allowed: a whole number >= 0")
-    if args.rpm and args.speeds is None:
-        fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT")
+    if args.rpm and args.speeds is None and args.speed is None:
+        fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT "
+                     "or --speed W")
     sweep = speeds_of(args)
     params = {name: _values(low, high, count) for name, low, high, count in args.param}
+    speeds = None if sweep is None else sweep.speeds()
+    if args.speed is not None:
+        speeds = _one_speed(parser, args)
     protocol = Protocol(settle_residual=args.settle_residual, settle_time=args.settle_time,
                         window_periods=args.window_periods,
                         samples_per_period=args.samples_per_period, tolerance=args.tolerance,
@@ -122,15 +130,13 @@ def execute(args, parser) -> int:
     folder = default_output(parser, args.output, Path("results"), folder=True)
     require("pandas", "sweep")
     require("matplotlib", "the sweep's pictures")
-    speeds = None if sweep is None else sweep.speeds()
     method = _method(parser, args, scene, speeds, params)
     started = time.perf_counter()
     time_sweeps = None
     if method == "shooting":
-        assert speeds is not None  # shooting_applies: a sweep of speeds
-        table, series = shooting_sweep(scene, speeds, protocol,
-                                       progress=not args.no_progress), None
-        if args.time_sweeps:
+        table, series = shooting_sweep(scene, speeds, protocol, progress=not args.no_progress,
+                                       params=params), None
+        if args.time_sweeps and speeds is not None:
             time_sweeps = {direction: chained_time_sweep(scene, order, protocol,
                                                          progress=not args.no_progress)
                            for direction, order in (("up", speeds), ("down", speeds[::-1]))}
@@ -165,7 +171,25 @@ def _method(parser, args, scene, speeds, params) -> str:
     if args.time_sweeps and method != "shooting":
         fail(parser, "--time-sweeps: allowed: only with a sweep by --method shooting "
                      f"(this one runs by time{': ' + why_not if why_not else ''})")
+    if args.time_sweeps and params:
+        fail(parser, "--time-sweeps: allowed: only with a sweep of speeds (--speeds alone); "
+                     "this one continues in " + ", ".join(params))
     return method
+
+
+def _one_speed(parser, args):
+    """--speed W as [ω] in rad/s: with one --param and without --speeds, W > 0 finite."""
+    import numpy as np
+
+    from ..arguments import PINION_SPEED
+
+    if args.speeds is not None or len(args.param) != 1:
+        fail(parser, f"--speed {args.speed:g}: allowed: with one --param and without "
+                     "--speeds (the speed a parameter is swept at)")
+    if PINION_SPEED.problem(args.speed) is not None:
+        fail(parser, f"--speed {args.speed:g}: allowed: {PINION_SPEED.allowed.describe()} "
+                     f"({'rpm' if args.rpm else 'rad/s'})")
+    return np.array([args.speed / RPM_PER_RAD_S if args.rpm else args.speed])
 
 
 def _values(low: float, high: float, count: int):
