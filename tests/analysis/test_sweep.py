@@ -338,3 +338,27 @@ def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
     path = tmp_path / "curve.png"
     plot_resonance_curve(table, path, [], 10, "branch", sweeps={"up": up})
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_parameter_branch_picture_names_its_unit_and_only_the_lines_it_has(tmp_path,
+                                                                             monkeypatch):
+    """A branch over a torque with stable orbits only: the abscissa reads the torque's unit,
+    and the legend has no entry for unstable orbits the picture does not draw."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis import sweep_plots
+
+    table = pd.DataFrame({"M_motor": [200.0, 500.0, 800.0], "K_v": [1.69, 1.685, 1.682],
+                          "stability": ["stable"] * 3, "event": [""] * 3})
+    drawn = {}
+    monkeypatch.setattr(sweep_plots, "_save", lambda figure, path: drawn.update(
+        figure=figure))
+    sweep_plots.plot_parameter_sweep(table, ["M_motor"], tmp_path / "branch.png", "torque")
+    axes = drawn["figure"].axes[0]
+    assert axes.get_xlabel() == "M_motor, N.m"
+    assert [text.get_text() for text in axes.get_legend().get_texts()] == [
+        "K_v, stable orbits"]
+    plt.close(drawn["figure"])

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.parameters import RPM_PER_RAD_S
+from ..model.parameters import RPM_PER_RAD_S, unit_of
 from .plots import _pyplot, _save, amplitude_spectrum
 from .report import HARMONICS, resonance_speeds
 
@@ -30,6 +30,8 @@ def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
     for panel, (column, colour) in zip(axes, columns):
         values = table[column].to_numpy()
         for kind, style in (("stable", "-"), ("unstable", "--")):
+            if not (stability == kind).any():
+                continue  # no legend entry for a line the picture does not have
             # each stretch drawn to the next point, so that stretches join
             shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
             masked = np.where(shown, values, np.nan)
@@ -116,7 +118,7 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
             draw_branch([axes], table, [("K_v", "k")], along=name)
         else:
             axes.plot(table[name], table["K_v"], "o-", color="k", ms=3, label="K_v")
-        axes.set_xlabel(name)
+        axes.set_xlabel(_axis_label(name))
         axes.set_ylabel("dynamic factor K_v")
         axes.legend()
         axes.grid(True, alpha=0.3)
@@ -125,10 +127,16 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
         grid = table.pivot(index=second, columns=first, values="K_v")
         mesh = axes.pcolormesh(grid.columns, grid.index, grid.to_numpy(), shading="nearest")
         figure.colorbar(mesh, ax=axes, label="dynamic factor K_v")
-        axes.set_xlabel(first)
-        axes.set_ylabel(second)
+        axes.set_xlabel(_axis_label(first))
+        axes.set_ylabel(_axis_label(second))
     axes.set_title(title)
     _save(figure, path)
+
+
+def _axis_label(name: str) -> str:
+    """A swept quantity's axis label: its name and unit (w0_pinion, a parameter or a torque)."""
+    unit = unit_of(name)
+    return f"{name}, {unit}" if unit else name
 
 
 def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
