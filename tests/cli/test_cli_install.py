@@ -113,3 +113,20 @@ def test_help_names_the_fmu_scheme_and_outputs(capsys):
     assert main(["run", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "--reference" in text and "a .csv file to write" in text
+
+
+@pytest.mark.parametrize("bar", [True, False], ids=["bar", "no-progress"])
+def test_a_run_without_tqdm_runs_without_a_bar(monkeypatch, capsys, tmp_path, bar):
+    """The base install (no `analysis` extra) runs the main job: without tqdm the run goes on
+    without a bar, one line on stderr saying why where a bar was wanted, and writes its table."""
+    from herringbone.cli import main
+
+    monkeypatch.setitem(sys.modules, "tqdm", None)  # import tqdm now fails
+    output = tmp_path / "run.csv"
+    argv = ["run", "reference", "--stop-time", "1e-3", "-o", str(output)]
+    assert main(argv + ([] if bar else ["--no-progress"])) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines()
+             if line.startswith("no progress bar")]
+    assert len(notes) == (1 if bar else 0)
+    assert all("pip install 'herringbone[analysis]'" in note for note in notes)
+    assert output.read_text().count("\n") == 12  # the header and 11 samples, 0 to 1e-3 s

@@ -43,6 +43,7 @@ import numpy as np
 from ..integrate.contract import IntegrationError
 from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S
 from ..model.scene import SceneError
+from .progress_bar import progress_bar
 from .steady_state import (
     DIFFERENCE_STEP,
     NEWTON_TOLERANCE,
@@ -517,12 +518,10 @@ def follow(run: Continuation, progress: bool = False) -> Branch:
     where the continuation cannot go on, the next requested values are run by time
     integration until shooting starts again at one of them (from the last orbit, or the time
     run's state)."""
-    from tqdm import tqdm
-
     grid, slack = run.grid, 1e-9 * run.unit
     most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
-    with tqdm(total=len(grid), unit="value", desc=f"continuation in {run.axis.name}",
-              disable=not progress, smoothing=0.0) as bar:
+    with progress_bar(len(grid), f"continuation in {run.axis.name}", progress,
+                      unit="value") as bar:
         def moved():
             bar.update(int(np.searchsorted(grid, run.points[-1].value + slack,
                                            side="right")) - bar.n)

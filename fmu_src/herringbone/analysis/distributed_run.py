@@ -15,9 +15,9 @@ machine's workers load what it wrote.
 from __future__ import annotations
 
 import os
-import sys
 
 from ..optional import require
+from .progress_bar import progress_bar
 
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -34,13 +34,6 @@ def load_integrator(scene) -> bool:
     return warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0])) is not None
 
 
-def progress_bar(total: int, enabled: bool):
-    """A tqdm bar over `total` sweep points, or a bar that shows nothing when not `enabled`."""
-    tqdm = require("tqdm", "the sweep's progress bar").tqdm
-    return tqdm(total=total, unit="point", desc="sweep", file=sys.stderr, disable=not enabled,
-                smoothing=0.0)
-
-
 def map_points(function, points, shared, workers=None, scheduler=None, progress=True):
     """[function(scene, point, protocol, fmu) for point in points], shared = (scene, protocol,
     fmu), in the order of points. workers = 0 without a scheduler: here; else on Dask."""
@@ -50,7 +43,7 @@ def map_points(function, points, shared, workers=None, scheduler=None, progress=
                          "(0: no Dask, run here)")
     if scheduler is None and workers == 0:
         results = []
-        with progress_bar(len(points), progress) as bar:
+        with progress_bar(len(points), "sweep", progress, unit="point") as bar:
             for point in points:
                 results.append(function(shared[0], point, *shared[1:]))
                 bar.update()
@@ -105,7 +98,7 @@ def _run_on(client, function, points, shared, progress):
     scene, *rest = shared
     futures = client.map(function, [scene] * len(points), points,
                          *([value] * len(points) for value in rest), pure=False)
-    with progress_bar(len(points), progress) as bar:
+    with progress_bar(len(points), "sweep", progress, unit="point") as bar:
         for _ in as_completed(futures):
             bar.update()
     return client.gather(futures)

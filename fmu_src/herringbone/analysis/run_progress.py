@@ -1,4 +1,4 @@
-"""A progress bar (tqdm: simulated seconds done, time left) over any stepper's run.
+"""A progress bar (progress_bar.py: simulated seconds done, time left) over any stepper's run.
 
 `ProgressStepper` wraps a stepper (stepping.ScipyStepper, compiled_stepper.CompiledStepper) and only
 watches the samples it hands out, so a run with it gives the same numbers to the bit.
@@ -10,7 +10,7 @@ import sys
 from ..arguments import check_compiled_run, check_reference_run
 from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_TOLERANCE
 from ..integrate.reference import checked_reference_run
-from ..optional import require
+from .progress_bar import progress_bar
 
 
 class ProgressStepper:
@@ -27,16 +27,6 @@ class ProgressStepper:
             self._bar.update(t - self._bar.n)
 
         return self._stepper.advance(position, end, torques, sample_times, watched)
-
-
-def progress_bar(total: float, description: str, enabled: bool = True):
-    """A tqdm bar on stderr over `total` simulated seconds (shows nothing unless `enabled`);
-    MissingDependency if tqdm is not installed."""
-    tqdm = require("tqdm", "the progress bar (or give --no-progress)").tqdm
-    return tqdm(total=total, unit="s", unit_scale=False, desc=description, file=sys.stderr,
-                disable=not enabled,
-                bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated "
-                           "[{elapsed}<{remaining}]")
 
 
 def reference_simulate_with_progress(scene, stop_time=None, output_interval=None,

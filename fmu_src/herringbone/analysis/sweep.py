@@ -24,6 +24,7 @@ from ..arguments import SWEEP_METHODS
 from ..model.parameters import INPUTS, unit_of, with_unit
 from ..optional import require
 from ..suggest import did_you_mean
+from .progress_bar import progress_bar
 from .sweep_point import Protocol, point_row, run_window
 
 SPEED = "w0_pinion"
@@ -258,7 +259,6 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
     which stays on one branch of a multi-valued response until that branch ends at a fold.
     A table as `sweep`'s (method "time"), one row a speed, in the order given."""
     import pandas as pd
-    from tqdm import tqdm
 
     from ..integrate.contract import Position
     from ..model.assembly import GearTrainModel
@@ -268,13 +268,15 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
     sweep_axes(scene, speeds=values)
     rows: list[dict] = []
     end = None
-    for speed in tqdm(values, unit="point", desc="time sweep", disable=not progress):
-        at = scene.with_parameters(w0_pinion=float(speed))
-        start: Position | None = (None if end is None
-                                  else at_speed(GearTrainModel(at), end, float(speed)))
-        window, end = run_window_from(at, protocol, start)
-        rows.append({SPEED: float(speed), **point_row(at, window, protocol),
-                     "stability": "time", "method": "time"})
+    with progress_bar(len(values), "time sweep", progress, unit="point") as bar:
+        for speed in values:
+            at = scene.with_parameters(w0_pinion=float(speed))
+            start: Position | None = (None if end is None
+                                      else at_speed(GearTrainModel(at), end, float(speed)))
+            window, end = run_window_from(at, protocol, start)
+            rows.append({SPEED: float(speed), **point_row(at, window, protocol),
+                         "stability": "time", "method": "time"})
+            bar.update(1)
     return pd.DataFrame(rows)
 
 

@@ -2,7 +2,6 @@
 speed, with its unstable bands."""
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..model.parameters import RPM_PER_RAD_S
@@ -27,6 +26,7 @@ def declare(parser) -> None:
 
 def execute(args, parser) -> int:
     """Chart the speeds, write the picture, print the bands."""
+    from ..analysis.progress_bar import progress_bar
     from ..analysis.stability import plot_stability_chart, stability_chart
 
     sweep = args.speeds._replace(in_rpm=args.rpm)
@@ -34,10 +34,9 @@ def execute(args, parser) -> int:
     output = default_output(parser, args.output,
                             Path("results") / f"{scene.name}_stability.png", PICTURES)
     require("matplotlib", "the stability chart")
-    tqdm = require("tqdm", "the progress bar (or give --no-progress)").tqdm
     speeds = sweep.speeds()
-    with tqdm(total=len(speeds), unit="speed", desc=f"stability {scene.name}",
-              file=sys.stderr, disable=args.no_progress) as bar:
+    with progress_bar(len(speeds), f"stability {scene.name}", not args.no_progress,
+                      unit="speed") as bar:
         chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)
     plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")

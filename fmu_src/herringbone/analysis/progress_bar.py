@@ -1,0 +1,56 @@
+"""The one progress bar of every long job (a run, a sweep, a continuation, a stability chart):
+tqdm on stderr where it is installed and wanted, else a bar that shows nothing.
+
+A progress bar is a courtesy, not part of the job: where tqdm (the `analysis` extra) is not
+installed, the job runs without one and says so in one line on stderr, rather than refusing
+to run. The job's results are the same either way.
+"""
+from __future__ import annotations
+
+import sys
+
+from ..optional import MissingDependency, require
+
+# tqdm's line for a run: simulated seconds done of the total, wall time spent and left
+SIMULATED_SECONDS = "{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated [{elapsed}<{remaining}]"
+
+
+class QuietBar:
+    """What the jobs use of a tqdm bar, showing nothing: its count `n`, `update`, `reset`,
+    `set_description`, and use as a context manager."""
+
+    def __init__(self, total=None):
+        self.total, self.n = total, 0
+
+    def update(self, amount=1) -> None:
+        """Count `amount` more done."""
+        self.n += amount
+
+    def reset(self, total=None) -> None:
+        """Count from zero again."""
+        self.n = 0
+
+    def set_description(self, description: str) -> None:
+        """Nothing to show."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exception) -> None:
+        return None
+
+
+def progress_bar(total, description: str, enabled: bool = True, unit: str = "s"):
+    """A tqdm bar on stderr over `total` units of work (unit "s": simulated seconds, shown
+    with SIMULATED_SECONDS; else whole items, e.g. "point"), or a QuietBar where not
+    `enabled`, or where tqdm is not installed (then one line on stderr says so)."""
+    if not enabled:
+        return QuietBar(total)
+    try:
+        tqdm = require("tqdm", "the progress bar").tqdm
+    except MissingDependency as missing:
+        print(f"no progress bar: {missing} (or give --no-progress)", file=sys.stderr)
+        return QuietBar(total)
+    options = ({"unit_scale": False, "bar_format": SIMULATED_SECONDS} if unit == "s"
+               else {"smoothing": 0.0})
+    return tqdm(total=total, unit=unit, desc=description, file=sys.stderr, **options)
