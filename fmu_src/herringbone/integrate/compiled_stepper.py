@@ -172,6 +172,7 @@ NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 # how far past its contact interval (a fraction of its length) a run's pinion may end: the
 # event rules place it within 1e-12 of a pitch
 PHASE_SLACK = 1e-6
+COMPLETED = int(walk.Status.OK)  # as an int: compared after every call, unlike an enum's lookup
 
 
 class StepBudgetExceeded(IntegrationError):
@@ -184,7 +185,8 @@ class Run:
     one); `CompiledStepper.position` takes an immutable snapshot of it, for saving and
     restoring, and `CompiledStepper.start` makes a run from one."""
 
-    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs", "workspace")
+    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs", "workspace",
+                 "arrays")
 
     def __init__(self, clock, place, state, loaded, first_steps, outputs, workspace):
         self.clock = clock  # [time (s), step size to try next (s)]
@@ -195,6 +197,8 @@ class Run:
         self.outputs = outputs  # equations.outputs at the run's position (model.output_layout)
         # walk.allocate_workspace's scratch arrays: what they hold is not part of the position
         self.workspace = workspace
+        # walk.advance's run record, built once: a communication step then builds no tuple
+        self.arrays = (clock, place, state, loaded, first_steps, outputs)
 
     @property
     def time(self) -> float:
@@ -243,6 +247,10 @@ class CompiledStepper:
         self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
                               if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
+        # the same as Python floats, and the pinion's index as an int: the check after every
+        # call reads them in plain Python, where numpy's scalars cost a microsecond a call
+        self.interval_lengths = [float(length) for length in self.lengths]
+        self.pinion = int(model.pinion)
         self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
         self.system_arrays = model.packed_system
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
@@ -301,28 +309,33 @@ class CompiledStepper:
         """Integrate the run to `end` with the torques held, in place. Raises IntegrationError
         where the integration fails, StepBudgetExceeded (the run left consistent where it
         stopped) after `max_steps` internal steps (None: no bound)."""
-        if end <= run.clock[0]:
+        if end <= run.clock.item(0):
             return
         # float(): an int would make numba compile another version
         status, steps = walk.advance(
             self.system_arrays, self.mesh, self.settings,
-            (run.clock, run.place, run.state, run.loaded, run.first_steps, run.outputs),
-            run.workspace, float(end), (float(torques[0]), float(torques[1])),
+            run.arrays, run.workspace, float(end), (float(torques[0]), float(torques[1])),
             NO_STEP_BUDGET if max_steps is None else int(max_steps))
         self.accepted_steps += steps
-        if status == walk.Status.OVER_BUDGET:
-            raise StepBudgetExceeded(f"stopped at t = {run.time:.9g} s after {steps} internal "
-                                     f"steps short of t = {end:.9g} s")
-        if status != walk.Status.OK:
-            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: "
-                                   f"{FAILURES[status]}")
+        if status != COMPLETED:
+            self._fail(status, run, steps, end)
         # every method ends within its contact interval; a state past it (one so large that
         # its rounding hides the phase events: a torque of 1e300 N·m) is no result to return
-        length = self.lengths[int(run.place[0])]
-        if not -PHASE_SLACK * length <= run.state[self.model.pinion] <= (1 + PHASE_SLACK) * length:
+        length = self.interval_lengths[run.place.item(0)]
+        if not -PHASE_SLACK * length <= run.state.item(self.pinion) <= (1 + PHASE_SLACK) * length:
             raise IntegrationError(f"integration failed at t = {run.time:.9g} s: the pinion "
                                    "left its contact interval unseen (the state is beyond the "
                                    "integrator's resolution)")
+
+    @staticmethod
+    def _fail(status: int, run: Run, steps: int, end: float) -> None:
+        """Raise what walk.advance's `status` (not OK) says: StepBudgetExceeded, or
+        IntegrationError naming the failure."""
+        if status == walk.Status.OVER_BUDGET:
+            raise StepBudgetExceeded(f"stopped at t = {run.time:.9g} s after {steps} internal "
+                                     f"steps short of t = {end:.9g} s")
+        raise IntegrationError(f"integration failed at t = {run.time:.9g} s: "
+                               f"{FAILURES[walk.Status(status)]}")
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
