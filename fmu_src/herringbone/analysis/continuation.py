@@ -65,10 +65,24 @@ CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's s
 NATURAL_HALVINGS = 5  # see Continuation.advance
 REFRESHES = 1  # fresh Jacobians a corrector may take where the chord contracts slowly
 SMALLEST_STEP = 1e-3
+# a fold is where t_p changes sign; a tangent with |t_p| below this goes straight across p
+# and says nothing of the branch's way in p (the period-2 branch leaves its doubling so while
+# no contact is lost, the map affine there: t_p is the differences' noise, 1e-3, and would
+# flag folds that are none), so the sign is compared with the last point's that had one
+STRAIGHT_ACROSS = 1e-2
 LARGEST_STEP = 3.0  # three spacings of the requested values
 MOST_POINTS = 2000  # the continuation gives up past this many points, and past
 MOST_POINTS_PER_SPEED = 8  # this many per requested value where that is more
 MAPS_KEPT = 8  # a parameter's PeriodMaps kept (see ParameterAxis)
+# branch switching at a period doubling (follow_doublings): the bifurcation is located until a
+# multiplier is within DOUBLING_TOLERANCE of −1 (at most LOCATE_ITERATIONS orbits), the
+# period-2 branch started SWITCH_STEP (in Z) along the eigenvector from it, and taken to have
+# come back to the period-1 branch where its change over one mesh period falls below
+# REJOIN_FRACTION of its first point's
+DOUBLING_TOLERANCE = 1e-6
+LOCATE_ITERATIONS = 20
+SWITCH_STEP = 1e-2
+REJOIN_FRACTION = 0.5
 # a failed period integration, a singular Jacobian, or a corrector's value out of the
 # parameter's range: the step fails and is retried shorter
 STEP_FAILURES = (IntegrationError, np.linalg.LinAlgError, SceneError)
@@ -89,26 +103,41 @@ class BranchPoint:
     figures: dict = field(default_factory=dict)
     tangent_value: float = math.nan  # t_p at the point (its sign: the branch's direction)
     follows: dict = field(default_factory=dict)  # columns that follow p (the other torque)
+    # max |z(T) − z| of the orbit over one mesh period T, in state scales: 0 on a period-1
+    # orbit, the distance of a period-2 orbit from being one (measured on 2T branches only)
+    change_over_mesh_period: float = math.nan
 
 
 @dataclass
 class Branch:
     """The points in the order of the branch (arclength), the values of its folds, and the
-    name of the continued quantity (w0_pinion, a parameter, M_motor or M_load)."""
+    name of the continued quantity (w0_pinion, a parameter, M_motor or M_load); for the
+    period-1 branch, the period-2 branches switched to at its period doublings (`doubled`,
+    each a Branch of mesh_periods 2) and the values where those doublings were located."""
 
     points: list[BranchPoint]
     folds: list[float]
     evaluations: int = 0  # period integrations it took (Jacobians, residuals, figures)
     name: str = SPEED
+    mesh_periods: int = 1
+    doubled: list[Branch] = field(default_factory=list)
+    doublings: list[float] = field(default_factory=list)
 
     def table(self):
-        """A pandas DataFrame, a row a point in branch order: the continued quantity (its
-        name), speed_rpm, the torque that follows a continued torque (M_load_Nm or
-        M_motor_Nm), the sweep figures, floquet_max (|λ|max of the orbit),
+        """A pandas DataFrame, a row a point in branch order, this branch's rows then each
+        doubled branch's: the continued quantity (its name), speed_rpm, the torque that
+        follows a continued torque (M_load_Nm or M_motor_Nm), the sweep figures (over the
+        orbit's period), floquet_max (|λ|max of the orbit over its period),
         floquet_exponent_per_s, stability ('stable', 'unstable' or 'time' where no orbit
-        converged), method, on_grid, event."""
+        converged), method, on_grid, event, mesh_periods (the orbit's period: 1 or 2 mesh
+        periods), branch (0 this one, 1… the doubled ones), change_over_mesh_period."""
         import pandas as pd
 
+        tables = [self.rows(0)] + [b.rows(n + 1) for n, b in enumerate(self.doubled)]
+        return pd.DataFrame([row for rows in tables for row in rows])
+
+    def rows(self, branch_number: int) -> list[dict]:
+        """table()'s rows of this branch alone."""
         rows = []
         for number, point in enumerate(self.points):
             orbit = point.orbit
@@ -121,8 +150,10 @@ class Branch:
                 "stability": ("time" if orbit is None else
                               "stable" if orbit.stable else "unstable"),
                 "method": point.method, "on_grid": point.on_grid,
-                "event": ", ".join(point.events), "branch_point": number})
-        return pd.DataFrame(rows)
+                "event": ", ".join(point.events), "branch_point": number,
+                "mesh_periods": self.mesh_periods, "branch": branch_number,
+                "change_over_mesh_period": point.change_over_mesh_period})
+        return rows
 
 
 def crossings(before: np.ndarray, after: np.ndarray) -> tuple[str, ...]:
@@ -166,9 +197,14 @@ class SpeedAxis:
 
     name = SPEED
 
-    def __init__(self, scene, tolerance: float):
-        self.scene = scene
-        self.period_map = PeriodMap(scene, tolerance)
+    def __init__(self, scene, tolerance: float, mesh_periods: int = 1):
+        self.scene, self.tolerance, self.mesh_periods = scene, tolerance, mesh_periods
+        self.period_map = PeriodMap(scene, tolerance, mesh_periods)
+
+    def doubled(self) -> SpeedAxis:
+        """The same axis for orbits of twice the period (the same unknown scales: one
+        scene)."""
+        return SpeedAxis(self.scene, self.tolerance, 2 * self.mesh_periods)
 
     def map_at(self, value: float) -> PeriodMap:
         """The period map at a speed: the one map."""
@@ -205,14 +241,26 @@ class ParameterAxis:
     torque moves the other with it (steady_state.balanced_torques)."""
 
     def __init__(self, scene, name: str, speed: float, tolerance: float, unit: float,
-                 first_value: float):
+                 first_value: float, mesh_periods: int = 1, like: ParameterAxis | None = None):
+        """mesh_periods: the orbits' period in mesh periods; like: an axis whose unknown
+        scales and integration method this one takes (None: its first value's map's)."""
         self.scene = scene.with_parameters(w0_pinion=speed)
         self.name, self.speed, self.tolerance, self.unit = name, speed, tolerance, unit
-        first = PeriodMap(self.scene_at(first_value), tolerance)
-        self.scales, self.method = first.scales, first.stepper.method
+        self.first_value, self.mesh_periods = first_value, mesh_periods
+        scales: np.ndarray | None = None if like is None else like.scales
+        method: str = "auto" if like is None else like.method
+        first = PeriodMap(self.scene_at(first_value), tolerance, mesh_periods, scales, method)
+        self.scales: np.ndarray = first.scales
+        self.method: str = first.stepper.method
         # value -> map, least recently used first
         self.maps: dict[float, PeriodMap] = {first_value: first}
         self.retired = 0  # period integrations of maps no longer kept
+
+    def doubled(self) -> ParameterAxis:
+        """The same axis for orbits of twice the period, with this one's scales and method
+        (z the same state on both)."""
+        return ParameterAxis(self.scene, self.name, self.speed, self.tolerance, self.unit,
+                             self.first_value, 2 * self.mesh_periods, like=self)
 
     def scene_at(self, value: float):
         """The scene at the value (SceneError where it is out of the parameter's range)."""
@@ -224,8 +272,8 @@ class ParameterAxis:
         """The period map at a value: kept, or built (and the least recently used dropped)."""
         period_map = self.maps.pop(value, None)
         if period_map is None:
-            period_map = PeriodMap(self.scene_at(value), self.tolerance, scales=self.scales,
-                                   method=self.method)
+            period_map = PeriodMap(self.scene_at(value), self.tolerance, self.mesh_periods,
+                                   self.scales, self.method)
             if len(self.maps) == MAPS_KEPT:
                 self.retired += self.maps.pop(next(iter(self.maps))).evaluations
         self.maps[value] = period_map
@@ -272,6 +320,8 @@ class Continuation:
         self.points: list[BranchPoint] = []
         self.distances: list[float] = []
         self.folds: list[float] = []
+        # the last point whose t_p says which way the branch goes in p (see STRAIGHT_ACROSS)
+        self.heading: BranchPoint | None = None
         self.v = self.jacobian = self.tangent = None
         self.previous_v = None  # the point before the last, where that was a shooting point
         self.step = 1.0
@@ -367,16 +417,20 @@ class Continuation:
                              iterations, True, images, phase_row, figures=False)
         events: tuple[str, ...] = ()
         last = self.points[-1] if self.points else None
+        t1, heading = float(self.tangent[-1]), self.heading
         if last is not None and last.orbit is not None:
-            if np.sign(last.tangent_value) != np.sign(self.tangent[-1]):
+            if (heading is not None and abs(t1) >= STRAIGHT_ACROSS
+                    and np.sign(heading.tangent_value) != np.sign(t1)):
+                t0 = heading.tangent_value
+                self.folds.append(heading.value + (value - heading.value) * t0 / (t0 - t1))
                 events += ("fold",)
-                t0, t1 = last.tangent_value, self.tangent[-1]
-                self.folds.append(last.value + (value - last.value) * t0 / (t0 - t1))
             events += crossings(last.orbit.multipliers, orbit.multipliers)
         self.previous_v, self.v = self.v, v
         self.points.append(BranchPoint(value, speed, orbit, "shooting", on_grid, events,
                                        figures, float(self.tangent[-1]),
                                        self.axis.follows(value)))
+        if abs(t1) >= STRAIGHT_ACROSS:
+            self.heading = self.points[-1]
 
     def start_at(self, value, unknowns=None) -> bool:
         """Newton at a fixed value from `unknowns` (z; None: the static deflection there); on
@@ -506,18 +560,21 @@ class Continuation:
                 heading[-1] = np.sign(self.tangent[-1])
             v, base, iterations, fresh = solved
             self.accept(v, base, iterations, fresh, natural and halvings == 0, heading)
-            self.step = min(self.step * (1.5 if iterations <= 2 else
-                                         0.6 if iterations >= 5 else 1.0), LARGEST_STEP)
+            # never below SMALLEST_STEP after a success: the next advance would not try
+            self.step = min(max(self.step * (1.5 if iterations <= 2 else
+                                             0.6 if iterations >= 5 else 1.0), SMALLEST_STEP),
+                            LARGEST_STEP)
             return True
         return False
 
 
-def follow(run: Continuation, progress: bool = False) -> Branch:
+def follow(run: Continuation, progress: bool = False, doubling: bool = True) -> Branch:
     """The branch from the first requested value at which an orbit converges (Continuation.
     begin_at; the ones before it run by time integration) up past the last, through folds;
     where the continuation cannot go on, the next requested values are run by time
     integration until shooting starts again at one of them (from the last orbit, or the time
-    run's state)."""
+    run's state). doubling: switch to the period-2 branch at each period doubling it flags
+    and follow that too (follow_doublings)."""
     grid, slack = run.grid, 1e-9 * run.unit
     most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
     with progress_bar(len(grid), f"continuation in {run.axis.name}", progress,
@@ -545,35 +602,181 @@ def follow(run: Continuation, progress: bool = False) -> Branch:
                 if run.begin_at(value, z):
                     break
         moved()
-    return Branch(run.points, run.folds, run.axis.evaluations, run.axis.name)
+    branch = Branch(run.points, run.folds, run.axis.evaluations, run.axis.name)
+    if doubling:
+        follow_doublings(run, branch)
+        branch.evaluations = run.axis.evaluations + sum(b.evaluations for b in branch.doubled)
+    return branch
+
+
+def doubling_excess(multipliers: np.ndarray) -> float:
+    """max |λ| − 1 over the multipliers in the left half-plane: crosses 0 where a real
+    multiplier passes −1 (continuous through a complex pair meeting on the negative axis)."""
+    negative = multipliers[multipliers.real < 0.0]
+    return float(np.abs(negative).max()) - 1.0 if len(negative) else -1.0
+
+
+def period_one_orbit(run: Continuation, value: float, unknowns: np.ndarray):
+    """Newton at a fixed value from `unknowns`: (z, Poincaré Jacobian) or None."""
+    period_map, speed = run.axis.map_at(value), run.axis.speed_at(value)
+    try:
+        z, _, _, converged, (images, phase_row, _) = newton(period_map, unknowns, speed,
+                                                             run.newton_tolerance)
+    except STEP_FAILURES:
+        return None
+    if not converged:
+        return None
+    return z, period_map.poincare(images, phase_row, period_map.state(z, speed))
+
+
+def locate_doubling(run: Continuation, before: BranchPoint, after: BranchPoint):
+    """Where a real multiplier passes −1 between two shooting points of the branch: the
+    Illinois variant of regula falsi on doubling_excess in the continued value (each
+    estimate an orbit by Newton from the state interpolated between the two), until
+    |excess| <= DOUBLING_TOLERANCE. Returns (value, z, the eigenvector of the multiplier
+    nearest −1 in scaled unknowns, unit length) or None where an orbit fails."""
+    orbits = [p.orbit for p in (before, after) if p.orbit is not None]
+    if len(orbits) != 2:
+        return None
+    ends = [(p.value, doubling_excess(orbit.multipliers))
+            for p, orbit in zip((before, after), orbits)]
+    states = [run.axis.map_at(p.value).unknowns(orbit.state)
+              for p, orbit in zip((before, after), orbits)]
+    found = None
+    for _ in range(LOCATE_ITERATIONS):
+        (a, fa), (b, fb) = ends
+        value = b - fb * (b - a) / (fb - fa)
+        share = (value - before.value) / (after.value - before.value)
+        found = period_one_orbit(run, value, (1 - share) * states[0] + share * states[1])
+        if found is None:
+            return None
+        excess = doubling_excess(np.linalg.eigvals(found[1]))
+        if abs(excess) <= DOUBLING_TOLERANCE:
+            break
+        if np.sign(excess) == np.sign(fb):  # the far end stays: halve its weight (Illinois)
+            ends = [(a, 0.5 * fa), (value, excess)]
+        else:
+            ends = [(b, fb), (value, excess)]
+    if found is None:
+        return None
+    values, vectors = np.linalg.eig(found[1])
+    direction = vectors[:, np.abs(values + 1.0).argmin()].real
+    return value, found[0], direction / np.linalg.norm(direction)
+
+
+def switch_to_doubled(run: Continuation, value: float, z: np.ndarray,
+                      direction: np.ndarray) -> Continuation | None:
+    """A continuation of period-2 orbits started at a period doubling (value, z on the
+    period-1 branch): the predictor z + SWITCH_STEP·direction (the −1 multiplier's
+    eigenvector; −direction gives the same orbit shifted by one mesh period), corrected by
+    Newton on the map over 2T with the step along `direction` held (pseudo-arclength: the
+    value is free, the new branch may leave the bifurcation at a fixed value). None where the
+    corrector fails or lands on the period-1 orbit."""
+    doubled = Continuation(run.axis.doubled(), run.grid, run.newton_tolerance, run.protocol)
+    tangent = np.append(direction, 0.0)
+    origin = np.append(z / AMPLITUDE_UNIT, value / doubled.unit)
+    solved = doubled.correct(origin + SWITCH_STEP * tangent, tangent)
+    if solved is None:
+        return None
+    v, base, iterations, fresh = solved
+    doubled.accept(v, base, iterations, fresh, False, tangent)
+    doubled.points[-1].tangent_value = math.nan
+    measure_change(run, doubled.points[-1])
+    if not doubled.points[-1].change_over_mesh_period > 1e-3 * SWITCH_STEP:
+        return None  # back on the period-1 orbit
+    return doubled
+
+
+def measure_change(run: Continuation, point: BranchPoint) -> float:
+    """max |z(T) − z| of a doubled branch's orbit over one mesh period, by the period-1
+    map of `run` (the same unknown scales), stored on the point; inf where it fails."""
+    period_map = run.axis.map_at(point.value)
+    if point.orbit is None:
+        return math.nan
+    try:
+        change = period_map.residual(period_map.unknowns(point.orbit.state), point.speed)[0]
+        point.change_over_mesh_period = float(np.abs(change).max())
+    except STEP_FAILURES:
+        point.change_over_mesh_period = math.inf
+    return point.change_over_mesh_period
+
+
+def trace_doubled(run: Continuation, doubled: Continuation) -> float | None:
+    """Follow a period-2 branch from its first point until it leaves the requested range,
+    cannot go on, or comes back to the period-1 branch (its change over one mesh period below
+    REJOIN_FRACTION of its first point's): the value where it came back, or None."""
+    grid, slack = doubled.grid, 1e-9 * doubled.unit
+    first = doubled.points[0].change_over_mesh_period
+    most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
+    while len(doubled.points) < most:
+        value = doubled.points[-1].value
+        if doubled.tangent[-1] > 0 and value >= grid[-1] - slack:
+            break
+        if doubled.tangent[-1] < 0 and value <= grid[0] + slack:
+            break
+        if not doubled.advance():
+            break
+        if measure_change(run, doubled.points[-1]) < REJOIN_FRACTION * first:
+            return doubled.points[-1].value
+    return None
+
+
+def follow_doublings(run: Continuation, branch: Branch) -> None:
+    """At each period doubling the period-1 branch flags (between two shooting points), the
+    bifurcation located (locate_doubling), the period-2 branch switched to and followed
+    (switch_to_doubled, trace_doubled) with its own folds, period doublings (to period 4:
+    flagged, not followed) and tori; a doubling that an earlier period-2 branch came back to
+    is not switched at again. Adds them to `branch` (doubled, doublings)."""
+    rejoined: list[float] = []
+    for before, after in zip(run.points, run.points[1:]):
+        if "period doubling" not in after.events or before.orbit is None:
+            continue
+        located = locate_doubling(run, before, after)
+        if located is None:
+            continue
+        value, z, direction = located
+        branch.doublings.append(value)
+        if any(abs(value - r) <= run.unit for r in rejoined):
+            continue
+        doubled = switch_to_doubled(run, value, z, direction)
+        if doubled is None:
+            continue
+        back = trace_doubled(run, doubled)
+        if back is not None:
+            rejoined.append(back)
+        branch.doubled.append(Branch(doubled.points, doubled.folds,
+                                     doubled.axis.evaluations, doubled.axis.name,
+                                     doubled.axis.mesh_periods))
 
 
 def continue_in_speed(scene, speeds, tolerance=SHOOTING_TOLERANCE,
                       newton_tolerance=NEWTON_TOLERANCE, protocol=None,
-                      progress: bool = False) -> Branch:
+                      progress: bool = False, doubling: bool = True) -> Branch:
     """The branch of period-1 steady states over the requested pinion speeds (rad/s): a point
     at every requested speed the branch passes (several where it folds back over it), and
     between them the points that passing a fold took. Where shooting fails the requested speed
     is run by time integration (sweep_point's `protocol`) and marked method = "time"; shooting
-    starts again at the next requested speed from the last orbit found."""
+    starts again at the next requested speed from the last orbit found. doubling: at each
+    period doubling, the period-2 branch switched to and followed (Branch.doubled)."""
     from ..arguments import check_scene, check_speeds
 
     check_scene(scene)
     grid = np.sort(check_speeds(speeds))
     axis = SpeedAxis(scene, tolerance)
-    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress)
+    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress, doubling)
 
 
 def continue_in_parameter(scene, name: str, values, pinion_speed: float | None = None,
                           tolerance=SHOOTING_TOLERANCE, newton_tolerance=NEWTON_TOLERANCE,
-                          protocol=None, progress: bool = False) -> Branch:
+                          protocol=None, progress: bool = False,
+                          doubling: bool = True) -> Branch:
     """The branch of period-1 steady states over the requested values of a scene parameter
     (in its unit) or input torque (N·m) at a fixed pinion speed (rad/s; None: the scene's
     w0_pinion), as continue_in_speed's over speeds: a point at every requested value the
     branch passes, the points that passing a fold took, time integration where shooting
     fails. A torque is the transmitted torque: the other one follows it so that the train
     stays balanced (M_load = u·M_motor), and the table shows it (M_load_Nm or M_motor_Nm).
-    Branch.folds are values of the parameter."""
+    Branch.folds are values of the parameter; doubling as continue_in_speed's."""
     from ..arguments import check_scene, check_speeds
 
     check_scene(scene)
@@ -593,4 +796,4 @@ def continue_in_parameter(scene, name: str, values, pinion_speed: float | None =
     for value in grid:  # out of the parameter's range: SceneError here, before any work
         scene.with_parameters(**({} if name in INPUTS else {name: float(value)}))
     axis = ParameterAxis(scene, name, speed, tolerance, value_unit(grid), float(grid[0]))
-    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress)
+    return follow(Continuation(axis, grid, newton_tolerance, protocol), progress, doubling)

@@ -301,15 +301,20 @@ class PeriodMap:
             phase_row[j] = (moved_offset - offset) / DIFFERENCE_STEP
         return images, phase_row
 
+    def poincare(self, images: np.ndarray, phase_row: np.ndarray,
+                 state: np.ndarray) -> np.ndarray:
+        """The Poincaré map's Jacobian (scaled unknowns) from the fixed-time one (module
+        docstring)."""
+        rate = self.model.derivative(state, self.section_set,
+                                     self.start(state).segment.loaded, *self.torques)
+        along = rate[self.unknown_entries] / self.scales
+        return images - np.outer(along, phase_row) / rate[self.pinion]
+
     def multipliers(self, images: np.ndarray, phase_row: np.ndarray,
                     state: np.ndarray) -> np.ndarray:
         """The nontrivial Floquet multipliers from the fixed-time Jacobian (module docstring),
         largest modulus first."""
-        rate = self.model.derivative(state, self.section_set,
-                                     self.start(state).segment.loaded, *self.torques)
-        along = rate[self.unknown_entries] / self.scales
-        poincare = images - np.outer(along, phase_row) / rate[self.pinion]
-        values = np.linalg.eigvals(poincare)
+        values = np.linalg.eigvals(self.poincare(images, phase_row, state))
         return values[np.argsort(-np.abs(values), kind="stable")]
 
     # --- what the user reads --------------------------------------------------------------

@@ -180,7 +180,8 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     **options
         workers (0: here, one point after the other; None: one Dask process per core),
         scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU):
-        time only; progress (a bar on stderr).
+        time only; progress (a bar on stderr); doubling (shooting: follow the period-2
+        branch from each period doubling, default True; False leaves them flagged only).
 
     Returns
     -------
@@ -193,7 +194,11 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         the torque following a swept one (M_load_Nm, M_motor_Nm), the same figures, the
         orbit's floquet_max and floquet_exponent_per_s (1/s), stability ("stable", "unstable",
         "time": no orbit converged, run by time integration), method, on_grid, event ("fold",
-        "period doubling", "torus"); attrs: "continued" (its name), "folds" (values there).
+        "period doubling", "torus"), mesh_periods (1; 2 on a period-2 branch switched to at a
+        period doubling, its figures over its two mesh periods), branch (0 the period-1
+        branch, 1… each period-2 one), change_over_mesh_period; attrs: "continued" (its
+        name), "folds" (the period-1 branch's values there), "period_doublings" (values where
+        a multiplier is −1 on it), "folds_2T" (the period-2 branches').
 
     Raises
     ------
@@ -215,14 +220,16 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         table = run_sweep(scene, speeds, params, protocol, **options)[0]
         return table.assign(stability="time", method="time")
     return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True),
-                          params=params)
+                          params=params, doubling=options.get("doubling", True))
 
 
 def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True,
-                   params=None):
+                   params=None, doubling: bool = True):
     """The branch table of `sweep`'s method "shooting": in speed, or in the one parameter or
     torque of `params` at the one speed of `speeds` (None: the scene's w0_pinion); each row's
-    mesh frequency and static force added after speed_rpm, as the time table has them."""
+    mesh frequency and static force added after speed_rpm, as the time table has them.
+    doubling: the period-2 branches from the period doublings as well (their rows after the
+    period-1 branch's, mesh_periods 2)."""
     import math
 
     from .continuation import continue_in_parameter, continue_in_speed
@@ -234,12 +241,14 @@ def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: boo
         (name, values), = checked.items()
         speed = None if speed_values is None else float(speed_values[0])
         branch = continue_in_parameter(scene, name, values, speed, protocol=protocol,
-                                       progress=progress)
+                                       progress=progress, doubling=doubling)
     else:
         name = SPEED
-        branch = continue_in_speed(scene, speed_values, protocol=protocol, progress=progress)
+        branch = continue_in_speed(scene, speed_values, protocol=protocol, progress=progress,
+                                   doubling=doubling)
     table = branch.table()
-    speeds_of_points = np.array([point.speed for point in branch.points])
+    speeds_of_points = np.array([point.speed for part in (branch, *branch.doubled)
+                                 for point in part.points])  # the table's rows
     forces = (static_mesh_force(scene) if name == SPEED else  # M_motor/Rp: Rp, M_motor may vary
               [static_mesh_force(scene_at(scene, Point(0, ((name, value),))))
                for value in table[name]])
@@ -248,6 +257,8 @@ def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: boo
                  speeds_of_points * scene.parameters["z_pinion"] / (2.0 * math.pi))
     table.insert(after + 1, "static_mesh_force_N", forces)
     table.attrs["folds"] = list(branch.folds)
+    table.attrs["period_doublings"] = list(branch.doublings)
+    table.attrs["folds_2T"] = [fold for doubled in branch.doubled for fold in doubled.folds]
     table.attrs["continued"] = name
     return table
 

@@ -21,10 +21,32 @@ def is_branch(table) -> bool:
     return "stability" in table and table["stability"].isin(["stable", "unstable"]).any()
 
 
+DOUBLED_COLOUR = "C0"  # a period-2 branch's lines on every panel
+
+
 def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
     """The branch in its order on each panel (one a column of `columns`) against the column
     `along`: stable stretches solid, unstable dashed, points found by time integration as open
-    circles, folds as crosses; rows in branch order (a fold makes the speed turn back)."""
+    circles, folds as crosses; rows in branch order (a fold makes the speed turn back). A
+    table with period-2 branches (its `branch` column) draws each of them so too, in
+    DOUBLED_COLOUR, with the period doublings they start from as diamonds."""
+    numbers = table["branch"].to_numpy() if "branch" in table else np.zeros(len(table), int)
+    for number in np.unique(numbers):
+        part = table[numbers == number]
+        doubled = number > 0
+        shown = [(column, DOUBLED_COLOUR if doubled else colour) for column, colour in columns]
+        draw_one_branch(axes, part, shown, along,
+                        "period 2T, " if doubled else "", first=number <= 1)
+        if doubled:
+            for panel, (column, _) in zip(axes, columns):
+                panel.plot(part[along].iloc[:1], part[column].iloc[:1], "D", ms=6,
+                           color=DOUBLED_COLOUR, mfc="none",
+                           label="period doubling" if number == 1 else None)
+
+
+def draw_one_branch(axes, table, columns, along: str, kind_label: str, first: bool) -> None:
+    """One branch of draw_branch's (rows in its order); `first`: its lines get legend
+    entries (one entry for all the period-2 branches)."""
     abscissa = table[along].to_numpy()
     stability = table["stability"].to_numpy()
     for panel, (column, colour) in zip(axes, columns):
@@ -36,7 +58,7 @@ def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
             shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
             masked = np.where(shown, values, np.nan)
             panel.plot(abscissa, masked, style, color=colour, lw=1.3,
-                       label=f"{column}, {kind} orbits")
+                       label=f"{column}, {kind_label}{kind} orbits" if first else None)
         timed = stability == "time"
         if timed.any():
             panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,

@@ -94,6 +94,10 @@ def declare(parser) -> None:
                         help="with shooting: also sweep up and down by time integration, each "
                              "point from the last one's end state, and draw both over the "
                              "branch (where the response is multi-valued they jump at folds)")
+    parser.add_argument("--no-period-doubling", action="store_true",
+                        help="with shooting: flag period doublings on the branch but do not "
+                             "switch to and follow the period-2 branch from each (followed by "
+                             "default)")
     parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
     parser.add_argument("--workers", type=number, help="Dask LocalCluster worker processes "
                         "(default: one per core; 0: no Dask, run here one after the other)")
@@ -135,7 +139,8 @@ def execute(args, parser) -> int:
     time_sweeps = None
     if method == "shooting":
         table, series = shooting_sweep(scene, speeds, protocol, progress=not args.no_progress,
-                                       params=params), None
+                                       params=params,
+                                       doubling=not args.no_period_doubling), None
         if args.time_sweeps and speeds is not None:
             time_sweeps = {direction: chained_time_sweep(scene, order, protocol,
                                                          progress=not args.no_progress)
@@ -170,6 +175,9 @@ def _method(parser, args, scene, speeds, params) -> str:
     method = args.method or ("time" if why_not or distributed else "shooting")
     if args.time_sweeps and method != "shooting":
         fail(parser, "--time-sweeps: allowed: only with a sweep by --method shooting "
+                     f"(this one runs by time{': ' + why_not if why_not else ''})")
+    if args.no_period_doubling and method != "shooting":
+        fail(parser, "--no-period-doubling: allowed: only with a sweep by --method shooting "
                      f"(this one runs by time{': ' + why_not if why_not else ''})")
     if args.time_sweeps and params:
         fail(parser, "--time-sweeps: allowed: only with a sweep of speeds (--speeds alone); "
