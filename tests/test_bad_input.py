@@ -358,7 +358,7 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("sweep-output-a-file", "--output", SWEEP_RUN + ("-o", "{file}"),
      ("--output", "is a file", "folder"), "herringbone"),
     ("sweep-no-period-doubling-by-time", "--no-period-doubling",
-     SWEEP_RUN + ("--method", "time", "--no-period-doubling"),
+     SWEEP_RUN + ("--method", "time", "--no-period-doubling", "-o", "{tmp}"),
      ("--no-period-doubling", "only with a sweep by --method shooting"), "herringbone"),
     ("campbell-speeds-descending", "--speeds", ("campbell", "{scene}", "--speeds", "500", "400",
                                                 "2"), SWEEP + ("FROM 500 is not below TO 400",),

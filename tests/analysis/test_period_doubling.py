@@ -7,10 +7,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.optimize import brentq
 
 import herringbone
 from herringbone import cli
-from herringbone.analysis.continuation import SWITCH_STEP, continue_in_speed
+from herringbone.analysis import stability
+from herringbone.analysis.continuation import (
+    SWITCH_STEP,
+    continue_in_parameter,
+    continue_in_speed,
+    doubling_excess,
+)
 from herringbone.analysis.steady_state import NEWTON_TOLERANCE, PeriodMap, periodic_orbit
 from herringbone.analysis.sweep import sweep
 from herringbone.analysis.sweep_point import Protocol, run_window, static_mesh_force, window_figures
@@ -36,7 +43,9 @@ def test_each_doubling_is_located_and_its_period_2_branch_starts_there(scene, br
     period-2 branch from each starts within 1e-2 rad/s of it (measured 1.3e-3, 8e-5) and
     within 1.5·SWITCH_STEP of the period-1 orbit there (in state scales; measured 0.0098 and
     0.0100: the switch's own step), its multipliers the period-1 ones squared within 1e-5
-    (the −1 one's square is +1; measured within 2e-7)."""
+    (the −1 one's square is +1; measured within 2e-7). The linear mesh's Floquet analysis
+    (herringbone.analysis.stability: contact geometry prescribed, an independent monodromy)
+    has its multiplier at −1 within 0.05 rad/s of each (measured 0.017, 0.013)."""
     flagged = [(before.value, after.value) for before, after
                in zip(branch.points, branch.points[1:]) if "period doubling" in after.events]
     assert len(flagged) == 2 and len(branch.doublings) == 2 and len(branch.doubled) == 2
@@ -52,6 +61,9 @@ def test_each_doubling_is_located_and_its_period_2_branch_starts_there(scene, br
         assert 0.5 * SWITCH_STEP <= distance <= 1.5 * SWITCH_STEP
         assert np.allclose(np.sort_complex(start.orbit.multipliers),
                            np.sort_complex(one.multipliers ** 2), atol=1e-5)
+        linear = brentq(lambda w: doubling_excess(stability.multipliers(scene, w)), low, high,
+                        xtol=1e-6)
+        assert abs(linear - value) <= 0.05
 
 
 def test_the_period_2_orbit_repeats_over_two_mesh_periods_and_not_over_one(scene, branch):
@@ -109,3 +121,22 @@ def test_sweep_table_and_command_carry_the_period_2_branch(scene, tmp_path, caps
         written = pd.read_csv(folder / "period_doubling_sweep_w0_pinion.csv")
         assert set(written["mesh_periods"]) == periods
         assert (folder / "period_doubling_sweep_w0_pinion_resonance.png").stat().st_size > 10_000
+
+
+def test_a_branch_in_a_parameter_switches_to_the_same_period_2_orbit(scene, branch):
+    """In the mesh damping at 5000 rad/s (0.02 to 0.04): the period-1 orbit doubles between
+    0.03 and 0.035 (located at 0.03053); the period-2 branch leaves it unstable (subcritical),
+    folds once (at 0.03103: between the two the period-1 and the period-2 orbit are both
+    stable) and comes back stable to zeta_mesh = 0.02, where its orbit is the one the branch
+    in speed found at 5000 rad/s: K_v and dte peak-to-peak within 1e-7 relative."""
+    dampings = np.linspace(0.02, 0.04, 5)
+    in_damping = continue_in_parameter(scene, "zeta_mesh", dampings, pinion_speed=INSIDE)
+    (located,) = in_damping.doublings
+    assert 0.03 < located < 0.035 and len(in_damping.doubled) == 1
+    doubled = in_damping.doubled[0]
+    assert len(doubled.folds) == 1 and located < doubled.folds[0] < 0.035
+    end = doubled.points[-1]
+    assert end.value == 0.02 and end.on_grid and end.orbit.stable
+    (in_speed,) = [p for p in branch.doubled[1].points if p.on_grid and p.value == INSIDE]
+    for figure in ("K_v", "dte_p2p_um"):
+        assert end.figures[figure] == pytest.approx(in_speed.figures[figure], rel=1e-7), figure

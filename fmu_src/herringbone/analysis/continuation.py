@@ -32,6 +32,9 @@ What is flagged on the point past it: a fold where t_p changes sign (a multiplie
 a period doubling where a real multiplier passes −1, a torus (Neimark–Sacker) where a complex
 pair leaves or enters the unit circle. The period-1 branch is followed through all three; past
 a period doubling or torus it is unstable, and the motion a time run shows there is not on it.
+At each period doubling the period-2 branch is switched to and followed as well
+(follow_doublings: located, started along the −1 multiplier's eigenvector, continued over 2T
+by the same driver); its own doublings (to period 4) are flagged, not followed.
 """
 from __future__ import annotations
 

@@ -174,14 +174,12 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     method : {"shooting", "time"} or None
         "shooting" (None's choice where it applies: one quantity — the speed, or a continuous
         parameter or torque at one speed or none — at balanced constant torques, no FMU): the
-        branch of periodic steady states by continuation (analysis.continuation); elsewhere
-        refused with the reason. "time" (None's choice elsewhere): each point from its static
-        start past its transient.
+        branches of periodic steady states (analysis.continuation); elsewhere refused with
+        the reason. "time" (None's choice elsewhere): each point past its transient.
     **options
         workers (0: here, one point after the other; None: one Dask process per core),
-        scheduler (a Dask scheduler's address), fmu (run each point through this gear FMU):
-        time only; progress (a bar on stderr); doubling (shooting: follow the period-2
-        branch from each period doubling, default True; False leaves them flagged only).
+        scheduler (a Dask scheduler's address), fmu (through this gear FMU): time only;
+        progress (a bar on stderr); doubling (shooting; False: no period-2 branch).
 
     Returns
     -------
@@ -194,11 +192,8 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         the torque following a swept one (M_load_Nm, M_motor_Nm), the same figures, the
         orbit's floquet_max and floquet_exponent_per_s (1/s), stability ("stable", "unstable",
         "time": no orbit converged, run by time integration), method, on_grid, event ("fold",
-        "period doubling", "torus"), mesh_periods (1; 2 on a period-2 branch switched to at a
-        period doubling, its figures over its two mesh periods), branch (0 the period-1
-        branch, 1… each period-2 one), change_over_mesh_period; attrs: "continued" (its
-        name), "folds" (the period-1 branch's values there), "period_doublings" (values where
-        a multiplier is −1 on it), "folds_2T" (the period-2 branches').
+        "period doubling", "torus"), mesh_periods, branch (Branch.table); attrs: "continued",
+        "folds", "period_doublings", "folds_2T" (values).
 
     Raises
     ------
