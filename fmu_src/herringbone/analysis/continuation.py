@@ -643,6 +643,8 @@ def locate_doubling(run: Continuation, before: BranchPoint, after: BranchPoint):
         return None
     ends = [(p.value, doubling_excess(orbit.multipliers))
             for p, orbit in zip((before, after), orbits)]
+    if np.sign(ends[0][1]) == np.sign(ends[1][1]):
+        return None  # no real multiplier passed −1 (a real one outside turned complex, say)
     states = [run.axis.map_at(p.value).unknowns(orbit.state)
               for p, orbit in zip((before, after), orbits)]
     found = None
