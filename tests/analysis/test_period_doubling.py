@@ -21,6 +21,8 @@ from herringbone.analysis.continuation import (
 from herringbone.analysis.steady_state import NEWTON_TOLERANCE, PeriodMap, periodic_orbit
 from herringbone.analysis.sweep import sweep
 from herringbone.analysis.sweep_point import Protocol, run_window, static_mesh_force, window_figures
+from herringbone.integrate.contract import Position
+from herringbone.integrate.stepping import ScipyStepper
 
 SCENE = Path(__file__).with_name("period_doubling.toml")
 SPEEDS = np.linspace(4800.0, 5200.0, 9)
@@ -140,3 +142,28 @@ def test_a_branch_in_a_parameter_switches_to_the_same_period_2_orbit(scene, bran
     (in_speed,) = [p for p in branch.doubled[1].points if p.on_grid and p.value == INSIDE]
     for figure in ("K_v", "dte_p2p_um"):
         assert end.figures[figure] == pytest.approx(in_speed.figures[figure], rel=1e-7), figure
+
+
+def test_unstable_period_2_orbits_repeat_by_the_reference_integrator(scene, branch):
+    """The branch from the lower doubling is unstable (a real multiplier above 1 over 2T) where
+    the teeth part; run through the independent scipy reference (its own event rule) over 2T
+    from the orbit's state, it comes back within 2e-7 of each unknown's scale, two mesh
+    periods on (measured 9.1e-9, 2.6e-9), and is far from it after one (> 1; measured 5.6,
+    6.1)."""
+    unstable = [p.orbit for p in branch.doubled[0].points
+                if p.figures["contact_lost_share"] > 0.0]
+    assert len(unstable) >= 3
+    period_map = PeriodMap(scene, mesh_periods=2)
+    reference = ScipyStepper(period_map.model, 1e-10)
+    for orbit in unstable[::2]:
+        assert orbit.residual <= NEWTON_TOLERANCE and orbit.mesh_periods == 2
+        largest = orbit.multipliers[0]
+        assert abs(largest.imag) < 1e-9 and largest.real > 1.0
+        segment = period_map.start(orbit.state).segment
+        halfway = reference.advance(Position(0.0, orbit.state.copy(), segment),
+                                    0.5 * orbit.period, period_map.torques)
+        end = reference.advance(halfway, orbit.period, period_map.torques)
+        assert end.segment.contact_set.index == 0 and end.segment.contact_set.cycle == 2
+        start = period_map.unknowns(orbit.state)
+        assert np.abs(period_map.unknowns(end.state) - start).max() <= 2e-7
+        assert np.abs(period_map.unknowns(halfway.state) - start).max() > 1.0
