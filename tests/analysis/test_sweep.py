@@ -362,3 +362,24 @@ def test_a_parameter_branch_picture_names_its_unit_and_only_the_lines_it_has(tmp
     assert [text.get_text() for text in axes.get_legend().get_texts()] == [
         "K_v, stable orbits"]
     plt.close(drawn["figure"])
+
+
+def test_the_summary_of_a_branch_reads_k_v_on_what_a_run_settles_on(reference_scene):
+    """A branch whose largest K_v is on an unstable orbit: the summary's K_v range and peak are
+    those of the stable orbits, and the period doublings and their 2T branches are named."""
+    from herringbone.analysis.sweep_report import describe
+
+    table = pd.DataFrame({"zeta_mesh": [0.02, 0.03, 0.04, 0.03, 0.02],
+                          "speed_rpm": [4775.0] * 5, "K_v": [1.4, 1.5, 1.6, 9.0, 2.5],
+                          "stability": ["stable", "stable", "stable", "unstable", "stable"],
+                          "mesh_periods": [1, 1, 1, 2, 2], "event": [""] * 5,
+                          "contact_lost_share": [0.0] * 5})
+    table.attrs.update(continued="zeta_mesh", folds=[], period_doublings=[0.0305],
+                       folds_2T=[0.031])
+    lines = describe(reference_scene, table, 1.0).splitlines()
+    assert "3 stable, 0 unstable orbits" in lines[1]
+    assert lines[2] == "period doublings in zeta_mesh at 0.0305"
+    assert lines[3] == "their 2T branches: 1 stable, 1 unstable orbits"
+    assert lines[4] == "folds of the 2T branches at 0.031"
+    assert lines[5] == ("K_v from 1.4000 to 2.5000 (stable orbits); largest at zeta_mesh = "
+                        "0.02")

@@ -35,18 +35,17 @@ def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
         part = table[numbers == number]
         doubled = number > 0
         shown = [(column, DOUBLED_COLOUR if doubled else colour) for column, colour in columns]
-        draw_one_branch(axes, part, shown, along,
-                        "period 2T, " if doubled else "", first=number <= 1)
+        draw_one_branch(axes, part, shown, along, "period 2T, " if doubled else "")
         if doubled:
             for panel, (column, _) in zip(axes, columns):
                 panel.plot(part[along].iloc[:1], part[column].iloc[:1], "D", ms=6,
                            color=DOUBLED_COLOUR, mfc="none",
-                           label="period doubling" if number == 1 else None)
+                           label=_once(panel, "period doubling"))
 
 
-def draw_one_branch(axes, table, columns, along: str, kind_label: str, first: bool) -> None:
-    """One branch of draw_branch's (rows in its order); `first`: its lines get legend
-    entries (one entry for all the period-2 branches)."""
+def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
+    """One branch of draw_branch's (rows in its order); each kind of line gets one legend
+    entry on a panel, however many branches draw it."""
     abscissa = table[along].to_numpy()
     stability = table["stability"].to_numpy()
     for panel, (column, colour) in zip(axes, columns):
@@ -58,15 +57,21 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str, first: bo
             shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
             masked = np.where(shown, values, np.nan)
             panel.plot(abscissa, masked, style, color=colour, lw=1.3,
-                       label=f"{column}, {kind_label}{kind} orbits" if first else None)
+                       label=_once(panel, f"{column}, {kind_label}{kind} orbits"))
         timed = stability == "time"
         if timed.any():
             panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,
-                       label=f"{column}, time integration (no orbit converged)")
+                       label=_once(panel, f"{column}, time integration (no orbit "
+                                                 "converged)"))
         folds = table["event"].str.contains("fold").to_numpy()
         if folds.any():
             panel.plot(abscissa[folds], values[folds], "x", color="C3", ms=9, mew=2,
-                       label="fold (jump)")
+                       label=_once(panel, "fold (jump)"))
+
+
+def _once(panel, label: str) -> str | None:
+    """`label`, or None where a line of the panel already carries it (one legend entry)."""
+    return None if label in [line.get_label() for line in panel.get_lines()] else label
 
 
 def draw_time_sweeps(axes, sweeps, columns) -> None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
@@ -56,8 +58,7 @@ def describe(scene, table, wall: float, args=None) -> str:
     """The summary printed after a sweep."""
     lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
              *(_branch_lines(table) if is_branch(table) else _time_lines(table)),
-             f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}; "
-             f"largest at {resonation_summary(table)}"]
+             *_k_v_lines(table)]
     if SPEED in swept_names(table) and len(swept_names(table)) == 1:
         low, high = table[SPEED].min(), table[SPEED].max()
         marks = resonances_between(elastic_frequencies(scene), scene.parameters["z_pinion"],
@@ -70,6 +71,16 @@ def describe(scene, table, wall: float, args=None) -> str:
     return "\n".join(lines)
 
 
+def _k_v_lines(table) -> list[str]:
+    """K_v's range and where it is largest, over what a run settles on: on a branch its stable
+    orbits (and the points by time integration), not the unstable ones."""
+    where = ""
+    if is_branch(table) and (table["stability"] != "unstable").any():
+        table, where = table[table["stability"] != "unstable"], " (stable orbits)"
+    return [f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}{where}; "
+            f"largest at {resonation_summary(table)}"]
+
+
 def _time_lines(table) -> list[str]:
     settle, window = table["settle_time_s"], table["window_time_s"]
     return [f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
@@ -78,13 +89,28 @@ def _time_lines(table) -> list[str]:
 
 
 def _branch_lines(table) -> list[str]:
-    counts = table["stability"].value_counts()
-    folds = table.attrs.get("folds", [])
+    doubled = ((table["mesh_periods"] > 1).to_numpy() if "mesh_periods" in table
+               else np.zeros(len(table), dtype=bool))
+    counts = table["stability"][~doubled].value_counts()
+    name = table.attrs.get("continued", SPEED)
     lines = [f"periodic steady state by shooting and continuation: {counts.get('stable', 0)} "
              f"stable, {counts.get('unstable', 0)} unstable orbits, "
              f"{counts.get('time', 0)} points by time integration (no orbit converged)"]
-    if len(folds):
-        name = table.attrs.get("continued", SPEED)
-        lines.append(f"folds (jumps) in {name} at " + ", ".join(
-            with_unit(f"{value:.6g}", unit_of(name)) for value in folds))
+    lines += _values_line(f"folds (jumps) in {name}", table.attrs.get("folds", []), name)
+    doublings = table.attrs.get("period_doublings", [])
+    if len(doublings):
+        counts = table["stability"][doubled].value_counts()
+        lines += _values_line(f"period doublings in {name}", doublings, name)
+        lines.append(f"their 2T branches: {counts.get('stable', 0)} stable, "
+                     f"{counts.get('unstable', 0)} unstable orbits")
+        lines += _values_line("folds of the 2T branches", table.attrs.get("folds_2T", []),
+                              name)
     return lines
+
+
+def _values_line(what: str, values, name: str) -> list[str]:
+    """"<what> at v1, v2 (unit)" for the values of the quantity `name`, or nothing."""
+    if not len(values):
+        return []
+    return [f"{what} at " + ", ".join(with_unit(f"{value:.6g}", unit_of(name))
+                                      for value in values)]
