@@ -22,7 +22,10 @@ augmented matrix Â = [[A, B], [0, 0]] acting on X = [x; u] is split by a sorted
 and a Sylvester equation into its slow block (eigenvalues near zero: the pinion angle and speed
 of the rigid rotation, the held inputs; nilpotent, a Jordan chain) and its fast block (the
 vibration modes, diagonalized): X(t) = R·diag(exp(T_slow·t), e^{Λt})·L·X(0). The slow block is
-a polynomial in t, summed as its series. A step evaluates that at one t (`propagate`), O(N²).
+a polynomial in t, summed as its series. A step evaluates that at one t (`step`), O(N²): the
+slow block in real arithmetic, one mode of each conjugate pair (ExactTables says why). The
+coordinates L·X(0) of a step's start are kept, so the trial steps of an event's location,
+which all start there, pay only for e^{Λt} and R.
 
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, the pinion speed keeps
@@ -44,7 +47,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from .counting import COUNTED
+from .counting import NUMBERS_ONLY
 from .equations import (
     LEAD_ERROR0,
     LEAD_ERROR_SLOPE,
@@ -72,29 +75,29 @@ MAX_SERIES_TERMS = 40
 
 
 class ExactTables(NamedTuple):
-    """Modal forms of every contact set of the mesh period in each loaded variant, indexed
-    [interval, variant]; N the state's size, M = N + INPUTS, S the widest slow block, F the
-    most fast modes kept, C the most tilt rows. An entry whose `valid` is 0 is not exact
-    (walk.py steps it by DOP853). The system is real, so its fast modes come in complex
-    conjugate pairs whose coordinates are conjugates of each other: one mode of each pair is
-    kept, its column of R counted twice, and Re(R·z) is the same sum at half the products. The
-    slow block and its rows of L and R are real."""
+    """Modal forms of every contact set of the mesh period in each loaded variant, indexed by
+    the exact form's index interval·VARIANTS + variant (P of them); N the state's size,
+    M = N + INPUTS, S the widest slow block, F the most fast modes kept, C the most tilt rows.
+    An entry whose `valid` is 0 is not exact (walk.py steps it by DOP853). The system is real,
+    so its fast modes come in complex conjugate pairs whose coordinates are conjugates of each
+    other: one mode of each pair is kept, its column of R counted twice, and Re(R·z) is the
+    same sum at half the products. The slow block and its rows of L and R are real."""
 
-    valid: np.ndarray  # (I, V) int: 1 where the set and variant meet exact_condition
-    slow_count: np.ndarray  # (I, V) int: the slow block's size
-    fast_count: np.ndarray  # (I, V) int: the fast modes kept
-    tilt_count: np.ndarray  # (I, V) int
-    slow_left: np.ndarray  # (I, V, S, M): L's rows of the slow block
-    slow_right: np.ndarray  # (I, V, N, S): R's columns of the slow block, the state's rows
-    slow: np.ndarray  # (I, V, S, S): the slow block T_slow (s⁻¹)
-    fast_left: np.ndarray  # (I, V, F, M) complex: L's rows of the fast modes kept
-    fast_right: np.ndarray  # (I, V, N, F) complex: their columns of R, twice for a pair
-    rates: np.ndarray  # (I, V, F) complex: their eigenvalues Λ (s⁻¹)
-    tilt_rows: np.ndarray  # (I, V, C, N): rows whose product with the state must vanish
-    speed_slow: np.ndarray  # (I, V, S): the pinion speed's row of the slow columns
-    approach_slow: np.ndarray  # (I, V, S): (g_base + η·g_base on ẏ)·R, a point's approach
-    speed_size: np.ndarray  # (I, V, F): |the pinion speed's row of fast_right|
-    approach_size: np.ndarray  # (I, V, F): |the approach's row of fast_right|
+    valid: np.ndarray  # (P,) int: 1 where the set and variant meet exact_condition
+    slow_count: np.ndarray  # (P,) int: the slow block's size
+    fast_count: np.ndarray  # (P,) int: the fast modes kept
+    tilt_count: np.ndarray  # (P,) int
+    slow_left: np.ndarray  # (P, S, M): L's rows of the slow block
+    slow_right: np.ndarray  # (P, N, S): R's columns of the slow block, the state's rows
+    slow: np.ndarray  # (P, S, S): the slow block T_slow (s⁻¹)
+    fast_left: np.ndarray  # (P, F, M) complex: L's rows of the fast modes kept
+    fast_right: np.ndarray  # (P, N, F) complex: their columns of R, twice for a pair
+    rates: np.ndarray  # (P, F) complex: their eigenvalues Λ (s⁻¹)
+    tilt_rows: np.ndarray  # (P, C, N): rows whose product with the state must vanish
+    speed_slow: np.ndarray  # (P, S): the pinion speed's row of the slow columns
+    approach_slow: np.ndarray  # (P, S): (g_base + η·g_base on ẏ)·R, a point's approach
+    speed_size: np.ndarray  # (P, F): |the pinion speed's row of fast_right|
+    approach_size: np.ndarray  # (P, F): |the approach's row of fast_right|
     tilt_bound: float  # how far from zero the tilt rows' products may be at a segment's start
     inertia: float  # Σ m·r² along the rigid rotation r
     # Scratch. `start`: the augmented X = [state; u] of the last step's start, then the
@@ -218,7 +221,8 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
 
 def exact_sets(system: System, period_table) -> np.ndarray:
     """Per contact set of the mesh period (mesh.period_table's lengths, counts, tables) and
-    loaded variant, 1 where it meets exact_condition, else 0: shape (intervals, VARIANTS)."""
+    loaded variant, 1 where it meets exact_condition, else 0: shape (intervals, VARIANTS)
+    (ExactTables.valid, reshaped)."""
     lengths, counts, tables = period_table
     valid = np.zeros((len(lengths), VARIANTS), dtype=np.int64)
     for interval in range(len(lengths)):
@@ -257,7 +261,7 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     intervals, size = len(lengths), 2 * system.mass.shape[0]
     width = size + INPUTS
     forms, rows_of = {}, {}
-    valid = np.zeros((intervals, VARIANTS), dtype=np.int64)
+    valid = np.zeros(intervals * VARIANTS, dtype=np.int64)
     for interval in range(intervals):
         count = int(counts[interval])
         for variant in range(VARIANTS):
@@ -267,13 +271,14 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
             if exact_condition(system, tables[interval], count, loaded, b, rows):
                 right, left, rates, slow = modal_form(a, b, scales)
                 kept, weights = kept_modes(rates[len(slow):])
-                forms[interval, variant] = (right, left, rates, slow, len(slow) + kept, weights)
-                rows_of[interval, variant] = rows
-                valid[interval, variant] = 1
+                place = interval * VARIANTS + variant
+                forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
+                rows_of[place] = rows
+                valid[place] = 1
     slow_width = max([len(form[3]) for form in forms.values()], default=1)
     fast_width = max([len(form[4]) for form in forms.values()], default=1)
     tilt_width = max([len(rows) for rows in rows_of.values()] + [1])
-    shape = (intervals, VARIANTS)
+    shape: tuple[int, ...] = (intervals * VARIANTS,)
     arrays = {
         "slow_count": np.zeros(shape, dtype=np.int64),
         "fast_count": np.zeros(shape, dtype=np.int64),
@@ -332,11 +337,11 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """The tables as three flat arrays (complex, float, int) that `unpack_tables` takes apart in
     compiled code: numba types each array of a call's arguments at every call, and the
     twenty-six of ExactTables would cost the FMU's communication step more than the exact
-    steps it takes. The ints open with the sizes (I, V, N, M, S, F, C); the floats end with
+    steps it takes. The ints open with the sizes (P, N, M, S, F, C); the floats end with
     tilt_bound and inertia."""
-    intervals, variants, size, fast = tables.fast_right.shape
-    header = [intervals, variants, size, tables.fast_left.shape[3], tables.slow.shape[2], fast,
-              tables.tilt_rows.shape[2]]
+    places, size, fast = tables.fast_right.shape
+    header = [places, size, tables.fast_left.shape[2], tables.slow.shape[1], fast,
+              tables.tilt_rows.shape[1]]
     complexes = np.concatenate([getattr(tables, name).ravel() for name in COMPLEX_FIELDS])
     floats = np.concatenate([getattr(tables, name).ravel() for name in FLOAT_FIELDS]
                             + [[tables.tilt_bound, tables.inertia]])
@@ -346,51 +351,47 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 # --- the kernels ---------------------------------------------------------------------------------
 
-@njit(**COUNTED)
+@njit(cache=True, error_model="numpy", inline="always")
 def unpack_tables(complexes, floats, ints):
-    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers."""
-    intervals, variants, size, width = ints[0], ints[1], ints[2], ints[3]
-    slow, fast, tilt = ints[4], ints[5], ints[6]
-    pairs = intervals * variants
+    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers. Inlined
+    into walk.advance, once per call: compiled on its own it would count each view's
+    references, a microsecond a call."""
+    places, size, width, slow, fast, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
     at = 0
-    fast_left = complexes[at:at + pairs * fast * width].reshape((intervals, variants, fast,
-                                                                  width))
-    at += pairs * fast * width
-    fast_right = complexes[at:at + pairs * size * fast].reshape((intervals, variants, size,
-                                                                  fast))
-    at += pairs * size * fast
-    rates = complexes[at:at + pairs * fast].reshape((intervals, variants, fast))
-    at += pairs * fast
+    fast_left = complexes[at:at + places * fast * width].reshape((places, fast, width))
+    at += places * fast * width
+    fast_right = complexes[at:at + places * size * fast].reshape((places, size, fast))
+    at += places * size * fast
+    rates = complexes[at:at + places * fast].reshape((places, fast))
+    at += places * fast
     start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
     at = 0
-    slow_left = floats[at:at + pairs * slow * width].reshape((intervals, variants, slow, width))
-    at += pairs * slow * width
-    slow_right = floats[at:at + pairs * size * slow].reshape((intervals, variants, size, slow))
-    at += pairs * size * slow
-    slow_block = floats[at:at + pairs * slow * slow].reshape((intervals, variants, slow, slow))
-    at += pairs * slow * slow
-    rows = floats[at:at + pairs * tilt * size].reshape((intervals, variants, tilt, size))
-    at += pairs * tilt * size
-    speed_slow = floats[at:at + pairs * slow].reshape((intervals, variants, slow))
-    at += pairs * slow
-    approach_slow = floats[at:at + pairs * slow].reshape((intervals, variants, slow))
-    at += pairs * slow
-    speed_size = floats[at:at + pairs * fast].reshape((intervals, variants, fast))
-    at += pairs * fast
-    approach_size = floats[at:at + pairs * fast].reshape((intervals, variants, fast))
-    at += pairs * fast
+    slow_left = floats[at:at + places * slow * width].reshape((places, slow, width))
+    at += places * slow * width
+    slow_right = floats[at:at + places * size * slow].reshape((places, size, slow))
+    at += places * size * slow
+    slow_block = floats[at:at + places * slow * slow].reshape((places, slow, slow))
+    at += places * slow * slow
+    rows = floats[at:at + places * tilt * size].reshape((places, tilt, size))
+    at += places * tilt * size
+    rows_of_slow = floats[at:at + 2 * places * slow].reshape((2, places, slow))
+    at += 2 * places * slow
+    rows_of_fast = floats[at:at + 2 * places * fast].reshape((2, places, fast))
+    at += 2 * places * fast
     start = floats[at:at + width + 3]
     at += width + 3
     start_slow, start_size = floats[at:at + slow], floats[at + slow:at + slow + fast]
     at += slow + fast
     modal_slow = floats[at:at + slow]
     series = floats[at + slow:at + 3 * slow].reshape((2, slow))
-    counts = ints[7:].reshape((4, intervals, variants))
-    return ExactTables(counts[0], counts[1], counts[2], counts[3], slow_left, slow_right,
-                       slow_block, fast_left, fast_right, rates, rows, speed_slow,
-                       approach_slow, speed_size, approach_size, floats[floats.shape[0] - 2],
-                       floats[floats.shape[0] - 1], start, start_slow, start_fast, start_size,
-                       modal_slow, modal_fast, series)
+    header = 6
+    return ExactTables(
+        ints[header:header + places], ints[header + places:header + 2 * places],
+        ints[header + 2 * places:header + 3 * places],
+        ints[header + 3 * places:header + 4 * places], slow_left, slow_right, slow_block,
+        fast_left, fast_right, rates, rows, rows_of_slow[0], rows_of_slow[1], rows_of_fast[0],
+        rows_of_fast[1], floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
+        start_slow, start_fast, start_size, modal_slow, modal_fast, series)
 
 
 @njit(cache=True, error_model="numpy")
@@ -408,16 +409,17 @@ def variant_of(tables, interval, count, loaded, state):
         variant = NONE_LOADED
     else:
         return -1
-    if tables.valid[interval, variant] == 0:
+    exact = interval * VARIANTS + variant
+    if tables.valid[exact] == 0:
         return -1
     rows = tables.tilt_rows
-    for k in range(tables.tilt_count[interval, variant]):
+    for k in range(tables.tilt_count[exact]):
         product = 0.0
         for j in range(state.shape[0]):
-            product += rows[interval, variant, k, j] * state[j]
+            product += rows[exact, k, j] * state[j]
         if abs(product) > tables.tilt_bound:
             return -1
-    return interval * VARIANTS + variant
+    return exact
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -436,12 +438,10 @@ def _prepared(tables, exact, state, motor_torque, load_torque):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _prepare(system, tables, interval, variant, exact, state, motor_torque, load_torque):
+def _prepare(system, tables, exact, state, motor_torque, load_torque):
     """The step's start into tables.start (X = [state; u], the exact form's index + 1, the
     momentum and moment), and L·X into start_slow and start_fast, the fast coordinates'
-    magnitudes into start_size. (Here and below the tables are indexed entry by entry, not
-    through views such as fast_left[interval, variant]: a view is a record built at every
-    step, and where this is compiled with numba's reference counts, two atomic counts.)"""
+    magnitudes into start_size."""
     size = state.shape[0]
     start = tables.start
     for j in range(size):
@@ -449,15 +449,15 @@ def _prepare(system, tables, interval, variant, exact, state, motor_torque, load
     start[size], start[size + 1], start[size + 2] = motor_torque, load_torque, 1.0
     width = size + INPUTS
     slow_left, fast_left = tables.slow_left, tables.fast_left
-    for i in range(tables.slow_count[interval, variant]):
+    for i in range(tables.slow_count[exact]):
         total = 0.0
         for j in range(width):
-            total += slow_left[interval, variant, i, j] * start[j]
+            total += slow_left[exact, i, j] * start[j]
         tables.start_slow[i] = total
-    for k in range(tables.fast_count[interval, variant]):
+    for k in range(tables.fast_count[exact]):
         real = imaginary = 0.0
         for j in range(width):
-            entry = fast_left[interval, variant, k, j]
+            entry = fast_left[exact, k, j]
             real += entry.real * start[j]
             imaginary += entry.imag * start[j]
         tables.start_fast[k] = complex(real, imaginary)
@@ -490,7 +490,7 @@ def _momentum(system, state):
 UNDERFLOW_EXPONENT = -700.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NUMBERS_ONLY)
 def step(system, tables, exact, state, motor_torque, load_torque, h, contact_loss,
          loaded_variant_sign, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
@@ -499,17 +499,16 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     certified (module docstring): the pinion speed keeps its sign over it, and where
     `contact_loss`, the points' approach keeps the sign `loaded_variant_sign` (+1 loaded, −1
     unloaded) over it."""
-    interval, variant = exact // VARIANTS, exact % VARIANTS
     if not _prepared(tables, exact, state, motor_torque, load_torque):
-        _prepare(system, tables, interval, variant, exact, state, motor_torque, load_torque)
+        _prepare(system, tables, exact, state, motor_torque, load_torque)
     # bounds: each function is its slow polynomial plus the fast modes' sum
     speed_swing = approach_swing = 0.0
     rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
-    for k in range(tables.fast_count[interval, variant]):
+    for k in range(tables.fast_count[exact]):
         size = tables.start_size[k]
-        speed_swing += tables.speed_size[interval, variant, k] * size
-        approach_swing += tables.approach_size[interval, variant, k] * size
-        rate = rates[interval, variant, k]
+        speed_swing += tables.speed_size[exact, k] * size
+        approach_swing += tables.approach_size[exact, k] * size
+        rate = rates[exact, k]
         exponent = rate.real * h
         if exponent < UNDERFLOW_EXPONENT:
             modal_fast[k] = 0.0
@@ -517,8 +516,8 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
             decay, angle = math.exp(exponent), rate.imag * h
             modal_fast[k] = start_fast[k] * complex(decay * math.cos(angle),
                                                     decay * math.sin(angle))
-    speed0, approach0, speed_drift, approach_drift = _slow_series(tables, interval, variant, h)
-    _from_modal(tables, interval, variant, out)
+    speed0, approach0, speed_drift, approach_drift = _slow_series(tables, exact, h)
+    _from_modal(tables, exact, out)
     # The rounding of the modal round trip, about 1e-13 of Â, leaves the rigid rotation a bias
     # where the torques' large accelerations cancel (9e-9 rad/s² on the reference scene: the
     # switches drift, 2e-8 of the force scale after 0.3 s). The momentum along r changes by
@@ -539,21 +538,21 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slow_series(tables, interval, variant, h):
+def _slow_series(tables, exact, h):
     """Propagate the slow coordinates of the step's start over h by their series into
     tables.modal_slow (exp(T_slow·h) applied term by term; the block is nilpotent but for
     rounding, so the series ends after a few terms). Returns the slow parts of the pinion
     speed and of the approach at the step's start, and bounds of how far each moves over the
     step (the sum of its terms' magnitudes)."""
-    slow_count = tables.slow_count[interval, variant]
+    slow_count = tables.slow_count[exact]
     block, series, modal = tables.slow, tables.series, tables.modal_slow
     speed_row, approach_row = tables.speed_slow, tables.approach_slow
     speed0 = approach0 = 0.0
     largest = 0.0
     for k in range(slow_count):
         coordinate = tables.start_slow[k]
-        speed0 += speed_row[interval, variant, k] * coordinate
-        approach0 += approach_row[interval, variant, k] * coordinate
+        speed0 += speed_row[exact, k] * coordinate
+        approach0 += approach_row[exact, k] * coordinate
         series[0, k] = coordinate
         modal[k] = coordinate
         largest = max(largest, abs(coordinate))
@@ -563,15 +562,15 @@ def _slow_series(tables, interval, variant, h):
         for i in range(slow_count):
             total = 0.0
             for j in range(slow_count):
-                total += block[interval, variant, i, j] * series[0, j]
+                total += block[exact, i, j] * series[0, j]
             series[1, i] = total * (h / order)
         speed_change = approach_change = 0.0
         for i in range(slow_count):
             following = series[1, i]
             series[0, i] = following
             modal[i] += following
-            speed_change += speed_row[interval, variant, i] * following
-            approach_change += approach_row[interval, variant, i] * following
+            speed_change += speed_row[exact, i] * following
+            approach_change += approach_row[exact, i] * following
             size = max(size, abs(following))
         speed_drift += abs(speed_change)
         approach_drift += abs(approach_change)
@@ -581,17 +580,17 @@ def _slow_series(tables, interval, variant, h):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _from_modal(tables, interval, variant, out):
+def _from_modal(tables, exact, out):
     """out = R_slow·modal_slow + Re(R_fast·modal_fast)."""
     slow_right, fast_right = tables.slow_right, tables.fast_right
     modal_slow, modal_fast = tables.modal_slow, tables.modal_fast
-    slow_count, fast_count = tables.slow_count[interval, variant], \
-        tables.fast_count[interval, variant]
+    slow_count, fast_count = tables.slow_count[exact], \
+        tables.fast_count[exact]
     for i in range(out.shape[0]):
         total = 0.0
         for k in range(slow_count):
-            total += slow_right[interval, variant, i, k] * modal_slow[k]
+            total += slow_right[exact, i, k] * modal_slow[k]
         for k in range(fast_count):
-            entry, coordinate = fast_right[interval, variant, i, k], modal_fast[k]
+            entry, coordinate = fast_right[exact, i, k], modal_fast[k]
             total += entry.real * coordinate.real - entry.imag * coordinate.imag
         out[i] = total
