@@ -22,7 +22,10 @@ augmented matrix Â = [[A, B], [0, 0]] acting on X = [x; u] is split by a sorted
 and a Sylvester equation into its slow block (eigenvalues near zero: the pinion angle and speed
 of the rigid rotation, the held inputs; nilpotent, a Jordan chain) and its fast block (the
 vibration modes, diagonalized): X(t) = R·diag(exp(T_slow·t), e^{Λt})·L·X(0). The slow block is
-a polynomial in t, summed as its series. A step evaluates that at one t (`propagate`), O(N²).
+a polynomial in t, summed as its series. A step evaluates that at one t (`step`), O(N²): the
+slow block in real arithmetic, one mode of each conjugate pair (ExactTables says why). The
+coordinates L·X(0) of a step's start are kept, so the trial steps of an event's location,
+which all start there, pay only for e^{Λt} and R.
 
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, the pinion speed keeps
@@ -44,7 +47,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from .counting import COUNTED
+from .counting import NUMBERS_ONLY
 from .equations import (
     LEAD_ERROR0,
     LEAD_ERROR_SLOPE,
@@ -72,24 +75,41 @@ MAX_SERIES_TERMS = 40
 
 
 class ExactTables(NamedTuple):
-    """Modal forms of every contact set of the mesh period in each loaded variant, indexed
-    [interval, variant]; M = N + INPUTS, N the state's size, S the widest slow block, C the
-    most tilt rows. An entry whose `valid` is 0 is not exact (walk.py steps it by DOP853)."""
+    """Modal forms of every contact set of the mesh period in each loaded variant, indexed by
+    the exact form's index interval·VARIANTS + variant (P of them); N the state's size,
+    M = N + INPUTS, S the widest slow block, F the most fast modes kept, C the most tilt rows.
+    An entry whose `valid` is 0 is not exact (walk.py steps it by DOP853). The system is real,
+    so its fast modes come in complex conjugate pairs whose coordinates are conjugates of each
+    other: one mode of each pair is kept, its column of R counted twice, and Re(R·z) is the
+    same sum at half the products. The slow block and its rows of L and R are real."""
 
-    valid: np.ndarray  # (I, V) int: 1 where the set and variant meet exact_condition
-    right: np.ndarray  # (I, V, N, M) complex: R's rows of the state
-    left: np.ndarray  # (I, V, M, M) complex: L
-    rates: np.ndarray  # (I, V, M) complex: Λ (s⁻¹) in the fast places, 0 in the slow ones
-    slow: np.ndarray  # (I, V, S, S) complex: the slow block T_slow (s⁻¹)
-    slow_count: np.ndarray  # (I, V) int: its size
-    tilt_rows: np.ndarray  # (I, V, C, N): rows whose product with the state must vanish
-    tilt_count: np.ndarray  # (I, V) int
-    tilt_bound: float  # how far from zero those products may be at a segment's start
-    approach: np.ndarray  # (I, V, M) complex: (g_base + η·g_base on ẏ)·R, a point's approach
-    pinion_rate: np.ndarray  # (I, V, M) complex: the pinion speed's row of R
-    modal: np.ndarray  # (M,) complex: scratch for L·X
-    augmented: np.ndarray  # (M,) float: scratch for X = [state; u]
-    series: np.ndarray  # (2, S) complex: scratch for the slow block's series
+    valid: np.ndarray  # (P,) int: 1 where the set and variant meet exact_condition
+    slow_count: np.ndarray  # (P,) int: the slow block's size
+    fast_count: np.ndarray  # (P,) int: the fast modes kept
+    tilt_count: np.ndarray  # (P,) int
+    slow_left: np.ndarray  # (P, S, M): L's rows of the slow block
+    slow_right: np.ndarray  # (P, N, S): R's columns of the slow block, the state's rows
+    slow: np.ndarray  # (P, S, S): the slow block T_slow (s⁻¹)
+    fast_left: np.ndarray  # (P, F, M) complex: L's rows of the fast modes kept
+    fast_right: np.ndarray  # (P, N, F) complex: their columns of R, twice for a pair
+    rates: np.ndarray  # (P, F) complex: their eigenvalues Λ (s⁻¹)
+    tilt_rows: np.ndarray  # (P, C, N): rows whose product with the state must vanish
+    speed_slow: np.ndarray  # (P, S): the pinion speed's row of the slow columns
+    approach_slow: np.ndarray  # (P, S): (g_base + η·g_base on ẏ)·R, a point's approach
+    speed_size: np.ndarray  # (P, F): |the pinion speed's row of fast_right|
+    approach_size: np.ndarray  # (P, F): |the approach's row of fast_right|
+    tilt_bound: float  # how far from zero the tilt rows' products may be at a segment's start
+    inertia: float  # Σ m·r² along the rigid rotation r
+    # Scratch. `start`: the augmented X = [state; u] of the last step's start, then the
+    # exact form's index + 1 (0: none yet), the momentum and moment (`_momentum`) there;
+    # start_slow, start_fast, start_size: its modal coordinates and the fast ones' magnitudes
+    start: np.ndarray  # (M + 3,)
+    start_slow: np.ndarray  # (S,)
+    start_fast: np.ndarray  # (F,) complex
+    start_size: np.ndarray  # (F,)
+    modal_slow: np.ndarray  # (S,): the coordinates at the step's end
+    modal_fast: np.ndarray  # (F,) complex
+    series: np.ndarray  # (2, S): the slow block's series
 
 
 # --- the tables (once per stepper, numpy) ------------------------------------------------------
@@ -201,7 +221,8 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
 
 def exact_sets(system: System, period_table) -> np.ndarray:
     """Per contact set of the mesh period (mesh.period_table's lengths, counts, tables) and
-    loaded variant, 1 where it meets exact_condition, else 0: shape (intervals, VARIANTS)."""
+    loaded variant, 1 where it meets exact_condition, else 0: shape (intervals, VARIANTS)
+    (ExactTables.valid, reshaped)."""
     lengths, counts, tables = period_table
     valid = np.zeros((len(lengths), VARIANTS), dtype=np.int64)
     for interval in range(len(lengths)):
@@ -212,6 +233,18 @@ def exact_sets(system: System, period_table) -> np.ndarray:
             valid[interval, variant] = exact_condition(system, tables[interval], count, loaded,
                                                        b, tilt_rows(system, a))
     return valid
+
+
+def kept_modes(rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Of the fast eigenvalues `rates` of a real matrix (numpy's eig gives conjugate pairs
+    as exact conjugates), the places of those kept, one of each pair (the one of positive
+    imaginary part) and every real one, and their weights (2 for a pair, 1 for a real one)."""
+    upper = np.flatnonzero(rates.imag > 0.0)
+    lower = rates[rates.imag < 0.0]
+    if len(lower) != len(upper) or not np.all(np.isin(rates[upper].conj(), lower)):
+        raise np.linalg.LinAlgError("the fast modes do not come in conjugate pairs")
+    kept = np.flatnonzero(rates.imag >= 0.0)
+    return kept, np.where(rates[kept].imag > 0.0, 2.0, 1.0)
 
 
 def build_tables(system: System, period_table, state_scales: np.ndarray,
@@ -227,8 +260,8 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     lengths, counts, tables = period_table
     intervals, size = len(lengths), 2 * system.mass.shape[0]
     width = size + INPUTS
-    forms, valid = {}, np.zeros((intervals, VARIANTS), dtype=np.int64)
-    rows_of = {}
+    forms, rows_of = {}, {}
+    valid = np.zeros(intervals * VARIANTS, dtype=np.int64)
     for interval in range(intervals):
         count = int(counts[interval])
         for variant in range(VARIANTS):
@@ -236,91 +269,129 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
             a, b = linear_system(system, tables[interval], count, loaded)
             rows = tilt_rows(system, a)
             if exact_condition(system, tables[interval], count, loaded, b, rows):
-                forms[interval, variant] = modal_form(a, b, scales)
-                rows_of[interval, variant] = rows
-                valid[interval, variant] = 1
+                right, left, rates, slow = modal_form(a, b, scales)
+                kept, weights = kept_modes(rates[len(slow):])
+                place = interval * VARIANTS + variant
+                forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
+                rows_of[place] = rows
+                valid[place] = 1
     slow_width = max([len(form[3]) for form in forms.values()], default=1)
-    tilt_width = max([len(rows) for rows in rows_of.values()], default=1)
-    right = np.zeros((intervals, VARIANTS, size, width), dtype=complex)
-    left = np.zeros((intervals, VARIANTS, width, width), dtype=complex)
-    rates = np.zeros((intervals, VARIANTS, width), dtype=complex)
-    slow = np.zeros((intervals, VARIANTS, slow_width, slow_width), dtype=complex)
-    slow_count = np.zeros((intervals, VARIANTS), dtype=np.int64)
-    tilt = np.zeros((intervals, VARIANTS, max(tilt_width, 1), size))
-    tilt_count = np.zeros((intervals, VARIANTS), dtype=np.int64)
-    approach = np.zeros((intervals, VARIANTS, width), dtype=complex)
-    pinion_rate = np.zeros((intervals, VARIANTS, width), dtype=complex)
+    fast_width = max([len(form[4]) for form in forms.values()], default=1)
+    tilt_width = max([len(rows) for rows in rows_of.values()] + [1])
+    shape: tuple[int, ...] = (intervals * VARIANTS,)
+    arrays = {
+        "slow_count": np.zeros(shape, dtype=np.int64),
+        "fast_count": np.zeros(shape, dtype=np.int64),
+        "tilt_count": np.zeros(shape, dtype=np.int64),
+        "slow_left": np.zeros(shape + (slow_width, width)),
+        "slow_right": np.zeros(shape + (size, slow_width)),
+        "slow": np.zeros(shape + (slow_width, slow_width)),
+        "fast_left": np.zeros(shape + (fast_width, width), dtype=complex),
+        "fast_right": np.zeros(shape + (size, fast_width), dtype=complex),
+        "rates": np.zeros(shape + (fast_width,), dtype=complex),
+        "tilt_rows": np.zeros(shape + (tilt_width, size)),
+        "speed_slow": np.zeros(shape + (slow_width,)),
+        "approach_slow": np.zeros(shape + (slow_width,)),
+        "speed_size": np.zeros(shape + (fast_width,)),
+        "approach_size": np.zeros(shape + (fast_width,))}
     n = system.mass.shape[0]
     base = np.concatenate([system.contact_row_base_relative,
                            system.mesh_damping_factor * system.contact_row_base_relative])
-    for (interval, variant), (r, inverse, lam, t_slow) in forms.items():
-        right[interval, variant] = r[:size]
-        left[interval, variant] = inverse
-        rates[interval, variant] = lam
-        slow[interval, variant, :len(t_slow), :len(t_slow)] = t_slow
-        slow_count[interval, variant] = len(t_slow)
-        rows = rows_of[interval, variant]
+    for place, (right, left, rates, t_slow, kept, weights) in forms.items():
+        slow, fast = len(t_slow), len(kept)
+        fast_right = right[:size, kept] * weights[None, :]
+        entries = {"slow_left": left[:slow].real, "slow_right": right[:size, :slow].real,
+                   "slow": t_slow.real, "fast_left": left[kept], "fast_right": fast_right,
+                   "rates": rates[kept]}
+        for name, value in entries.items():
+            arrays[name][place][tuple(slice(0, extent) for extent in value.shape)] = value
+        arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
+        arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
+        arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
+        arrays["speed_size"][place][:fast] = np.abs(fast_right[n + system.pinion])
+        arrays["approach_size"][place][:fast] = np.abs(base @ fast_right)
+        rows = rows_of[place]
         # measured in the state's scales: a row's product is then a relative tilt
         scaled = rows * state_scales[None, :]
         norms = np.maximum(np.linalg.norm(scaled, axis=1), 1e-300)
-        tilt[interval, variant, :len(rows)] = rows / norms[:, None]
-        tilt_count[interval, variant] = len(rows)
-        approach[interval, variant] = base @ r[:size]
-        pinion_rate[interval, variant] = r[n + system.pinion]
-    return ExactTables(valid, right, left, rates, slow, slow_count, tilt, tilt_count,
-                       float(TILT_FRACTION * step_tolerance), approach, pinion_rate,
-                       np.zeros(width, dtype=complex), np.zeros(width),
-                       np.zeros((2, slow_width), dtype=complex))
+        arrays["tilt_rows"][place][:len(rows)] = rows / norms[:, None]
+        arrays["tilt_count"][place] = len(rows)
+    inertia = float(np.sum(system.mass * system.rigid_rotation ** 2))
+    return ExactTables(
+        valid=valid, **arrays, tilt_bound=float(TILT_FRACTION * step_tolerance),
+        inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
+        start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
+        modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
+        series=np.zeros((2, slow_width)))
+
+
+# pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
+COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "start_fast", "modal_fast")
+FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "tilt_rows", "speed_slow", "approach_slow",
+                "speed_size", "approach_size", "start", "start_slow", "start_size",
+                "modal_slow", "series")
+INT_FIELDS = ("valid", "slow_count", "fast_count", "tilt_count")
 
 
 def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The tables as three flat arrays (complex, float, int) that `unpack_tables` takes apart in
     compiled code: numba types each array of a call's arguments at every call, and the
-    fourteen of ExactTables cost the FMU's communication step more than the exact steps it
-    takes. The ints open with the sizes (I, V, N, M, S, C)."""
-    intervals, variants, size, width = tables.right.shape
-    header = [intervals, variants, size, width, tables.slow.shape[2], tables.tilt_rows.shape[2]]
-    complexes = np.concatenate([array.ravel() for array in (
-        tables.right, tables.left, tables.rates, tables.slow, tables.approach,
-        tables.pinion_rate, tables.modal, tables.series)])
-    floats = np.concatenate([tables.tilt_rows.ravel(), tables.augmented, [tables.tilt_bound]])
-    ints = np.concatenate([header, tables.valid.ravel(), tables.slow_count.ravel(),
-                           tables.tilt_count.ravel()]).astype(np.int64)
-    return complexes, floats, ints
+    twenty-six of ExactTables would cost the FMU's communication step more than the exact
+    steps it takes. The ints open with the sizes (P, N, M, S, F, C); the floats end with
+    tilt_bound and inertia."""
+    places, size, fast = tables.fast_right.shape
+    header = [places, size, tables.fast_left.shape[2], tables.slow.shape[1], fast,
+              tables.tilt_rows.shape[1]]
+    complexes = np.concatenate([getattr(tables, name).ravel() for name in COMPLEX_FIELDS])
+    floats = np.concatenate([getattr(tables, name).ravel() for name in FLOAT_FIELDS]
+                            + [[tables.tilt_bound, tables.inertia]])
+    ints = np.concatenate([header] + [getattr(tables, name).ravel() for name in INT_FIELDS])
+    return complexes, floats, ints.astype(np.int64)
 
 
 # --- the kernels ---------------------------------------------------------------------------------
 
-@njit(**COUNTED)
+@njit(cache=True, error_model="numpy", inline="always")
 def unpack_tables(complexes, floats, ints):
-    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers."""
-    intervals, variants, size, width, slow, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], \
-        ints[5]
-    pairs = intervals * variants
+    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers. Inlined
+    into walk.advance, once per call: compiled on its own it would count each view's
+    references, a microsecond a call."""
+    places, size, width, slow, fast, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
     at = 0
-    right = complexes[at:at + pairs * size * width].reshape((intervals, variants, size, width))
-    at += pairs * size * width
-    left = complexes[at:at + pairs * width * width].reshape((intervals, variants, width, width))
-    at += pairs * width * width
-    rates = complexes[at:at + pairs * width].reshape((intervals, variants, width))
-    at += pairs * width
-    slow_block = complexes[at:at + pairs * slow * slow].reshape((intervals, variants, slow,
-                                                                  slow))
-    at += pairs * slow * slow
-    approach = complexes[at:at + pairs * width].reshape((intervals, variants, width))
-    at += pairs * width
-    pinion_rate = complexes[at:at + pairs * width].reshape((intervals, variants, width))
-    at += pairs * width
-    modal = complexes[at:at + width]
-    series = complexes[at + width:at + width + 2 * slow].reshape((2, slow))
-    rows = floats[:pairs * tilt * size].reshape((intervals, variants, tilt, size))
-    augmented = floats[pairs * tilt * size:pairs * tilt * size + width]
-    valid = ints[6:6 + pairs].reshape((intervals, variants))
-    slow_count = ints[6 + pairs:6 + 2 * pairs].reshape((intervals, variants))
-    tilt_count = ints[6 + 2 * pairs:6 + 3 * pairs].reshape((intervals, variants))
-    return ExactTables(valid, right, left, rates, slow_block, slow_count, rows, tilt_count,
-                       floats[floats.shape[0] - 1], approach, pinion_rate, modal, augmented,
-                       series)
+    fast_left = complexes[at:at + places * fast * width].reshape((places, fast, width))
+    at += places * fast * width
+    fast_right = complexes[at:at + places * size * fast].reshape((places, size, fast))
+    at += places * size * fast
+    rates = complexes[at:at + places * fast].reshape((places, fast))
+    at += places * fast
+    start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
+    at = 0
+    slow_left = floats[at:at + places * slow * width].reshape((places, slow, width))
+    at += places * slow * width
+    slow_right = floats[at:at + places * size * slow].reshape((places, size, slow))
+    at += places * size * slow
+    slow_block = floats[at:at + places * slow * slow].reshape((places, slow, slow))
+    at += places * slow * slow
+    rows = floats[at:at + places * tilt * size].reshape((places, tilt, size))
+    at += places * tilt * size
+    rows_of_slow = floats[at:at + 2 * places * slow].reshape((2, places, slow))
+    at += 2 * places * slow
+    rows_of_fast = floats[at:at + 2 * places * fast].reshape((2, places, fast))
+    at += 2 * places * fast
+    start = floats[at:at + width + 3]
+    at += width + 3
+    start_slow, start_size = floats[at:at + slow], floats[at + slow:at + slow + fast]
+    at += slow + fast
+    modal_slow = floats[at:at + slow]
+    series = floats[at + slow:at + 3 * slow].reshape((2, slow))
+    header = 6
+    return ExactTables(
+        ints[header:header + places], ints[header + places:header + 2 * places],
+        ints[header + 2 * places:header + 3 * places],
+        ints[header + 3 * places:header + 4 * places], slow_left, slow_right, slow_block,
+        fast_left, fast_right, rates, rows, rows_of_slow[0], rows_of_slow[1], rows_of_fast[0],
+        rows_of_fast[1], floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
+        start_slow, start_fast, start_size, modal_slow, modal_fast, series)
 
 
 @njit(cache=True, error_model="numpy")
@@ -338,43 +409,61 @@ def variant_of(tables, interval, count, loaded, state):
         variant = NONE_LOADED
     else:
         return -1
-    if tables.valid[interval, variant] == 0:
+    exact = interval * VARIANTS + variant
+    if tables.valid[exact] == 0:
         return -1
-    rows = tables.tilt_rows[interval, variant]
-    for k in range(tables.tilt_count[interval, variant]):
+    rows = tables.tilt_rows
+    for k in range(tables.tilt_count[exact]):
         product = 0.0
         for j in range(state.shape[0]):
-            product += rows[k, j] * state[j]
+            product += rows[exact, k, j] * state[j]
         if abs(product) > tables.tilt_bound:
             return -1
-    return interval * VARIANTS + variant
+    return exact
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _to_modal(tables, interval, variant, state, motor_torque, load_torque):
-    """L·[state; u] into tables.modal. (Here and below the tables are indexed entry by entry,
-    not through views such as left[interval, variant]: a view is a record built at every step,
-    and where this is compiled with numba's reference counts, two atomic counts.)"""
-    size = state.shape[0]
-    augmented, modal, left = tables.augmented, tables.modal, tables.left
+def _prepared(tables, exact, state, motor_torque, load_torque):
+    """Whether tables.start holds this step's start already: the event location's trial
+    steps all start where the step that crossed started, and its modal coordinates serve
+    them all."""
+    start, size = tables.start, state.shape[0]
+    if (start[size + INPUTS] != exact + 1 or start[size] != motor_torque
+            or start[size + 1] != load_torque):
+        return False
     for j in range(size):
-        augmented[j] = state[j]
-    augmented[size] = motor_torque
-    augmented[size + 1] = load_torque
-    augmented[size + 2] = 1.0
-    width = augmented.shape[0]
-    for i in range(width):
-        total = 0.0j
-        for j in range(width):
-            total += left[interval, variant, i, j] * augmented[j]
-        modal[i] = total
+        if start[j] != state[j]:
+            return False
+    return True
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def magnitude(z):
-    """|z| without hypot's guard against overflow, which these sizes never come near: libm's
-    hypot took a tenth of the method's time."""
-    return math.sqrt(z.real * z.real + z.imag * z.imag)
+def _prepare(system, tables, exact, state, motor_torque, load_torque):
+    """The step's start into tables.start (X = [state; u], the exact form's index + 1, the
+    momentum and moment), and L·X into start_slow and start_fast, the fast coordinates'
+    magnitudes into start_size."""
+    size = state.shape[0]
+    start = tables.start
+    for j in range(size):
+        start[j] = state[j]
+    start[size], start[size + 1], start[size + 2] = motor_torque, load_torque, 1.0
+    width = size + INPUTS
+    slow_left, fast_left = tables.slow_left, tables.fast_left
+    for i in range(tables.slow_count[exact]):
+        total = 0.0
+        for j in range(width):
+            total += slow_left[exact, i, j] * start[j]
+        tables.start_slow[i] = total
+    for k in range(tables.fast_count[exact]):
+        real = imaginary = 0.0
+        for j in range(width):
+            entry = fast_left[exact, k, j]
+            real += entry.real * start[j]
+            imaginary += entry.imag * start[j]
+        tables.start_fast[k] = complex(real, imaginary)
+        tables.start_size[k] = math.sqrt(real * real + imaginary * imaginary)
+    momentum, moment = _momentum(system, state)
+    start[width], start[width + 1], start[width + 2] = exact + 1, momentum, moment
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -396,7 +485,12 @@ def _momentum(system, state):
     return momentum, moment
 
 
-@njit(cache=True, error_model="numpy")
+# exp(λ·h) of a mode whose decay exponent Re(λ)·h is below this is taken as 0: it is below
+# 1e-304, and libm's exp would reach its underflow path (errno) on the way to 0
+UNDERFLOW_EXPONENT = -700.0
+
+
+@njit(**NUMBERS_ONLY)
 def step(system, tables, exact, state, motor_torque, load_torque, h, contact_loss,
          loaded_variant_sign, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
@@ -405,34 +499,37 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     certified (module docstring): the pinion speed keeps its sign over it, and where
     `contact_loss`, the points' approach keeps the sign `loaded_variant_sign` (+1 loaded, −1
     unloaded) over it."""
-    interval, variant = exact // VARIANTS, exact % VARIANTS
-    _to_modal(tables, interval, variant, state, motor_torque, load_torque)
-    modal, rates = tables.modal, tables.rates
-    slow_count = tables.slow_count[interval, variant]
+    if not _prepared(tables, exact, state, motor_torque, load_torque):
+        _prepare(system, tables, exact, state, motor_torque, load_torque)
     # bounds: each function is its slow polynomial plus the fast modes' sum
-    speed_row, approach_row = tables.pinion_rate, tables.approach
     speed_swing = approach_swing = 0.0
-    for k in range(slow_count, modal.shape[0]):
-        size = magnitude(modal[k])
-        speed_swing += magnitude(speed_row[interval, variant, k]) * size
-        approach_swing += magnitude(approach_row[interval, variant, k]) * size
-        modal[k] *= np.exp(rates[interval, variant, k] * h)
-    speed0, approach0, speed_drift, approach_drift = _slow_series(
-        tables, interval, variant, modal, h)
-    momentum, moment = _momentum(system, state)
-    _from_modal(tables, interval, variant, out)
+    rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
+    for k in range(tables.fast_count[exact]):
+        size = tables.start_size[k]
+        speed_swing += tables.speed_size[exact, k] * size
+        approach_swing += tables.approach_size[exact, k] * size
+        rate = rates[exact, k]
+        exponent = rate.real * h
+        if exponent < UNDERFLOW_EXPONENT:
+            modal_fast[k] = 0.0
+        else:
+            decay, angle = math.exp(exponent), rate.imag * h
+            modal_fast[k] = start_fast[k] * complex(decay * math.cos(angle),
+                                                    decay * math.sin(angle))
+    speed0, approach0, speed_drift, approach_drift = _slow_series(tables, exact, h)
+    _from_modal(tables, exact, out)
     # The rounding of the modal round trip, about 1e-13 of Â, leaves the rigid rotation a bias
     # where the torques' large accelerations cancel (9e-9 rad/s² on the reference scene: the
     # switches drift, 2e-8 of the force scale after 0.3 s). The momentum along r changes by
     # the net torque alone, exactly: the step's end is put back on it, and on its integral.
+    width = state.shape[0] + INPUTS
+    momentum, moment = tables.start[width + 1], tables.start[width + 2]
     net = motor_torque - load_torque * system.rigid_rotation[system.wheel]
-    inertia = 0.0
-    for j in range(system.mass.shape[0]):
-        inertia += system.mass[j] * system.rigid_rotation[j] ** 2
     momentum_after, moment_after = _momentum(system, out)
     n = system.mass.shape[0]
-    out[n + system.pinion] += (momentum + net * h - momentum_after) / inertia
-    out[system.pinion] += (moment + momentum * h + 0.5 * net * h * h - moment_after) / inertia
+    out[n + system.pinion] += (momentum + net * h - momentum_after) / tables.inertia
+    out[system.pinion] += (moment + momentum * h + 0.5 * net * h * h
+                           - moment_after) / tables.inertia
     certified = abs(speed0) > speed_drift + speed_swing
     if contact_loss:
         certified = certified and (loaded_variant_sign * approach0
@@ -441,51 +538,59 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slow_series(tables, interval, variant, modal, h):
-    """Propagate the slow block of `modal` over h by its series (exp(T_slow·h) applied term by
-    term; the block is nilpotent but for rounding, so the series ends after a few terms).
-    Returns the slow parts of the pinion speed and of the approach at the step's start, and
-    bounds of how far each moves over the step (the sum of its terms' magnitudes)."""
-    slow_count = tables.slow_count[interval, variant]
-    block, series = tables.slow, tables.series
-    speed_row, approach_row = tables.pinion_rate, tables.approach
+def _slow_series(tables, exact, h):
+    """Propagate the slow coordinates of the step's start over h by their series into
+    tables.modal_slow (exp(T_slow·h) applied term by term; the block is nilpotent but for
+    rounding, so the series ends after a few terms). Returns the slow parts of the pinion
+    speed and of the approach at the step's start, and bounds of how far each moves over the
+    step (the sum of its terms' magnitudes)."""
+    slow_count = tables.slow_count[exact]
+    block, series, modal = tables.slow, tables.series, tables.modal_slow
+    speed_row, approach_row = tables.speed_slow, tables.approach_slow
     speed0 = approach0 = 0.0
     largest = 0.0
     for k in range(slow_count):
-        speed0 += (speed_row[interval, variant, k] * modal[k]).real
-        approach0 += (approach_row[interval, variant, k] * modal[k]).real
-        series[0, k] = modal[k]
-        largest = max(largest, magnitude(modal[k]))
+        coordinate = tables.start_slow[k]
+        speed0 += speed_row[exact, k] * coordinate
+        approach0 += approach_row[exact, k] * coordinate
+        series[0, k] = coordinate
+        modal[k] = coordinate
+        largest = max(largest, abs(coordinate))
     speed_drift = approach_drift = 0.0
     for order in range(1, MAX_SERIES_TERMS):  # series[0]: the term, series[1]: the next
         size = 0.0
         for i in range(slow_count):
-            total = 0.0j
+            total = 0.0
             for j in range(slow_count):
-                total += block[interval, variant, i, j] * series[0, j]
+                total += block[exact, i, j] * series[0, j]
             series[1, i] = total * (h / order)
-        speed_change = approach_change = 0.0j
+        speed_change = approach_change = 0.0
         for i in range(slow_count):
             following = series[1, i]
             series[0, i] = following
             modal[i] += following
-            speed_change += speed_row[interval, variant, i] * following
-            approach_change += approach_row[interval, variant, i] * following
-            size = max(size, magnitude(following))
-        speed_drift += magnitude(speed_change)
-        approach_drift += magnitude(approach_change)
+            speed_change += speed_row[exact, i] * following
+            approach_change += approach_row[exact, i] * following
+            size = max(size, abs(following))
+        speed_drift += abs(speed_change)
+        approach_drift += abs(approach_change)
         if size <= SERIES_FLOOR * largest:
             break
     return speed0, approach0, speed_drift, approach_drift
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _from_modal(tables, interval, variant, out):
-    """out = Re(R·modal)."""
-    right, modal = tables.right, tables.modal
+def _from_modal(tables, exact, out):
+    """out = R_slow·modal_slow + Re(R_fast·modal_fast)."""
+    slow_right, fast_right = tables.slow_right, tables.fast_right
+    modal_slow, modal_fast = tables.modal_slow, tables.modal_fast
+    slow_count, fast_count = tables.slow_count[exact], \
+        tables.fast_count[exact]
     for i in range(out.shape[0]):
         total = 0.0
-        for k in range(modal.shape[0]):
-            entry = right[interval, variant, i, k]
-            total += entry.real * modal[k].real - entry.imag * modal[k].imag
+        for k in range(slow_count):
+            total += slow_right[exact, i, k] * modal_slow[k]
+        for k in range(fast_count):
+            entry, coordinate = fast_right[exact, i, k], modal_fast[k]
+            total += entry.real * coordinate.real - entry.imag * coordinate.imag
         out[i] = total

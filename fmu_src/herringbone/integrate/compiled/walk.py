@@ -66,7 +66,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from . import dop853, exponential, radau
-from .counting import COUNTED, UNCOUNTED
+from .counting import COUNTED, NUMBERS_ONLY, UNCOUNTED
 from .equations import (
     Event,
     PeriodTable,
@@ -333,7 +333,8 @@ def _open_workspace(workspace):
         return lambda workspace: Workspace(*workspace)
     return lambda workspace: Workspace(
         workspace[0], workspace[1], workspace[2], workspace[3], workspace[4], workspace[5],
-        workspace[6], exponential.unpack_tables(*workspace[7]))
+        workspace[6],
+        exponential.unpack_tables(workspace[7][0], workspace[7][1], workspace[7][2]))
 
 
 def exact_form(workspace, interval, count, loaded, state):
@@ -812,7 +813,7 @@ def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope
     return -1.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NUMBERS_ONLY)
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
@@ -871,7 +872,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     return event, high
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NUMBERS_ONLY)
 def violated_before(system, segment, settings, state, workspace, high, h_step):
     """A debug run's check of a step from `state` to a crossing located at `high` (s) in a
     step of h_step (s), where no other point may have crossed unseen
