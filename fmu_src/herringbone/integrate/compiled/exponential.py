@@ -257,12 +257,32 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     # rounding of the modal round trip grows with the largest scaled entry: it is measured by
     # the longest interval instead.
     scales[system.pinion] = max(scales[system.pinion], float(np.max(period_table[0])))
-    lengths, counts, tables = period_table
-    intervals, size = len(lengths), 2 * system.mass.shape[0]
+    valid, forms, rows_of = _exact_forms(system, period_table, scales)
+    size = 2 * system.mass.shape[0]
     width = size + INPUTS
+    slow_width = max([len(form[3]) for form in forms.values()], default=1)
+    fast_width = max([len(form[4]) for form in forms.values()], default=1)
+    tilt_width = max([len(rows) for rows in rows_of.values()] + [1])
+    arrays = _empty_arrays(len(valid), size, width, slow_width, fast_width, tilt_width)
+    for place, form in forms.items():
+        _fill_place(arrays, place, form, rows_of[place], system, state_scales)
+    inertia = float(np.sum(system.mass * system.rigid_rotation ** 2))
+    return ExactTables(
+        valid=valid, **arrays, tilt_bound=float(TILT_FRACTION * step_tolerance),
+        inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
+        start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
+        modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
+        series=np.zeros((2, slow_width)))
+
+
+def _exact_forms(system: System, period_table, scales: np.ndarray):
+    """(valid, forms, rows): per exact form's index interval·VARIANTS + variant, 1 where the
+    set and variant meet exact_condition; for those, (R, L, Λ, T_slow, the places of the fast
+    modes kept, their weights) and the tilt rows."""
+    lengths, counts, tables = period_table
     forms, rows_of = {}, {}
-    valid = np.zeros(intervals * VARIANTS, dtype=np.int64)
-    for interval in range(intervals):
+    valid = np.zeros(len(lengths) * VARIANTS, dtype=np.int64)
+    for interval in range(len(lengths)):
         count = int(counts[interval])
         for variant in range(VARIANTS):
             loaded = np.full(count, 1.0 if variant == ALL_LOADED else 0.0)
@@ -275,11 +295,14 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
                 forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
                 rows_of[place] = rows
                 valid[place] = 1
-    slow_width = max([len(form[3]) for form in forms.values()], default=1)
-    fast_width = max([len(form[4]) for form in forms.values()], default=1)
-    tilt_width = max([len(rows) for rows in rows_of.values()] + [1])
-    shape: tuple[int, ...] = (intervals * VARIANTS,)
-    arrays = {
+    return valid, forms, rows_of
+
+
+def _empty_arrays(places: int, size: int, width: int, slow_width: int, fast_width: int,
+                  tilt_width: int) -> dict[str, np.ndarray]:
+    """ExactTables' arrays (but `valid` and the scratch), zero, by field name."""
+    shape: tuple[int, ...] = (places,)
+    return {
         "slow_count": np.zeros(shape, dtype=np.int64),
         "fast_count": np.zeros(shape, dtype=np.int64),
         "tilt_count": np.zeros(shape, dtype=np.int64),
@@ -294,35 +317,33 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
         "approach_slow": np.zeros(shape + (slow_width,)),
         "speed_size": np.zeros(shape + (fast_width,)),
         "approach_size": np.zeros(shape + (fast_width,))}
+
+
+def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarray,
+                system: System, state_scales: np.ndarray) -> None:
+    """Write one exact form (_exact_forms' entry) and its tilt rows into `arrays` at `place`."""
+    right, left, rates, t_slow, kept, weights = form
     n = system.mass.shape[0]
+    size = 2 * n
     base = np.concatenate([system.contact_row_base_relative,
                            system.mesh_damping_factor * system.contact_row_base_relative])
-    for place, (right, left, rates, t_slow, kept, weights) in forms.items():
-        slow, fast = len(t_slow), len(kept)
-        fast_right = right[:size, kept] * weights[None, :]
-        entries = {"slow_left": left[:slow].real, "slow_right": right[:size, :slow].real,
-                   "slow": t_slow.real, "fast_left": left[kept], "fast_right": fast_right,
-                   "rates": rates[kept]}
-        for name, value in entries.items():
-            arrays[name][place][tuple(slice(0, extent) for extent in value.shape)] = value
-        arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
-        arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
-        arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
-        arrays["speed_size"][place][:fast] = np.abs(fast_right[n + system.pinion])
-        arrays["approach_size"][place][:fast] = np.abs(base @ fast_right)
-        rows = rows_of[place]
-        # measured in the state's scales: a row's product is then a relative tilt
-        scaled = rows * state_scales[None, :]
-        norms = np.maximum(np.linalg.norm(scaled, axis=1), 1e-300)
-        arrays["tilt_rows"][place][:len(rows)] = rows / norms[:, None]
-        arrays["tilt_count"][place] = len(rows)
-    inertia = float(np.sum(system.mass * system.rigid_rotation ** 2))
-    return ExactTables(
-        valid=valid, **arrays, tilt_bound=float(TILT_FRACTION * step_tolerance),
-        inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
-        start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
-        modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
-        series=np.zeros((2, slow_width)))
+    slow, fast = len(t_slow), len(kept)
+    fast_right = right[:size, kept] * weights[None, :]
+    entries = {"slow_left": left[:slow].real, "slow_right": right[:size, :slow].real,
+               "slow": t_slow.real, "fast_left": left[kept], "fast_right": fast_right,
+               "rates": rates[kept]}
+    for name, value in entries.items():
+        arrays[name][place][tuple(slice(0, extent) for extent in value.shape)] = value
+    arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
+    arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
+    arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
+    arrays["speed_size"][place][:fast] = np.abs(fast_right[n + system.pinion])
+    arrays["approach_size"][place][:fast] = np.abs(base @ fast_right)
+    # measured in the state's scales: a row's product is then a relative tilt
+    scaled = rows * state_scales[None, :]
+    norms = np.maximum(np.linalg.norm(scaled, axis=1), 1e-300)
+    arrays["tilt_rows"][place][:len(rows)] = rows / norms[:, None]
+    arrays["tilt_count"][place] = len(rows)
 
 
 # pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
