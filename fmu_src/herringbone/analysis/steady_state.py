@@ -46,6 +46,7 @@ from ..integrate.compiled_stepper import CompiledStepper
 from ..integrate.contract import IntegrationError, Position, start_position
 from ..integrate.segments import Segment, begin, contact_band, point_approaches
 from ..model.assembly import GearTrainModel
+from ..model.geometry import GearGeometry
 from .sweep_point import static_mesh_force, window_figures
 
 # the compiled integrator's tolerance for the period integrations. The map it computes is one
@@ -101,6 +102,12 @@ class ShootingError(ValueError):
     """A scene the shooting method cannot take (it says why and what is allowed)."""
 
 
+def gear_ratio(scene) -> float:
+    """u = z_wheel/z_pinion of the scene, from its geometry alone (no train assembled: a
+    continuation in a torque asks for it at every value)."""
+    return GearGeometry.from_parameters(scene.parameters).ratio
+
+
 def check_balanced(scene) -> tuple[float, float]:
     """The scene's constant torques (M_motor, M_load), which must balance (M_load =
     u·M_motor, to 1e-9 of it): else the train accelerates and has no steady state."""
@@ -108,7 +115,7 @@ def check_balanced(scene) -> tuple[float, float]:
         raise ShootingError(f"{scene.source}: a steady state needs constant input torques; "
                             "the scene has an input table (allowed: [inputs] M_motor, M_load)")
     motor, load = (float(t) for t in scene.inputs.at(0.0))
-    ratio = GearTrainModel(scene).geometry.ratio
+    ratio = gear_ratio(scene)
     if abs(load - ratio * motor) > 1e-9 * max(abs(load), abs(ratio * motor), 1e-300):
         raise ShootingError(f"M_load = {load:g} N·m does not balance M_motor = {motor:g} N·m "
                             f"(u = {ratio:g}): the train accelerates and has no periodic "
@@ -120,7 +127,7 @@ def balanced_torques(scene, name: str, value: float) -> dict[str, float]:
     """Both input torques where one of them (`name`, "M_motor" or "M_load") is set to `value`
     and the other follows so that they balance (M_load = u·M_motor): the transmitted torque
     set by either end, as a sweep or continuation in a torque of a balanced scene takes it."""
-    ratio = GearTrainModel(scene).geometry.ratio
+    ratio = gear_ratio(scene)
     if name == "M_motor":
         return {"M_motor": value, "M_load": ratio * value}
     return {"M_motor": value / ratio, "M_load": value}
