@@ -10,7 +10,7 @@ from helpers.independent_model import radii
 
 import herringbone
 from herringbone.integrate import contract, segments, stepping
-from herringbone.integrate.compiled import walk
+from herringbone.integrate.compiled import reference_events, walk
 from herringbone.model.assembly import GearTrainModel
 
 REGRESSION = REGRESSION
@@ -179,9 +179,9 @@ def test_a_bulge_between_two_nodes_is_seen_from_their_slopes():
     values = np.array([0.02 - 50.0 * (times - 0.56) ** 2])
     slopes = np.array([-100.0 * (times - 0.56)])
     assert np.all(values < 0.0)
-    flagged = stepping._bumps(values, slopes, times)
+    flagged = reference_events.bumps(values, slopes, times)
     assert flagged[0].tolist() == [k == 4 for k in range(8)]
-    assert not stepping._bumps(values - 2.0, slopes, times).any()
+    assert not reference_events.bumps(values - 2.0, slopes, times).any()
 
 
 @pytest.mark.parametrize("peak, loss_at", [(1.02, 0.54), (0.98, None)])

@@ -31,6 +31,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from ..model.assembly import GearTrainModel
 from . import segments
+from .compiled import reference_events
 from .contract import IntegrationError, Position
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)
@@ -191,12 +192,7 @@ class ScipyStepper:
         times = step.start + (step.end - step.start) * self.fractions
         values, slopes = self._values_and_slopes(step, segment, times)
         values -= offsets[:, None]
-        # rises through zero between two nodes (the step's start is on the near side: had it
-        # been past, the step before would have ended there)
-        rising = (values[:, 1:] > 0.0) & ((values[:, :-1] <= 0.0)
-                                          | (np.arange(len(times) - 1) == 0))
-        bumps = _bumps(values, slopes, times)
-        candidates = rising | bumps
+        candidates, bumps = reference_events.crossing_candidates(values, slopes, times)
         # interval by interval: a bulge that turns out to stay below zero leaves the intervals
         # after it to be searched (a crossing there is no less due)
         for interval in np.flatnonzero(candidates.any(axis=0)):
@@ -220,8 +216,7 @@ class ScipyStepper:
         slopes = np.zeros_like(values)
         speed = states[self.model.size + self.model.pinion]
         slopes[segments.PHASE_END], slopes[segments.PHASE_START] = speed, -speed
-        contact = values[2:]
-        near = contact.max(axis=1) > -NEAR_ZERO * np.abs(np.diff(contact, axis=1)).max(axis=1)
+        near = reference_events.near_zero(values[2:], NEAR_ZERO)
         if near.any():
             spacing = SLOPE_SPACING * (step.end - step.start)
             shifted = step.dense(np.concatenate([times - spacing, times + spacing]))
@@ -302,20 +297,3 @@ def step_tolerance(model: GearTrainModel, tolerance: float, horizon: float) -> f
     radians = ringing_radians(model, horizon)
     return max(tolerance * min(1.0, RINGING_BUDGET / radians) if radians > 0.0 else tolerance,
                FINEST_STEP_TOLERANCE)
-
-
-def _bumps(values, slopes, times):
-    """Per event (row) and interval between nodes: whether the function, below zero at both
-    nodes, may bulge up between them more than halfway to zero. It rises at the interval's
-    start and falls at its end, and the tangents there meet that high: they meet above the top
-    of a concave bulge, so none is missed that the nodes' slopes show."""
-    span = np.diff(times)
-    g0, g1 = values[:, :-1], values[:, 1:]
-    d0, d1 = slopes[:, :-1] * span, slopes[:, 1:] * span
-    higher = np.maximum(g0, g1)
-    turning = (d0 > 0.0) & (d1 < 0.0) & (higher <= 0.0)
-    if not turning.any():
-        return turning
-    with np.errstate(divide="ignore", invalid="ignore"):
-        meet = np.where(turning, (g1 - d1 - g0) / (d0 - d1), 0.0)
-    return turning & (g0 + d0 * meet > 0.5 * higher)

@@ -207,7 +207,7 @@ class GearTrainModel:
                                         float(y[self.pinion]))
 
     def point_approaches(self, state, contact_set: ContactSet) -> np.ndarray:
-        """δ + η·δ̇ of every point of the set (its load per unit stiffness), in numpy: at one
+        """δ + η·δ̇ of every point of the set (its load per unit stiffness): at one
         state (a vector; gives one value a point) or at each column of a 2-D array of states
         (gives a row a point). The compiled equations.approaches computes the same.
 
@@ -217,16 +217,15 @@ class GearTrainModel:
         states = state if state.ndim == 2 else state[:, None]
         base, tilt = self._approach_rows @ states
         travel = self.axial_travel_per_radian * states[self.pinion]
-        approach = _approach(contact_set.table[:, :, None], base, tilt, travel)
+        approach = np.empty((len(contact_set), states.shape[1]))
+        equations.approaches_from_sums(contact_set.table, len(contact_set), base, tilt, travel,
+                                       approach)
         return approach if state.ndim == 2 else approach[:, 0]
 
     def point_approach(self, state, contact_set: ContactSet, point: int) -> float:
-        """point_approaches of point `point` alone at one state (a vector), to the bit, in
-        scalars: a root search reads one point many times, where numpy's work on whole
-        arrays would cost ten times the arithmetic."""
-        (base,), (tilt,) = self._approach_rows @ state[:, None]
-        travel = self.axial_travel_per_radian * state[self.pinion]
-        return float(_approach(contact_set.table[:, point], base, tilt, travel))
+        """point_approaches of point `point` alone at one state (a vector), to the bit: a
+        root search reads one point many times."""
+        return float(self.point_approaches(state, contact_set)[point])
 
     def point_forces(self, state, contact_set: ContactSet, loaded) -> np.ndarray:
         """The force (N) each point of the set carries at a state, c·(δ + η·δ̇) where it is
@@ -398,11 +397,3 @@ def natural_modes(scene, pinion_angle=None):
         stiffness = model.stiffness_matrix(y, contact_set)
     eigenvalues, shapes = scipy.linalg.eigh(stiffness, np.diag(model.mass))
     return np.sqrt(np.clip(eigenvalues, 0.0, None)) / (2 * math.pi), shapes, list(model.coordinates)
-
-
-def _approach(points, base, tilt, travel):
-    """B + e0 + ζ0·T + s·(ζ1·T + e1) (GearTrainModel.point_approaches) of the points whose table
-    columns `points` holds, from B, T and s: arrays that broadcast together, or scalars."""
-    return (base + points[equations.LEAD_ERROR0] + points[equations.LEVER_ARM0] * tilt
-            + travel * (points[equations.LEVER_ARM_SLOPE] * tilt
-                        + points[equations.LEAD_ERROR_SLOPE]))

@@ -6,6 +6,8 @@
   order 5), each step's contract written at its top;
 - `walk`: the loop that steps through the segments of a run, stopping at every switch;
 - `exponential`: the exact propagation of a linear, time-invariant segment.
+- `reference_events`: the scipy reference's own screening of a step for events, compiled
+  (its rule is the reference's, in integrate/stepping.py; the loop above never imports it).
 
 Compiled code is cached on disk. numba keys its cache on the source file's folder, and an FMU
 host unpacks the FMU to a new temporary folder for every run, so `cache` keys it on the source

@@ -332,6 +332,20 @@ def packed_derivative(floats, ints, points, count, loaded, motor_torque, load_to
                state, out)
 
 @njit(**COUNTED)
+def approaches_from_sums(points, count, base, tilt, travel, out):
+    """out[i, j] = B_j + e0_i + ζ0_i·T_j + s_j·(ζ1_i·T_j + e1_i) (m): the approach of point
+    i < count of the table `points` at state j, from that state's sums B = g_b·(y + η·ẏ) and
+    T = g_t·(y + η·ẏ) and its axial travel s (GearTrainModel.point_approaches, which forms
+    them by one product of numpy's: the arithmetic here is numpy's, term by term)."""
+    for i in range(count):
+        lead_error, lever_arm = points[LEAD_ERROR0, i], points[LEVER_ARM0, i]
+        arm_slope, error_slope = points[LEVER_ARM_SLOPE, i], points[LEAD_ERROR_SLOPE, i]
+        for j in range(base.shape[0]):
+            out[i, j] = (base[j] + lead_error + lever_arm * tilt[j]
+                         + travel[j] * (arm_slope * tilt[j] + error_slope))
+
+
+@njit(**COUNTED)
 def outputs(system, points, count, loaded, state, out):
     """docs/model.md section 7 into `out`, laid out as the constants above say: mesh stiffness
     (N/m) and force (N), in all and per half, n_contacts (loaded points of nonzero stiffness),
