@@ -13,9 +13,11 @@ reach the set's end, at the stepper's own tolerances, by (tests/helpers/lawson.p
 It prints accepted and rejected steps, summed over the segments, and how far each end state is
 from the bounded DOP853's, in units of the absolute tolerance.
 
-Cost (--cost): CPU µs of one compiled DOP853 step (dop853.step), of one exact step from a new
-start (exponential.step: a product by L, the exponentials, a product by R) and of the two
-products alone (L on the acceleration rows, R), in compiled loops on the reference scene.
+Cost (unless --no-cost): CPU µs of one compiled DOP853 step (dop853.step), of one exact step
+from a new start (exponential.step: a product by L, the exponentials, a product by R), of the
+two products alone (L on the acceleration rows, R) and of numba's eig of a set's augmented
+matrix (what a modal form per step would start from), in compiled loops on the reference
+scene.
 
     python benchmarks/exponential_variable.py                    # the four scenes, the cost
     python benchmarks/exponential_variable.py lead_error --segments 8 --no-cost
@@ -110,15 +112,20 @@ def compiled_cost(repeats=200_000):
              ("exponential.step, new start", kernels[1],
               (model.system, tables, exact, state, torques[0], torques[1], h, np.zeros(size))),
              ("L (acceleration rows) and R", kernels[2],
-              (tables, exact, state, np.zeros(size))))
+              (tables, exact, state, np.zeros(size))),
+             ("np.linalg.eig of the set's Â (complex)", kernels[3],
+              (lawson.frozen_form(lawson.Segment(model.system, segment.points,
+                                                 segment.point_count, run.loaded,
+                                                 torques)).astype(complex),)))
     for label, kernel, arguments in cases:
-        kernel(*arguments, 10)
+        kernel(*arguments, 2)
+        calls = repeats if "eig" not in label else repeats // 100
         best = np.inf
         for _ in range(3):
             started = time.process_time()
-            kernel(*arguments, repeats)
+            kernel(*arguments, calls)
             best = min(best, time.process_time() - started)
-        print(f"{label} | {best / repeats * 1e6:.3f}", flush=True)
+        print(f"{label} | {best / calls * 1e6:.3f}", flush=True)
 
 
 def _cost_kernels():
@@ -176,7 +183,15 @@ def _cost_kernels():
             total += out[0]
         return total
 
-    return dop853_steps, exact_steps, products
+    @njit
+    def modal_forms(augmented, count):
+        total = 0.0
+        for _ in range(count):
+            rates, _vectors = np.linalg.eig(augmented)
+            total += rates[0].real
+        return total
+
+    return dop853_steps, exact_steps, products, modal_forms
 
 
 def main(argv=None) -> int:
