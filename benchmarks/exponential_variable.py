@@ -21,6 +21,7 @@ scene.
 
     python benchmarks/exponential_variable.py                    # the four scenes, the cost
     python benchmarks/exponential_variable.py lead_error --segments 8 --no-cost
+    python benchmarks/exponential_variable.py --no-cost --pinion   # and the pinion's departure
 """
 from __future__ import annotations
 
@@ -78,6 +79,30 @@ def step_counts(path, count, warm):
         apart = max(float(np.max(np.abs(ends[label, i] - ends["DOP853, step bound", i])
                                  / absolute)) for i in range(len(found)))
         print(f"{path.stem} | {label} | {accepted} | {rejected} | {apart:.2g}", flush=True)
+
+
+def pinion_deviation(path, count, warm):
+    """Print, per segment, how far the pinion angle strays over the set from the straight
+    line (and from the parabola) fitted through it in time, over the set's length: what a
+    scheme exact for a travel polynomial in t would still have to approximate."""
+    from scipy.integrate import solve_ivp
+
+    import herringbone
+
+    scene = herringbone.load_scene(path)
+    model, stepper, found = lawson.segments_after_switches(scene, count, warm)
+    for segment, state, span in found:
+        solution = solve_ivp(lambda _t, x, s=segment: lawson.rate(s, x), (0.0, span), state,
+                             method="DOP853", rtol=1e-10,
+                             atol=1e-3 * stepper.absolute_tolerance, dense_output=True)
+        times = np.linspace(0.0, span, 400)
+        angle = solution.sol(times)[model.pinion]
+        length = angle[-1] - angle[0]
+        strays = [float(np.max(np.abs(angle - np.polyval(np.polyfit(times, angle, degree),
+                                                          times)))) / length
+                  for degree in (1, 2)]
+        print(f"{path.stem} | {span * 1e6:.0f} | {strays[0]:.1e} | {strays[1]:.1e}",
+              flush=True)
 
 
 def compiled_cost(repeats=200_000):
@@ -200,10 +225,16 @@ def main(argv=None) -> int:
     parser.add_argument("--segments", type=int, default=4, help="segments per scene")
     parser.add_argument("--warm", type=float, default=0.01, help="s run before the first")
     parser.add_argument("--no-cost", dest="cost", action="store_false")
+    parser.add_argument("--pinion", action="store_true",
+                        help="also the pinion angle's departure from a polynomial in t")
     args = parser.parse_args(argv)
     print("scene | scheme | accepted steps | rejected | max |x − x_DOP853, bound| / atol")
     for path in common.scene_paths(args.scenes):
         step_counts(path, args.segments, args.warm)
+    if args.pinion:
+        print("scene | set's span µs | max |φp − line| / length | max |φp − parabola| / length")
+        for path in common.scene_paths(args.scenes):
+            pinion_deviation(path, args.segments, args.warm)
     if args.cost:
         print("compiled kernel | CPU µs a call")
         compiled_cost()
