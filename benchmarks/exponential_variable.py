@@ -178,6 +178,13 @@ def _cost_kernels():
             total += out[0]
         return total
 
+    return (dop853_steps, exact_steps) + _modal_kernels()
+
+
+def _modal_kernels():
+    """compiled_cost's loops of the modal products and of the eigen-decomposition."""
+    from numba import njit
+
     @njit
     def products(tables, exact, state, out, count):
         size, half = state.shape[0], state.shape[0] // 2
@@ -216,7 +223,7 @@ def _cost_kernels():
             total += rates[0].real
         return total
 
-    return dop853_steps, exact_steps, products, modal_forms
+    return products, modal_forms
 
 
 def main(argv=None) -> int:
