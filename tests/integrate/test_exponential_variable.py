@@ -1,0 +1,85 @@
+"""The measurement behind docs/exponential-variable-segments.md: a Lawson Runge-Kutta scheme on
+the contact set's modal form (tests/helpers/lawson.py) for the segments that the exponential
+method cannot take exactly. Checked here: the scheme itself (exact where the frozen form is the
+true system, and as accurate as the tolerance asks against scipy's DOP853 at 1e-12 where it is
+not), and the step counts that made it not worth compiling (benchmarks/exponential_variable.py
+prints them for four scenes with the compiled costs)."""
+import numpy as np
+import pytest
+import scipy.linalg
+from helpers import MODELS, lawson
+from scipy.integrate import solve_ivp
+
+import herringbone
+
+# A Lawson-DOP853 step costs a DOP853 step (1.76 µs compiled) plus, for each of its 11 later
+# stages, a product by L and one by R (0.32 µs together), at least: 3.0 DOP853 steps. On the
+# tabulated forms it pays only where it takes fewer than a third of DOP853's steps; on a
+# Jacobian refreshed at every step it adds that Jacobian's modal form (a compiled eig of the
+# 19×19 Â alone: 0.19 ms, a hundred DOP853 steps), so a tenth of the steps would not do.
+FROZEN_BREAK_EVEN = 1.0 / 3.0
+JACOBIAN_FAR_FROM_PAYING = 1.0 / 10.0
+
+
+def segments(name, count=2):
+    return lawson.segments_after_switches(herringbone.load_scene(MODELS / f"{name}.toml"),
+                                          count, 0.01)
+
+
+def test_lawson_step_exact_where_the_frozen_form_is_the_system():
+    """On the reference scene a segment's frozen linear system is exact (its tilt stays zero):
+    N vanishes, so the Lawson scheme's error estimate is rounding and a whole segment takes
+    the few steps the controller needs to grow to it, landing on the matrix exponential's
+    solution."""
+    _, stepper, found = segments("reference", 1)
+    segment, state, span = found[0]
+    result = lawson.integrate(segment, state, span, stepper.absolute_tolerance,
+                              stepper.step_tolerance, stepper.max_step / 4,
+                              form=lawson.frozen(segment))
+    exact = (scipy.linalg.expm(lawson.frozen_form(segment) * span)
+             @ np.concatenate([state, lawson.inputs(segment)]))[:len(state)]
+    assert result.accepted <= 4 and result.rejected == 0
+    assert np.max(np.abs(result.state - exact) / stepper.absolute_tolerance) < 1e-2
+
+
+@pytest.mark.parametrize("name", ["lead_error", "contact_loss"])
+def test_lawson_agrees_with_scipy_on_segments_that_are_not_exact(name):
+    """Where N does not vanish (lead-error slopes; a partially loaded set) the scheme, frozen
+    form or Jacobian at each step, ends each segment within a few absolute tolerances of
+    scipy's DOP853 at 1e-12, as the plain DOP853 pair does."""
+    _, stepper, found = segments(name, 2)
+    absolute, relative = stepper.absolute_tolerance, stepper.step_tolerance
+    scales = absolute / relative
+    for segment, state, span in found:
+        reference = solve_ivp(lambda _t, x, s=segment: lawson.rate(s, x), (0.0, span), state,
+                              method="DOP853", rtol=1e-12, atol=1e-5 * absolute).y[:, -1]
+        forms = (None, lawson.frozen(segment), lawson.linearized(segment, scales))
+        for form in forms:
+            result = lawson.integrate(segment, state, span, absolute, relative,
+                                      stepper.max_step / 4, form=form)
+            assert np.max(np.abs(result.state - reference) / absolute) < 5.0
+
+
+@pytest.mark.parametrize("name", ["lead_error", "staggered"])
+def test_lawson_steps_do_not_pay(name):
+    """The figure that kept the scheme out of the compiled loop: over whole segments from
+    their switches, Lawson-DOP853 on the set's frozen form takes more than a third of
+    DOP853's steps (with the stepper's step bound), so at three DOP853 steps' cost a step it
+    is slower; on the Jacobian refreshed at every step (the limit of any finer table) it
+    still takes more than a tenth of them, each at the cost of a modal decomposition."""
+    _, stepper, found = segments(name, 2)
+    absolute, relative = stepper.absolute_tolerance, stepper.step_tolerance
+    scales = absolute / relative
+    steps = {"dop853": 0, "frozen": 0, "jacobian": 0}
+    for segment, state, span in found:
+        h = stepper.max_step / 4
+        steps["dop853"] += lawson.integrate(segment, state, span, absolute, relative, h,
+                                            max_step=stepper.max_step).accepted
+        steps["frozen"] += lawson.integrate(
+            segment, state, span, absolute, relative, h,
+            form=lawson.frozen(segment)).accepted
+        steps["jacobian"] += lawson.integrate(
+            segment, state, span, absolute, relative, h,
+            form=lawson.linearized(segment, scales)).accepted
+    assert steps["frozen"] > FROZEN_BREAK_EVEN * steps["dop853"]
+    assert steps["jacobian"] > JACOBIAN_FAR_FROM_PAYING * steps["dop853"]
