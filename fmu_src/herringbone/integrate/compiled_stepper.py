@@ -397,7 +397,8 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
     first time); returns the seconds spent compiling, or None if it came from the cache."""
     started = time.perf_counter()
     steps = stepper.accepted_steps
-    stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))  # (the FMU's)
+    # run_to's kernel, the one the FMU and the sweeps run (an FMU never runs the sampled one)
+    stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
     stepper.accepted_steps = steps
     compiled = any(walk.advance.stats.cache_misses.values())
     return time.perf_counter() - started if compiled else None
