@@ -90,14 +90,14 @@ def test_one_call_per_piece_samples_the_same_to_the_bit(name, stop_time, method)
     assert np.ptp(sampled["F_mesh"]) > 0.0
 
 
-def failing_run(sample_in_one_call):
-    """The torsional scene at a motor torque of 1e300 N·m (finite, but the state overflows),
-    sampled every 1e-4 s to 5 ms either in one call (CompiledStepper.sample) or by run_to per
-    sample: (the error raised, the sample times handed out before it)."""
+def failing_run(sample_in_one_call, motor_torque):
+    """The torsional scene at a motor torque (N·m) that ends it, sampled every 1e-4 s to 5 ms
+    either in one call (CompiledStepper.sample) or by run_to per sample: (the error raised, the
+    sample times handed out before it)."""
     scene = herringbone.load_scene(MODELS / "torsional.toml")
     stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "dop853")
     run = stepper.start(start_position(stepper.model, 500.0))
-    times, torques = output_times(5e-3, 1e-4)[1:], (1e300, 1800.0)
+    times, torques = output_times(5e-3, 1e-4)[1:], (motor_torque, 1800.0)
     seen = []
     with pytest.raises(IntegrationError) as error:
         if sample_in_one_call:
@@ -111,13 +111,17 @@ def failing_run(sample_in_one_call):
     return error.value, seen
 
 
-def test_a_failing_run_fails_alike_after_the_same_samples():
-    one_call, seen_one_call = failing_run(True)
-    per_sample, seen_per_sample = failing_run(False)
+@pytest.mark.parametrize("motor_torque, failure", [
+    (1e80, "the pinion left its contact interval unseen"),  # (the check after each stretch)
+    (1e300, "the step size fell below the time's resolution"),  # (walk.advance's own status)
+])
+def test_a_failing_run_fails_alike_after_the_same_samples(motor_torque, failure):
+    one_call, seen_one_call = failing_run(True, motor_torque)
+    per_sample, seen_per_sample = failing_run(False, motor_torque)
     assert str(one_call) == str(per_sample)
     assert type(one_call) is type(per_sample)
     assert seen_one_call == seen_per_sample
-    assert "integration failed" in str(one_call)
+    assert failure in str(one_call)
 
 
 def test_the_step_budget_bounds_the_whole_call():
@@ -131,10 +135,16 @@ def test_the_step_budget_bounds_the_whole_call():
     stepper.sample(stepper.start(start), times, rows, 4e-3, torques)
     steps = stepper.accepted_steps
     run, budget_rows = stepper.start(start), np.full_like(rows, np.nan)
+    seen = []
     with pytest.raises(StepBudgetExceeded) as error:
-        stepper.sample(run, times, budget_rows, 4e-3, torques, max_steps=steps // 2)
+        stepper.sample(run, times, budget_rows, 4e-3, torques, max_steps=steps // 2,
+                       on_sample=lambda t, outputs: seen.append((t, outputs["F_mesh"])))
     written = int(np.isfinite(budget_rows[:, 0]).sum())
     assert 0 < written < len(times)
+    # the callback was handed every row written, before the error
+    assert [t for t, _ in seen] == list(times[:written])
+    slot = dict(stepper.model.output_layout)["F_mesh"]
+    assert [force for _, force in seen] == list(rows[:written, slot])
     assert np.array_equal(budget_rows[:written], rows[:written])
     assert f"short of t = {times[written]:.9g} s" in str(error.value)
     assert times[written - 1] <= run.time < times[written]
