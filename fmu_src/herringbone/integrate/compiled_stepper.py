@@ -4,8 +4,10 @@
 start from `position`, integrate with the torques held to exactly `end`, stopping on every contact
 switch, contact loss and regain; the result depends only on the position passed in, so a saved
 position re-runs identically. One call is one pass through compiled code, however many switches
-the span holds. A caller that steps on and on (the FMU) keeps a `Run` instead, which `run_to`
-advances in place, and takes a Position of it only to save it.
+the span holds, and through any number of sample times: `sample` (compiled/walk.py's
+advance_sampled) stops at each and writes its outputs into a row of an array, the same to the
+bit as stopping there by a call of its own. A caller that steps on and on (the FMU) keeps a
+`Run` instead, which `run_to` advances in place, and takes a Position of it only to save it.
 
 Methods (`method`):
 - "dop853": explicit, order 8. Its steps are held to h·|λ|max <= 3.5 (|λ|max the fastest
@@ -164,14 +166,17 @@ FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing con
             walk.Status.NOT_FINITE: "the state is no longer finite",
             walk.Status.CHATTER: CHATTER_MESSAGE,
             walk.Status.CONTACT_VIOLATED: "a point carried tension, or penetrated without load, "
-                                          "inside a step (contact check of a debug run)"}
+                                          "inside a step (contact check of a debug run)",
+            walk.Status.LEFT_INTERVAL: "the pinion left its contact interval unseen (the state "
+                                       "is beyond the integrator's resolution)"}
 
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
+# A callback (`advance`'s on_sample) is handed the samples of one compiled call after it: a
+# progress bar or a budget watch so lags this many samples, and the call's own cost (a few µs)
+# is shared by as many
+SAMPLES_PER_CALL = 64
 
-
-# how far past its contact interval (a fraction of its length) a run's pinion may end: the
-# event rules place it within 1e-12 of a pitch
-PHASE_SLACK = 1e-6
+PHASE_SLACK = walk.PHASE_SLACK  # its home: compiled/walk.py
 COMPLETED = int(walk.Status.OK)  # as an int: compared after every call, unlike an enum's lookup
 
 
@@ -323,9 +328,33 @@ class CompiledStepper:
         # its rounding hides the phase events: a torque of 1e300 N·m) is no result to return
         length = self.interval_lengths[run.place.item(0)]
         if not -PHASE_SLACK * length <= run.state.item(self.pinion) <= (1 + PHASE_SLACK) * length:
-            raise IntegrationError(f"integration failed at t = {run.time:.9g} s: the pinion "
-                                   "left its contact interval unseen (the state is beyond the "
-                                   "integrator's resolution)")
+            self._fail(walk.Status.LEFT_INTERVAL, run, steps, end)
+
+    def sample(self, run: Run, times: np.ndarray, rows: np.ndarray, end: float,
+               torques: tuple[float, float], max_steps: int | None = None,
+               on_sample=None) -> None:
+        """Integrate the run through `times` (s, rising, in [run's time, end]) to `end` with
+        the torques held, in place, in one call of compiled code (walk.advance_sampled): rows[k]
+        gets the outputs (model.output_layout) at times[k]. The run and the rows are to the bit
+        those of run_to to each time in turn, then to `end`; a time not past the run's takes
+        the outputs the run holds. Raises as run_to would (a budget of `max_steps` steps for
+        the whole call), once on_sample(t, outputs by name), if given, has been called for
+        every row written before the failure. `rows`: C-contiguous, len(times) rows of the
+        run's outputs' length."""
+        times = np.ascontiguousarray(times, dtype=float)
+        if rows.shape != (len(times), len(run.outputs)) or not rows.flags.c_contiguous:
+            raise ValueError(f"rows: {rows.shape}, C-contiguous {rows.flags.c_contiguous}; "
+                             f"allowed: a C-contiguous {(len(times), len(run.outputs))} array")
+        status, steps, written = walk.advance_sampled(
+            self.system_arrays, self.mesh, self.settings, run.arrays, run.workspace, times, rows,
+            float(end), (float(torques[0]), float(torques[1])),
+            NO_STEP_BUDGET if max_steps is None else int(max_steps))
+        self.accepted_steps += steps
+        if on_sample is not None:
+            for t, row in zip(times[:written], rows):
+                on_sample(t, self.model.named_outputs(row))
+        if status != COMPLETED:
+            self._fail(status, run, steps, times[written] if written < len(times) else end)
 
     @staticmethod
     def _fail(status: int, run: Run, steps: int, end: float) -> None:
@@ -339,13 +368,27 @@ class CompiledStepper:
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
-        """Integrate to `end`; for every t in `sample_times` with position.time <= t < end,
-        call on_sample(t, outputs) with the outputs at t (the run stops there exactly)."""
+        """Integrate to `end`; for every t in `sample_times` (rising) with position.time <= t <
+        end, call on_sample(t, outputs) with the outputs at t (the run stops there exactly).
+        The samples of SAMPLES_PER_CALL times at a time are taken in one compiled call
+        (`sample`), and handed to on_sample after it."""
         run = self.start(position)
-        for t in [t for t in sample_times if position.time <= t < end]:
-            self.run_to(run, t, torques)
-            on_sample(t, self.model.named_outputs(run.outputs))
-        self.run_to(run, end, torques)
+        times = np.asarray(sample_times, dtype=float)
+        times = times[(position.time <= times) & (times < end)]
+        rows = np.empty((min(len(times), SAMPLES_PER_CALL), len(run.outputs)))
+        for first in range(0, max(len(times), 1), SAMPLES_PER_CALL):
+            chunk = times[first:first + SAMPLES_PER_CALL]
+            after = first + SAMPLES_PER_CALL
+            self.sample(run, chunk, rows[:len(chunk)], times[after] if after < len(times) else end,
+                        torques, on_sample=on_sample)
+        return self.position(run)
+
+    def advance_sampled(self, position: Position, end: float, torques: tuple[float, float],
+                        times: np.ndarray, rows: np.ndarray) -> Position:
+        """Integrate to `end`; rows[k] gets the outputs (model.output_layout) at times[k]
+        (rising, in [position.time, end)), all in one compiled call (`sample`)."""
+        run = self.start(position)
+        self.sample(run, times, rows, end, torques)
         return self.position(run)
 
 
@@ -354,7 +397,8 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
     first time); returns the seconds spent compiling, or None if it came from the cache."""
     started = time.perf_counter()
     steps = stepper.accepted_steps
-    stepper.advance(position, position.time + 1e-9, (0.0, 0.0))
+    # run_to's kernel, the one the FMU and the sweeps run (an FMU never runs the sampled one)
+    stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
     stepper.accepted_steps = steps
     compiled = any(walk.advance.stats.cache_misses.values())
     return time.perf_counter() - started if compiled else None

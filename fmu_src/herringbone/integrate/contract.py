@@ -6,7 +6,8 @@ run loop that drives them.
   torques, sample_times, on_sample)`, which integrates with the torques held to exactly `end`,
   stopping on every contact switch, and depends on nothing but the position passed in. The scipy
   reference (stepping.ScipyStepper) and the compiled integrator
-  (compiled_stepper.CompiledStepper) both satisfy it;
+  (compiled_stepper.CompiledStepper) both satisfy it; a `SamplingStepper` (the compiled one)
+  also writes its samples into an array, with no Python per sample;
 - `IntegrationError`: an integrator could not advance (it says where and why); `Result`: the
   outputs of a run;
 - `start_position`: the initial condition every integrator starts from;
@@ -84,6 +85,17 @@ class Stepper(Protocol):
         outputs at t. The result depends only on the position passed in."""
 
 
+@runtime_checkable
+class SamplingStepper(Stepper, Protocol):
+    """A Stepper that also samples into an array (`simulate_with` takes this way where it is
+    given no on_sample)."""
+
+    def advance_sampled(self, position: Position, end: float, torques: tuple[float, float],
+                        times: np.ndarray, rows: np.ndarray) -> Position:
+        """Integrate from `position` to exactly `end` with the torques held; rows[k] gets the
+        outputs (model.output_layout) at times[k], rising, in [position.time, end)."""
+
+
 def output_times(stop_time: float, output_interval: float) -> np.ndarray:
     """0, h, 2h, … up to stop_time inclusive (stop_time added if h does not divide it)."""
     count = int(np.floor(stop_time / output_interval * (1 + 1e-12)))
@@ -99,13 +111,17 @@ def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
     anything that is a `Stepper`), sampling the outputs every output_interval; returns
     {"time": …, output name: …}. `on_sample(t, outputs)`, if given, is called after each sample
     is stored (the benchmarks watch their budget through it; an exception it raises ends the
-    run). A bad span or start raises ValueError before any work (arguments.check_run_times)."""
+    run). A bad span or start raises ValueError before any work (arguments.check_run_times).
+    Without on_sample, a SamplingStepper samples each piece of the input table into an array
+    (`sampled_run`), the same numbers to the bit."""
     check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
     stop_time = scene.experiment.stop_time if stop_time is None else stop_time
     output_interval = scene.experiment.output_interval if output_interval is None \
         else output_interval
     model = stepper.model
     times = output_times(stop_time, output_interval)
+    if on_sample is None and isinstance(stepper, SamplingStepper):
+        return sampled_run(stepper, scene, stop_time, times, initial_pinion_angle)
     results = {name: np.empty(len(times)) for name in model.output_names}
     index = {t: i for i, t in enumerate(times)}
 
@@ -122,4 +138,26 @@ def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
     # the stop time itself, with the segment that holds from there on
     store(times[-1], model.outputs(position.state, position.segment.contact_set,
                                    position.segment.loaded))
+    return Result(time=times, **results)
+
+
+def sampled_run(stepper: SamplingStepper, scene, stop_time: float, times: np.ndarray,
+                initial_pinion_angle=0.0):
+    """simulate_with's run through a SamplingStepper (its arguments checked there): each piece
+    of the input table in one call of advance_sampled, every sample a row of one array, named
+    at the end."""
+    model = stepper.model
+    rows = np.empty((len(times), model.output_layout_size))
+    position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
+    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
+    for start, end in zip([0.0] + changes, changes + [stop_time]):
+        first, after = np.searchsorted(times, [position.time, end])
+        position = stepper.advance_sampled(position, end, scene.inputs.at(start),
+                                           times[first:after], rows[first:after])
+    slots = dict(model.output_layout)
+    results = {name: np.ascontiguousarray(rows[:, slots[name]]) for name in model.output_names}
+    # the stop time itself, with the segment that holds from there on
+    final = model.outputs(position.state, position.segment.contact_set, position.segment.loaded)
+    for name, value in final.items():
+        results[name][-1] = value
     return Result(time=times, **results)

@@ -98,6 +98,7 @@ class _Announcer(event.Listener):
     the loop is done. One per process; `say` is swapped for the newest caller's."""
 
     LOOP = "advance"
+    SAMPLED_LOOP = "advance_sampled"  # walk's other entry, herringbone.simulate's: the loop in it
 
     def __init__(self, say):
         self.say, self.depth, self.started, self.kernel_started = say, 0, None, None
@@ -124,7 +125,7 @@ class _Announcer(event.Listener):
             return
         record_seconds(kernel, time.perf_counter() - self.kernel_started)
         self.kernel_started = None
-        if kernel == self.LOOP and self.started is not None:
+        if kernel in (self.LOOP, self.SAMPLED_LOOP) and self.started is not None:
             seconds, self.started = time.perf_counter() - self.started, None
             self.say(f"compiled the integrator in {seconds:.1f} s; cached in "
                      f"{cache.kernels_folder()}")

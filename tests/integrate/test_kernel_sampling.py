@@ -1,0 +1,226 @@
+"""A run sampled in one compiled call (walk.advance_sampled, CompiledStepper.sample) against
+one call per sample time (CompiledStepper.run_to, how simulate sampled before): the same
+outputs to the bit, through simulate_with with and without a callback, on scenes with a torque
+step, contact loss and separation, with DOP853 and the exponential method; and the same error,
+raised after the same samples, where a run fails; and the one call, compiled without numba's
+reference counts as walk.advance is, frees what it allocates and keeps what it is given."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from helpers import MODELS, ROOT
+
+import herringbone
+from herringbone.integrate.compiled_stepper import (
+    SAMPLES_PER_CALL,
+    CompiledStepper,
+    StepBudgetExceeded,
+)
+from herringbone.integrate.contract import (
+    IntegrationError,
+    SamplingStepper,
+    output_times,
+    simulate_with,
+    start_position,
+)
+from herringbone.model.assembly import GearTrainModel
+
+# (scene, simulated s): each span holds more than SAMPLES_PER_CALL samples at 1e-4 s, so a
+# callback's run takes several calls; torque_step's torques jump at 5 ms
+SCENES = [("reference", 0.015), ("torque_step", 0.015), ("contact_loss", 0.015),
+          ("separation", 0.015)]
+OUTPUT_INTERVAL = 1e-4
+
+
+def one_call_per_sample(stepper, scene, stop_time, output_interval, on_sample=None):
+    """simulate_with's run as it sampled before: run_to to every sample time, the outputs named
+    and stored one by one (and handed to on_sample), run_to to the end of each piece of the
+    input table."""
+    model = stepper.model
+    times = output_times(stop_time, output_interval)
+    results = {name: np.empty(len(times)) for name in model.output_names}
+
+    def store(k, outputs):
+        for name, value in outputs.items():
+            results[name][k] = value
+        if on_sample is not None:
+            on_sample(times[k], outputs)
+
+    position = start_position(model, scene.inputs.at(0.0)[0])
+    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
+    for start, end in zip([0.0] + changes, changes + [stop_time]):
+        run, torques = stepper.start(position), scene.inputs.at(start)
+        for k in [k for k, t in enumerate(times) if position.time <= t < end]:
+            stepper.run_to(run, times[k], torques)
+            store(k, model.named_outputs(run.outputs))
+        stepper.run_to(run, end, torques)
+        position = stepper.position(run)
+    store(len(times) - 1, model.outputs(position.state, position.segment.contact_set,
+                                        position.segment.loaded))
+    return dict(time=times, **results)
+
+
+@pytest.mark.parametrize("method", ["dop853", "exponential"])
+@pytest.mark.parametrize("name, stop_time", SCENES)
+def test_one_call_per_piece_samples_the_same_to_the_bit(name, stop_time, method):
+    scene = herringbone.load_scene(MODELS / f"{name}.toml")
+    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, method)
+    assert isinstance(stepper, SamplingStepper)
+    before = one_call_per_sample(stepper, scene, stop_time, OUTPUT_INTERVAL)
+    steps = stepper.accepted_steps
+    sampled = simulate_with(stepper, scene, stop_time, OUTPUT_INTERVAL)
+    assert stepper.accepted_steps - steps == steps  # the same steps, taken again
+    called = []
+    watched = simulate_with(stepper, scene, stop_time, OUTPUT_INTERVAL,
+                            on_sample=lambda t, outputs: called.append((t, outputs)))
+    assert len(before["time"]) > 2 * SAMPLES_PER_CALL
+    assert list(sampled) == list(watched) == list(before)
+    for name_ in before:
+        assert np.array_equal(sampled[name_], before[name_]), name_
+        assert np.array_equal(watched[name_], before[name_]), name_
+        assert sampled[name_].flags.c_contiguous
+    # the callback saw every sample once, in order, with the stored values
+    assert [t for t, _ in called] == list(before["time"])
+    assert all(outputs[key] == watched[key][k] for k, (_, outputs) in enumerate(called)
+               for key in outputs)
+    # the physics moved: the mesh force is not a constant (a run that stood still would pass)
+    assert np.ptp(sampled["F_mesh"]) > 0.0
+
+
+def failing_run(sample_in_one_call, motor_torque):
+    """The torsional scene at a motor torque (N·m) that ends it, sampled every 1e-4 s to 5 ms
+    either in one call (CompiledStepper.sample) or by run_to per sample: (the error raised, the
+    sample times handed out before it)."""
+    scene = herringbone.load_scene(MODELS / "torsional.toml")
+    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "dop853")
+    run = stepper.start(start_position(stepper.model, 500.0))
+    times, torques = output_times(5e-3, 1e-4)[1:], (motor_torque, 1800.0)
+    seen = []
+    with pytest.raises(IntegrationError) as error:
+        if sample_in_one_call:
+            rows = np.empty((len(times), len(run.outputs)))
+            stepper.sample(run, times, rows, 5e-3, torques,
+                           on_sample=lambda t, outputs: seen.append(t))
+        else:
+            for t in times:
+                stepper.run_to(run, t, torques)
+                seen.append(t)
+    return error.value, seen
+
+
+@pytest.mark.parametrize("motor_torque, failure", [
+    (1e80, "the pinion left its contact interval unseen"),  # (the check after each stretch)
+    (1e300, "the step size fell below the time's resolution"),  # (walk.advance's own status)
+])
+def test_a_failing_run_fails_alike_after_the_same_samples(motor_torque, failure):
+    one_call, seen_one_call = failing_run(True, motor_torque)
+    per_sample, seen_per_sample = failing_run(False, motor_torque)
+    assert str(one_call) == str(per_sample)
+    assert type(one_call) is type(per_sample)
+    assert seen_one_call == seen_per_sample
+    assert failure in str(one_call)
+
+
+def test_the_step_budget_bounds_the_whole_call():
+    """A budget of the steps half a run takes stops it there, with StepBudgetExceeded naming
+    the sample time it fell short of, the rows before it written as run_to writes them."""
+    scene = herringbone.load_scene(MODELS / "reference.toml")
+    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "dop853")
+    start = start_position(stepper.model, 500.0)
+    times, torques = output_times(4e-3, 1e-4)[1:], scene.inputs.at(0.0)
+    rows = np.empty((len(times), stepper.model.output_layout_size))
+    stepper.sample(stepper.start(start), times, rows, 4e-3, torques)
+    steps = stepper.accepted_steps
+    run, budget_rows = stepper.start(start), np.full_like(rows, np.nan)
+    seen = []
+    with pytest.raises(StepBudgetExceeded) as error:
+        stepper.sample(run, times, budget_rows, 4e-3, torques, max_steps=steps // 2,
+                       on_sample=lambda t, outputs: seen.append((t, outputs["F_mesh"])))
+    written = int(np.isfinite(budget_rows[:, 0]).sum())
+    assert 0 < written < len(times)
+    # the callback was handed every row written, before the error
+    assert [t for t, _ in seen] == list(times[:written])
+    slot = dict(stepper.model.output_layout)["F_mesh"]
+    assert [force for _, force in seen] == list(rows[:written, slot])
+    assert np.array_equal(budget_rows[:written], rows[:written])
+    assert f"short of t = {times[written]:.9g} s" in str(error.value)
+    assert times[written - 1] <= run.time < times[written]
+
+
+def test_rows_of_the_wrong_shape_are_refused():
+    scene = herringbone.load_scene(MODELS / "reference.toml")
+    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "dop853")
+    run = stepper.start(start_position(stepper.model, 500.0))
+    with pytest.raises(ValueError, match="rows"):
+        stepper.sample(run, np.array([1e-4, 2e-4]), np.empty((2, 3)), 3e-4, (500.0, 1800.0))
+    assert run.time == 0.0
+
+
+# test_compiled_memory's check, of one call of CompiledStepper.sample through 40 sample times
+PROBE = r"""
+import json, sys
+import numpy as np
+from numba.core.runtime import rtsys
+import herringbone
+from herringbone.integrate.compiled_stepper import CompiledStepper
+from herringbone.integrate.contract import start_position
+from herringbone.model.assembly import GearTrainModel
+
+scene = herringbone.load_scene(sys.argv[1])
+model = GearTrainModel(scene)
+stepper = CompiledStepper(model, 1e-7, sys.argv[2])
+run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+interval, torques = float(sys.argv[3]), scene.inputs.at(0.0)
+rows = np.empty((40, len(run.outputs)))
+stepper.sample(run, np.array([1e-4]), rows[:1], 1e-4, torques)  # loads (or compiles) it first
+times = 1e-4 + interval * np.arange(1, 41)
+
+def arrays(value):
+    if isinstance(value, np.ndarray):
+        yield value
+    elif isinstance(value, tuple):
+        for item in value:
+            yield from arrays(item)
+
+given = list(arrays((stepper.system_arrays, stepper.mesh, stepper.settings, run.clock, run.place,
+                     run.state, run.loaded, run.first_steps, run.outputs, run.workspace, times,
+                     rows)))
+def references():
+    return [sys.getrefcount(array) for array in given]
+
+counted = references()
+before = rtsys.get_allocation_stats()
+stepper.sample(run, times, rows, times[-1] + interval, torques)
+after = rtsys.get_allocation_stats()
+print(json.dumps({
+    "allocated": after.alloc - before.alloc, "freed": after.free - before.free,
+    "records_made": after.mi_alloc - before.mi_alloc,
+    "records_freed": after.mi_free - before.mi_free,
+    "references_changed": sum(now != then for now, then in zip(references(), counted)),
+    "arrays": len(given), "sampled": bool(np.ptp(rows, axis=0).max() > 0.0)}))
+"""
+
+
+@pytest.mark.parametrize("scene, method, interval", [
+    ("reference", "exponential", 2e-4),
+    ("contact_loss", "dop853", 2e-4),
+    ("stiff_bearings", "radau", 2e-6),  # Radau IIA allocates its Newton arrays at every step
+])
+def test_one_call_frees_what_it_allocates_and_keeps_what_it_was_given(scene, method, interval):
+    environment = dict(os.environ, NUMBA_NRT_STATS="1",
+                       PYTHONPATH=os.pathsep.join([str(ROOT / "fmu_src"),
+                                                   os.environ.get("PYTHONPATH", "")]))
+    done = subprocess.run([sys.executable, "-c", PROBE, str(MODELS / f"{scene}.toml"), method,
+                           str(interval)], capture_output=True, text=True, env=environment,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    assert figures["arrays"] >= 12 and figures["sampled"], figures
+    assert figures["references_changed"] == 0, figures
+    assert figures["allocated"] == figures["freed"], figures
+    assert figures["records_made"] == figures["records_freed"], figures
+    if method == "radau":
+        assert figures["allocated"] > 0  # the check sees the allocations it counts
