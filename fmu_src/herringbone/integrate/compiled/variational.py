@@ -165,11 +165,15 @@ def variational_step(system, segment, state, sensitivity, h, work):
             for k in range(stage):
                 total += STAGE_WEIGHTS[stage, k] * stages[k, j]
             stage_state[j] = state[j] + h * total
+            # the sensitivity's sums by columns, each term independent of the last: the
+            # columns' loop is the innermost and vectorizes
             for c in range(columns):
-                total = 0.0
-                for k in range(stage):
-                    total += STAGE_WEIGHTS[stage, k] * sensitivity_stages[k, j, c]
-                stage_sensitivity[j, c] = sensitivity[j, c] + h * total
+                stage_sensitivity[j, c] = sensitivity[j, c]
+            for k in range(stage):
+                weight = h * STAGE_WEIGHTS[stage, k]
+                if weight != 0.0:
+                    for c in range(columns):
+                        stage_sensitivity[j, c] += weight * sensitivity_stages[k, j, c]
         derivative(system, segment.points, segment.point_count, segment.loaded,
                    segment.motor_torque, segment.load_torque, stage_state, stages[stage])
         sensitivity_rate(system, segment.points, segment.point_count, segment.loaded,
@@ -180,11 +184,11 @@ def variational_step(system, segment, state, sensitivity, h, work):
         for k in range(N_STAGES):
             total += SOLUTION_WEIGHTS[k] * stages[k, j]
         state[j] += h * total
-        for c in range(columns):
-            total = 0.0
-            for k in range(N_STAGES):
-                total += SOLUTION_WEIGHTS[k] * sensitivity_stages[k, j, c]
-            sensitivity[j, c] += h * total
+        for k in range(N_STAGES):
+            weight = h * SOLUTION_WEIGHTS[k]
+            if weight != 0.0:
+                for c in range(columns):
+                    sensitivity[j, c] += weight * sensitivity_stages[k, j, c]
 
 
 @njit(cache=True, error_model="numpy")
