@@ -28,14 +28,20 @@ def solved(period_map, speed, unknowns=None):
     return z, variational, differences, period_map.state(z, speed)
 
 
-def test_variational_monodromy_agrees_with_differences(reference_scene, monkeypatch):
+@pytest.mark.parametrize("changes", [{}, {"edge_ramp": 1e-3, "dbeta_left": 7.5e-5,
+                                          "dbeta_right": -2.5e-5}])
+def test_variational_monodromy_agrees_with_differences(reference_scene, monkeypatch, changes):
     """Where the compiled integrator's map is one smooth discrete map (DOP853 at 1e-10: a
     perturbation of 1e-6 takes the same steps), its forward differences and the variational
     equations give the same A = ∂z(T)/∂z: within 5e-5 of its largest entry at the default
-    steps (measured 1.5e-5: they are set for the multipliers, MULTIPLIER_ERROR, and the fast
-    modes' entries of A carry more), within 2e-6 at steps set for 1e-10 (measured 2.4e-7, the
-    differences' own error); the same ∂φp(T)/∂z within 1e-7 rad a unit."""
-    period_map = PeriodMap(reference_scene, tolerance=1e-10, method="dop853")
+    steps (measured 1.5e-5 and 2.1e-6: they are set for the multipliers, MULTIPLIER_ERROR, and
+    the fast modes' entries of A carry more), within 2e-6 at steps set for 1e-10 (measured
+    2.4e-7 and 3.1e-8, the differences' own error); the same ∂φp(T)/∂z within 1e-7 rad a unit
+    (measured 3e-9, 1e-9). On the reference scene (its lever arms move with the pinion) and
+    with edge ramps and lead errors (its stiffnesses and lead errors too: every term of J's
+    pinion column), 500 rad/s."""
+    scene = reference_scene.with_parameters(**changes)
+    period_map = PeriodMap(scene, tolerance=1e-10, method="dop853")
     z, (images, phase_row), (difference_images, difference_row), state = solved(period_map,
                                                                                 500.0)
     largest = np.abs(images).max()
