@@ -129,3 +129,23 @@ def test_period_doubling_multiplier_passes_minus_one():
                for source in ("variational", "differences", "linear")}
     assert abs(located["variational"] - located["differences"]) <= 1e-3
     assert abs(located["variational"] - located["linear"]) <= 0.05
+
+
+def test_period_2_orbits_leave_the_doubling_on_a_line_of_fixed_points():
+    """While no contact is lost the map over 2T is affine, and at the doubling the period-2
+    orbits form a line of its fixed points: the variational multiplier along it is +1 within
+    1e-5 (measured 6e-8, 1e-6, 2.5e-6 on the first three points of the upper doubling's
+    branch, the speed 3e-3 rad/s apart at most), up to the orbit whose mesh force first
+    reaches zero, the corner where the differences' secant, across it, gave 0.94
+    (MULTI_PERIOD_JACOBIAN says why the period-2 maps keep the differences)."""
+    scene = herringbone.load_scene(PERIOD_DOUBLING)
+    branch = continue_in_speed(scene, np.linspace(4800.0, 5200.0, 9))
+    upper = max(branch.doubled, key=lambda b: b.points[0].speed)
+    line = [p for p in upper.points if p.figures["contact_lost_share"] == 0.0]
+    assert len(line) >= 3 and line[-1].figures["F_mesh_min_N"] < 1.0
+    period_map = PeriodMap(scene, mesh_periods=2, jacobian_method="variational")
+    for point in line:
+        z = period_map.unknowns(point.orbit.state)
+        values = period_map.multipliers(*period_map.variational_jacobian(z, point.speed),
+                                        period_map.state(z, point.speed))
+        assert np.abs(values - 1.0).min() <= 1e-5
