@@ -108,28 +108,33 @@ def contact_gradients(system, points, count, loaded, state, total_row, moment_ro
 
 
 @njit(cache=True, error_model="numpy")
-def sensitivity_rate(system, points, count, loaded, state, sensitivity, total_row, moment_row,
-                     out):
+def sensitivity_rate(system, points, count, loaded, state, sensitivity, rows, sums, out):
     """out = J(state)·sensitivity (each column a perturbation of the state), J = ∂f/∂x of
-    equations.derivative with the segment's set and loaded points. total_row, moment_row:
-    scratch of the state's size."""
+    equations.derivative with the segment's set and loaded points. rows: two rows of the
+    state's size, sums two of the sensitivity's columns (scratch). The columns' loops are the
+    innermost: their terms are independent and vectorize."""
     n = system.mass.shape[0]
     columns = sensitivity.shape[1]
+    total_row, moment_row = rows[0], rows[1]
+    totals, moments = sums[0], sums[1]
     contact_gradients(system, points, count, loaded, state, total_row, moment_row)
-    for c in range(columns):
-        total = moment = 0.0
-        for j in range(2 * n):
-            total += total_row[j] * sensitivity[j, c]
-            moment += moment_row[j] * sensitivity[j, c]
-        for j in range(n):
+    totals[:] = 0.0
+    moments[:] = 0.0
+    for j in range(2 * n):
+        to_total, to_moment = total_row[j], moment_row[j]
+        for c in range(columns):
+            totals[c] += to_total * sensitivity[j, c]
+            moments[c] += to_moment * sensitivity[j, c]
+    for j in range(n):
+        base, tilt = system.contact_base_acceleration[j], system.contact_tilt_acceleration[j]
+        for c in range(columns):
             out[j, c] = sensitivity[n + j, c]
-            out[n + j, c] = (-total * system.contact_base_acceleration[j]
-                             - moment * system.contact_tilt_acceleration[j])
-        for entry in range(system.coupling_row.shape[0]):
-            k = system.coupling_column[entry]
-            out[n + system.coupling_row[entry], c] += (
-                system.elastic_acceleration[entry] * sensitivity[k, c]
-                + system.damping_acceleration[entry] * sensitivity[n + k, c])
+            out[n + j, c] = -totals[c] * base - moments[c] * tilt
+    for entry in range(system.coupling_row.shape[0]):
+        k, row = system.coupling_column[entry], n + system.coupling_row[entry]
+        elastic, damping = system.elastic_acceleration[entry], system.damping_acceleration[entry]
+        for c in range(columns):
+            out[row, c] += elastic * sensitivity[k, c] + damping * sensitivity[n + k, c]
 
 
 @njit(cache=True, error_model="numpy")
@@ -157,7 +162,7 @@ def dop853_step(system, segment, state, h, stages, stage_state, out):
 def variational_step(system, segment, state, sensitivity, h, work):
     """One fixed DOP853 step of h (s) of the state and its sensitivity together, in place: the
     sensitivity's stages are the linearized stages J(stage state)·(stage sensitivity)."""
-    stages, stage_state, sensitivity_stages, stage_sensitivity, rows = work
+    stages, stage_state, sensitivity_stages, stage_sensitivity, rows, sums = work
     size, columns = sensitivity.shape
     for stage in range(N_STAGES):
         for j in range(size):
@@ -177,8 +182,7 @@ def variational_step(system, segment, state, sensitivity, h, work):
         derivative(system, segment.points, segment.point_count, segment.loaded,
                    segment.motor_torque, segment.load_torque, stage_state, stages[stage])
         sensitivity_rate(system, segment.points, segment.point_count, segment.loaded,
-                         stage_state, stage_sensitivity, rows[0], rows[1],
-                         sensitivity_stages[stage])
+                         stage_state, stage_sensitivity, rows, sums, sensitivity_stages[stage])
     for j in range(size):
         total = 0.0
         for k in range(N_STAGES):
@@ -277,7 +281,7 @@ def flow_sensitivity(floats, ints, mesh_arrays, interval, cycle, loaded_in, stat
     width = Event.CONTACT + loaded.shape[0]
     stages, stage_state = np.empty((N_STAGES, size)), np.empty(size)
     work = (stages, stage_state, np.empty((N_STAGES, size, columns)),
-            np.empty((size, columns)), np.empty((2, size)))
+            np.empty((size, columns)), np.empty((2, size)), np.empty((2, columns)))
     trial, values = np.empty(size), np.empty((4, width))
     location = (stages, stage_state, trial, values[2], np.empty(loaded.shape[0]))
     rates = np.empty((2, size))
