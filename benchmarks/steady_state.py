@@ -4,6 +4,7 @@
     python benchmarks/steady_state.py --time-points 5 --scene models/reference.toml
     python benchmarks/steady_state.py --param zeta_mesh 0.02 0.1 20 --speed 500
                                                       # a parameter at one speed
+    python benchmarks/steady_state.py --differences   # and the Jacobian by differences
 
 Prints, side by side, one core's CPU time (process time, this process alone: the points run
 here one after the other) of
@@ -14,6 +15,9 @@ here one after the other) of
   so: a time point costs what its settle costs, which does not depend on the others);
 and, at the subset's values, how far the time sweep's K_v and dte peak-to-peak lie from the
 orbits' (the time protocol stops its settle at a residual of 1e-3 of the start's transient).
+With --differences the branch is also run with the period map's Jacobian by forward
+differences (steady_state.PeriodMap(jacobian_method="differences"), the method before the
+variational monodromy, docs/monodromy.md), side by side in the same process.
 The compiled integrator is loaded (or compiled) before anything is timed.
 """
 from __future__ import annotations
@@ -46,9 +50,28 @@ def arguments(argv):
                         help="continue in this parameter (or M_motor, M_load) instead, at "
                              "--speed")
     parser.add_argument("--speed", type=float, default=500.0, help="rad/s, with --param")
+    parser.add_argument("--differences", action="store_true",
+                        help="also run the branch with the Jacobian by forward differences")
     parser.add_argument("--time-points", type=int, default=10,
                         help="values of the subset the time sweep runs (evenly spread)")
     return parser.parse_args(argv)
+
+
+def by_differences(continued):
+    """(branch, CPU s) of the same continuation with every period map's Jacobian by forward
+    differences: the continuation builds its maps by the name it imported, which this
+    replaces for the one call."""
+    import functools
+
+    from herringbone.analysis import continuation
+    from herringbone.analysis.steady_state import PeriodMap
+
+    continuation.PeriodMap = functools.partial(PeriodMap, jacobian_method="differences")
+    try:
+        branch, cpu, _ = timed(*continued)
+    finally:
+        continuation.PeriodMap = PeriodMap
+    return branch, cpu
 
 
 def main(argv=None) -> int:
@@ -73,6 +96,8 @@ def main(argv=None) -> int:
     periodic_orbit(scene, args.speed if args.param else values[0])  # its numba functions loaded
 
     branch, branch_cpu, branch_wall = timed(*continued)
+    if args.differences:
+        compared = by_differences(continued)
     table = branch.table()
     grid = table[table["on_grid"]]
     subset = values[np.linspace(0, len(values) - 1, args.time_points).round().astype(int)]
@@ -94,6 +119,10 @@ def main(argv=None) -> int:
     print(f"{'points (branch) / requested values':38s}{len(table):>10d} / {len(grid):<5d}")
     print(f"{'period integrations a branch point':38s}"
           f"{branch.evaluations / len(table):16.1f}")
+    if args.differences:
+        other, other_cpu = compared
+        print(f"{'by differences: CPU s, points':38s}{other_cpu:16.3f}{len(other.points):>10d}"
+              f"  ({other.evaluations / len(other.points):.1f} period integrations a point)")
     methods = dict(zip(*np.unique(table["method"], return_counts=True)))
     stabilities = dict(zip(*np.unique(table["stability"], return_counts=True)))
     print(f"branch: {methods}, stability {stabilities}, "

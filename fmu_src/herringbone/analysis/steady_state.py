@@ -15,10 +15,12 @@ coordinate but the pinion's — with ẏ_pinion given by p; 2(n−1) of them, sc
 `state_scales` so that a unit is a force of the size of the static mesh force. The map
 z -> z(T) (the compiled integrator over the fixed time T) has the orbit as a fixed point, and
 at a fixed point φp is back on the section by itself (θ advanced k pitches, the y_i are back).
-Newton solves G(z) = z(T) − z = 0 with the Jacobian A − I, A = ∂z(T)/∂z by forward differences
-of the compiled integrator at a tight tolerance (`SHOOTING_TOLERANCE`): for perturbations this
-small the integrator takes the same steps, so the differences are those of one smooth discrete
-map, accurate to its rounding. Started from the static deflection, the first Newton step is
+Newton solves G(z) = z(T) − z = 0 with the Jacobian A − I, A = ∂z(T)/∂z the monodromy of the
+map: by default from the variational equations through the segments of the period, with the
+saltation of the sensitivities at each event (integrate/variational.py, docs/monodromy.md), one
+integration of the state and its 2(n−1) sensitivities; `jacobian_method="differences"` takes
+forward differences of the compiled map instead (one period integration an unknown), the
+check. Started from the static deflection, the first Newton step is
 the linear mesh's periodic solution (I − A)⁻¹·b exactly where the map is affine (no contact
 loss); a continuation starts each point from its predictor instead.
 
@@ -42,9 +44,10 @@ import numpy as np
 
 from ..arguments import check_scene
 from ..integrate.compiled import equations
-from ..integrate.compiled_stepper import CompiledStepper
+from ..integrate.compiled_stepper import EXPLICIT_STEP_BOUND, CompiledStepper, eigenvalues
 from ..integrate.contract import IntegrationError, Position, start_position
 from ..integrate.segments import Segment, begin, contact_band, point_approaches
+from ..integrate.variational import VariationalFlow, multiplier_step
 from ..model.assembly import GearTrainModel
 from ..model.geometry import GearGeometry
 from .sweep_point import static_mesh_force, window_figures
@@ -60,6 +63,23 @@ SHOOTING_TOLERANCE = 1e-8
 NEWTON_TOLERANCE = 1e-8
 NEWTON_ITERATIONS = 12
 DIFFERENCE_STEP = 1e-6  # forward-difference step, in state scales
+# how PeriodMap.jacobian takes A = ∂z(T)/∂z: "variational" (the variational equations through
+# the segments with the saltation at each event, docs/monodromy.md) or "differences" (forward
+# differences of the map, one period integration an unknown: the check)
+JACOBIAN_METHODS = ("variational", "differences")
+# A period-2 branch leaves its doubling along a line of orbits (while no contact is lost the map
+# over 2T is affine, with a multiplier +1) up to the orbit whose teeth first touch zero load,
+# where it turns off at a corner. The variational A there is the one-sided derivative of the
+# affine side, whose tangent runs on along the line, and the continuation's steps past the
+# corner fail; the differences' secant straddles it and leads round. So maps over several mesh
+# periods take the differences by default (docs/monodromy.md).
+MULTI_PERIOD_JACOBIAN = "differences"
+# the variational run's fixed steps keep each mode's multiplier within this of its value, by
+# DOP853's error constant (integrate/variational.multiplier_step), with STEP_MARGIN for the
+# stiffest contact set, whose modes are faster than the mean set's; and they stay within
+# DOP853's stability bound (EXPLICIT_STEP_BOUND/|λ|max). Measured: docs/monodromy.md.
+MULTIPLIER_ERROR = 1e-6
+STEP_MARGIN = 0.8
 # a multiplier is on the unit circle (neither stable nor unstable) within this much
 UNIT_CIRCLE_BAND = 1e-6
 SAMPLES_PER_PERIOD = 64  # as sweep_point.Protocol's default
@@ -156,11 +176,20 @@ class PeriodMap:
     """z -> z(T) on the section, and its derivatives, for one scene (any speed)."""
 
     def __init__(self, scene, tolerance: float = SHOOTING_TOLERANCE, mesh_periods: int = 1,
-                 scales: np.ndarray | None = None, method: str = "auto"):
+                 scales: np.ndarray | None = None, method: str = "auto",
+                 jacobian_method: str | None = None):
         """scales: the unknowns' scales (default `unknown_scales` of this scene; a
         continuation in a parameter gives every value's map the first one's, so that z is the
-        same state at every value); method: the compiled integrator's (CompiledStepper)."""
+        same state at every value); method: the compiled integrator's (CompiledStepper);
+        jacobian_method: how `jacobian` takes A (JACOBIAN_METHODS; None: "variational" over
+        one mesh period, "differences" over several, see MULTI_PERIOD_JACOBIAN)."""
         check_scene(scene)
+        if jacobian_method is None:
+            jacobian_method = "variational" if mesh_periods == 1 else MULTI_PERIOD_JACOBIAN
+        if jacobian_method not in JACOBIAN_METHODS:
+            raise ValueError(f"jacobian_method {jacobian_method!r}: allowed are "
+                             f"{', '.join(JACOBIAN_METHODS)}")
+        self.jacobian_method = jacobian_method
         self.torques = check_balanced(scene)
         self.scene = scene
         self.model = model = GearTrainModel(scene)
@@ -179,6 +208,7 @@ class PeriodMap:
         self.section_phase = 0.5 * self.section_set.length
         self.pitch = model.geometry.angular_pitch
         self.evaluations = 0  # period integrations done, for benchmarks
+        self.variational_evaluations = 0  # of them, variational ones (jacobian)
         self.contact_band = contact_band(model)
         self.run = self.stepper.start(start_position(model, self.torques[0]))
 
@@ -292,6 +322,50 @@ class PeriodMap:
         return self.unknowns(end) - unknowns, end, offset
 
     def jacobian(self, unknowns: np.ndarray, speed: float, base=None):
+        """∂z(T)/∂z (A, scaled) and ∂φp(T)/∂z (row, rad a unit), by the map's
+        `jacobian_method`: the variational equations (`variational_jacobian`) or forward
+        differences from `base` (`difference_jacobian`)."""
+        if self.jacobian_method == "variational":
+            return self.variational_jacobian(unknowns, speed)
+        return self.difference_jacobian(unknowns, speed, base)
+
+    @functools.cached_property
+    def directions(self) -> np.ndarray:
+        """∂(state on the section)/∂z: each unknown moves its own entry by its scale, and a
+        rate also the pinion's rate, which the momentum fixes (`state`)."""
+        n, count = self.size, len(self.unknown_entries)
+        directions = np.zeros((2 * n, count))
+        directions[self.unknown_entries, np.arange(count)] = self.scales
+        rates = np.arange(len(self.free), count)
+        directions[n + self.pinion, rates] = -self.momentum_weights * self.scales[rates]
+        return directions
+
+    @functools.cached_property
+    def modes(self) -> np.ndarray:
+        """The eigenvalues (1/s) of the train at its mean stiffness and damping."""
+        return eigenvalues(self.model)
+
+    @functools.cached_property
+    def variational_flow(self) -> VariationalFlow:
+        """The variational run's integrator, its steps within DOP853's stability bound (also
+        where the map runs Radau IIA)."""
+        return VariationalFlow(self.model, EXPLICIT_STEP_BOUND / np.abs(self.modes).max())
+
+    def variational_jacobian(self, unknowns: np.ndarray, speed: float):
+        """∂z(T)/∂z (A, scaled) and ∂φp(T)/∂z (row), by the variational equations through
+        the segments of one period, with the saltation of the sensitivities at each event
+        (integrate/variational.py): one integration of the state and its 2(n−1)
+        sensitivities."""
+        self.evaluations += 1
+        self.variational_evaluations += 1
+        state, period = self.state(unknowns, speed), self.period(speed)
+        step = STEP_MARGIN * multiplier_step(self.modes, period, MULTIPLIER_ERROR)
+        _, sensitivity, _ = self.variational_flow.run(self.start(state), period, self.torques,
+                                                      self.directions, step)
+        return (sensitivity[self.unknown_entries] / self.scales[:, None],
+                sensitivity[self.pinion].copy())
+
+    def difference_jacobian(self, unknowns: np.ndarray, speed: float, base=None):
         """∂z(T)/∂z (A, scaled) and ∂φp(T)/∂z (row), by forward differences from `base`
         (residual's result at the point, computed if not given)."""
         if base is None:
