@@ -19,7 +19,8 @@ Error control (with a `horizon`, as reference_simulate gives it): the tolerance 
 forces over the whole run. Every step's error rings on in the train's modes, for the run or for
 1/ζ radians, whichever is shorter, and the errors of the steps add up over those radians; the
 step tolerance is cut by the radians the train rings (ringing_radians, step_tolerance), which
-this module works out from the model's own matrices.
+this module works out from the model's own matrices. And an explicit method's step spans at most
+STEP_RADIANS of the train's fastest mode, where its error estimate still reads that mode's error.
 """
 from __future__ import annotations
 
@@ -49,6 +50,14 @@ SLOPE_SPACING = 1e-5  # of a step: the half-spacing of the differences that give
 # Only points whose approach comes this many times its largest change between nodes near zero
 # get slopes (and so the bulge test): a smoother one cannot reach zero between two nodes.
 NEAR_ZERO = 4.0
+# A step spans at most this many radians of the train's fastest mode (|λ|max of the linearized
+# train), whatever the error estimate allows: DOP853's estimate is asymptotic, and beyond that it
+# can miss a fast mode's error. On light_load_reference_drift (tests/regression) a step of 7.7
+# radians of the 9.5e5 rad/s bearing mode passed at a step tolerance of 8e-12 and ended 9e-9 of
+# the force scale off, an error the mode's damping took away within 30 µs, which only a sample
+# falling there showed (docs/reference-accuracy.md).
+STEP_RADIANS = 2.0
+EXPLICIT_METHODS = ("DOP853", "RK45", "RK23")  # scipy's; the implicit ones are not held to it
 # The debug check of contact forces (check_tension) reads the step at this many points.
 TENSION_NODES = 33
 # The error of every step rings on in the train's modes until their damping eats it, adding up
@@ -89,6 +98,8 @@ class ScipyStepper:
         (relative and absolute). horizon: the run's length (s); None: each step is held to
         `tolerance` itself (scipy's own meaning: an error per step, not per run).
         method: a scipy.integrate OdeSolver ("DOP853", "RK45", "Radau", "BDF", "LSODA").
+        max_step: the longest step (s); an explicit method's steps are also held to
+        STEP_RADIANS of the train's fastest mode.
         check_tension: after every step, read every point's approach at TENSION_NODES points
         of it and raise IntegrationError where a loaded point pulls or a free one penetrates
         by more than the contact band (segments.contact_band): a debug check, for tests."""
@@ -99,7 +110,9 @@ class ScipyStepper:
         self.absolute_tolerance = self.step_tolerance * model.state_scales()
         self.method = method
         self.solver_class = getattr(scipy.integrate, method)
-        self.max_step = max_step
+        explicit = method in EXPLICIT_METHODS
+        self.max_step = min(max_step, STEP_RADIANS / fastest_rate(model)) if explicit \
+            else max_step
         self.check_tension = check_tension
         self.fractions = np.linspace(0.0, 1.0, INTERIOR_NODES + 2)
         # The record of what this stepper has met (results never depend on it): segments
@@ -275,6 +288,11 @@ def _eigenvalues(model: GearTrainModel) -> np.ndarray:
         [-inverse_mass * model.mean_stiffness_matrix(),
          -inverse_mass * model.mean_damping_matrix()]])
     return np.linalg.eigvals(state_matrix)
+
+
+def fastest_rate(model: GearTrainModel) -> float:
+    """|λ|max over the eigenvalues of the linearized train (_eigenvalues), 1/s."""
+    return float(np.abs(_eigenvalues(model)).max())
 
 
 def ringing_radians(model: GearTrainModel, horizon: float) -> float:
