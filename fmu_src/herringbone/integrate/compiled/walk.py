@@ -1163,7 +1163,7 @@ def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, 
         if status != Status.OK.value:
             return status, steps, k
         if k < samples:
-            copy_into(rows[k], run[5])  # the run's outputs
+            copy_into(rows[k], RunArrays(*run).outputs)
     return Status.OK.value, steps, samples
 
 
@@ -1174,13 +1174,13 @@ def advance_stretch(system_arrays, mesh, settings, run, workspace, end, torques,
     time, then the check that the pinion (its index in the state: `pinion`) ended within its
     contact interval, to PHASE_SLACK of its length. Returns (the Status's value, accepted
     steps)."""
-    clock, place, state = run[0], run[1], run[2]
-    if end <= clock[0]:
+    position = RunArrays(*run)
+    if end <= position.clock[0]:
         return Status.OK.value, 0
     status, steps = advance(system_arrays, mesh, settings, run, workspace, end, torques,
                             max_steps)
-    length = mesh[0][place[0]]
-    if status == Status.OK.value and not (-PHASE_SLACK * length <= state[pinion]
+    length = PeriodTable(*mesh).lengths[position.place[0]]
+    if status == Status.OK.value and not (-PHASE_SLACK * length <= position.state[pinion]
                                           <= (1 + PHASE_SLACK) * length):
         return Status.LEFT_INTERVAL.value, steps
     return status, steps
