@@ -56,7 +56,7 @@ NEAR_ZERO = 4.0
 # radians of the 9.5e5 rad/s bearing mode passed at a step tolerance of 8e-12 and ended 9e-9 of
 # the force scale off, an error the mode's damping took away within 30 µs, which only a sample
 # falling there showed (docs/reference-accuracy.md).
-STEP_RADIANS = 2.0
+STEP_RADIANS = 4.0
 EXPLICIT_METHODS = ("DOP853", "RK45", "RK23")  # scipy's; the implicit ones are not held to it
 # The debug check of contact forces (check_tension) reads the step at this many points.
 TENSION_NODES = 33
