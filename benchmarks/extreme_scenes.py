@@ -16,6 +16,7 @@ Writes extreme_scenes.csv and extreme_scenes.md to the output directory.
     python benchmarks/extreme_scenes.py --quick                           # a quick check
     python benchmarks/extreme_scenes.py                                   # 10^4 periods
     python benchmarks/extreme_scenes.py --no-scenes --periods 1000000     # the issue's long run
+    python benchmarks/extreme_scenes.py --fmu-methods dop853 exponential  # a row for each
 """
 from __future__ import annotations
 
@@ -30,8 +31,9 @@ import common  # noqa: E402
 
 
 def scene_rows(scene_paths, span_scale=1.0, max_span=1.0, budget=math.inf,
-               reference_tolerance=1e-12, log=print) -> list[dict]:
-    """One row per scene: the FMU at its defaults against the reference."""
+               reference_tolerance=1e-12, fmu_methods=(None,), log=print) -> list[dict]:
+    """One row per scene and FMU solver_method (None: the FMU's default), each against the
+    reference of its scene."""
     import herringbone
 
     rows = []
@@ -40,42 +42,55 @@ def scene_rows(scene_paths, span_scale=1.0, max_span=1.0, budget=math.inf,
         step = scene.experiment.output_interval
         span = min(scene.experiment.stop_time * span_scale, max_span)
         span = max(round(span / step), 1) * step  # a whole number of communication steps
-        forces, scale = common.force_outputs(scene), common.force_scale(scene)
         log(f"{scene.name}: {span:g} s at communication step {step:g} s")
         reference = common.cached_reference(path, span, step, reference_tolerance, log=log)
         try:
             fmu_dir = common.scene_fmu(path, log=log)
         except common.BuildError as error:
             log(f"  {error}")
-            rows.append(dict(scene=scene.name, comm_step=step, span_requested=span,
-                             span_simulated=0.0, wall_s=math.nan, wall_per_sim_s=math.nan,
-                             startup_s=math.nan, first_startup_s=math.nan, error=math.nan,
-                             internal_steps="", steps_per_sim_s="",
-                             reference_wall_per_sim_s=float(reference["wall"]),
-                             status=str(error)))
+            rows += [failed_row(scene, step, span, method, reference, str(error))
+                     for method in fmu_methods]
             continue
-        warm_up = common.run_fmu(fmu_dir, common.input_schedule(scene), [(step, step, False)],
-                                 [], budget=budget)
-        result = common.run_fmu(fmu_dir, common.input_schedule(scene), [(span, step, True)],
-                                forces, budget=budget)
-        reached = result["reached"]
-        error = common.force_error(result["time"], {n: result[n] for n in forces}, reference,
-                                   scale) if len(result["time"]) > 1 else math.nan
-        steps = result["internal_steps"]
-        row = dict(scene=scene.name, comm_step=step, span_requested=span, span_simulated=reached,
-                   wall_s=result["wall"],
-                   wall_per_sim_s=result["wall"] / reached if reached else math.nan,
-                   startup_s=result["startup"], first_startup_s=warm_up["startup"],
-                   error=error, internal_steps=steps if steps is not None else "",
-                   steps_per_sim_s=steps / reached if steps and reached else "",
-                   reference_wall_per_sim_s=float(reference["wall"]), status=result["status"])
-        log(f"  FMU: {row['status']}, {reached:g} s in {row['wall_s']:.3g} s "
-            f"({row['wall_per_sim_s']:.3g} s/s), start-up {row['startup_s']:.3g} s "
-            f"(first {row['first_startup_s']:.3g} s), error {error:.3g}"
-            + (f", {row['steps_per_sim_s']:.4g} internal steps/s" if row["steps_per_sim_s"]
-               else ""))
-        rows.append(row)
+        rows += [fmu_row(scene, fmu_dir, step, span, method, reference, budget, log)
+                 for method in fmu_methods]
     return rows
+
+
+def failed_row(scene, step, span, method, reference, status) -> dict:
+    """The row of a scene whose FMU could not be built."""
+    return dict(scene=scene.name, method=method or "default", comm_step=step,
+                span_requested=span, span_simulated=0.0, wall_s=math.nan,
+                wall_per_sim_s=math.nan, startup_s=math.nan, first_startup_s=math.nan,
+                error=math.nan, internal_steps="", steps_per_sim_s="",
+                reference_wall_per_sim_s=float(reference["wall"]), status=status)
+
+
+def fmu_row(scene, fmu_dir, step, span, method, reference, budget, log) -> dict:
+    """One scene through its FMU with solver_method `method` (None: the FMU's default):
+    wall time, start-up, internal steps and the error against the reference."""
+    forces, scale = common.force_outputs(scene), common.force_scale(scene)
+    start_values = {} if method is None else {"solver_method": method}
+    warm_up = common.run_fmu(fmu_dir, common.input_schedule(scene), [(step, step, False)],
+                             [], start_values=start_values, budget=budget)
+    result = common.run_fmu(fmu_dir, common.input_schedule(scene), [(span, step, True)],
+                            forces, start_values=start_values, budget=budget)
+    reached = result["reached"]
+    error = common.force_error(result["time"], {n: result[n] for n in forces}, reference,
+                               scale) if len(result["time"]) > 1 else math.nan
+    steps = result["internal_steps"]
+    row = dict(scene=scene.name, method=method or "default", comm_step=step,
+               span_requested=span, span_simulated=reached, wall_s=result["wall"],
+               wall_per_sim_s=result["wall"] / reached if reached else math.nan,
+               startup_s=result["startup"], first_startup_s=warm_up["startup"],
+               error=error, internal_steps=steps if steps is not None else "",
+               steps_per_sim_s=steps / reached if steps and reached else "",
+               reference_wall_per_sim_s=float(reference["wall"]), status=result["status"])
+    log(f"  FMU ({row['method']}): {row['status']}, {reached:g} s in {row['wall_s']:.3g} s "
+        f"({row['wall_per_sim_s']:.3g} s/s), start-up {row['startup_s']:.3g} s "
+        f"(first {row['first_startup_s']:.3g} s), error {error:.3g}"
+        + (f", {row['steps_per_sim_s']:.4g} internal steps/s" if row["steps_per_sim_s"]
+           else ""))
+    return row
 
 
 def long_run(scene_path, periods=10_000, step=1e-3, window_periods=25, window_step=1e-5,
@@ -161,7 +176,7 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
     lines = ["# Extreme scenes and a long run through the FMU", "",
              *common.machine_record(command), ""]
     if rows:
-        base = next((r for r in rows if r["scene"] == "reference"), None)
+        bases = {r["method"]: r for r in rows if r["scene"] == "reference"}
         lines += ["Each scene through its FMU at the FMU's default settings, communication step "
                   "= the scene's output interval. Error: the largest |x − x_ref| of F_mesh and "
                   "the bearing reactions at the communication points, relative to the static "
@@ -169,15 +184,18 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
                   f"{reference_tolerance:g}. Wall time: stepping only. Start-up: instantiate + "
                   "initialize in a fresh process with compiled code cached (first: the very "
                   "first start of that FMU).", ""]
-        table = [[r["scene"], f"{r['span_simulated']:g}" + ("" if r["status"] == "ok" else "*"),
+        table = [[r["scene"], r["method"],
+                  f"{r['span_simulated']:g}" + ("" if r["status"] == "ok" else "*"),
                   f"{r['comm_step']:g}", common.number(r["error"]),
                   common.number(r["wall_per_sim_s"]),
-                  common.number(r["wall_per_sim_s"] / base["wall_per_sim_s"]) if base else "—",
+                  common.number(r["wall_per_sim_s"] / bases[r["method"]]["wall_per_sim_s"])
+                  if r["method"] in bases else "—",
                   common.number(r["steps_per_sim_s"] or None),
                   f"{common.number(r['startup_s'])} ({common.number(r['first_startup_s'])})",
                   common.number(r["reference_wall_per_sim_s"]), r["status"]]
                  for r in rows]
-        lines += common.markdown_table(["scene", "simulated s", "comm. step s", "error",
+        lines += common.markdown_table(["scene", "FMU method", "simulated s", "comm. step s",
+                                        "error",
                                         "wall s/s", "cost ÷ reference scene's",
                                         "internal steps/s", "start-up s (first)",
                                         "reference integration s/s", "status"], table)
@@ -230,6 +248,10 @@ def main(argv=None) -> int:
     parser.add_argument("--scenes", nargs="+", default=["models/*.toml"],
                         help="scene names, files or globs (default: models/*.toml)")
     parser.add_argument("--no-scenes", action="store_true", help="only the long run")
+    parser.add_argument("--fmu-methods", nargs="+", default=None,
+                        choices=("auto", "dop853", "radau", "exponential"),
+                        help="FMU solver_method values, a row each per scene (default: the "
+                             "FMU's own default)")
     parser.add_argument("--span-scale", type=positive("fraction of the stop time"),
                         help="simulate this fraction of each scene's stop time (default 1)")
     parser.add_argument("--max-span", type=positive("simulated seconds"), default=1.0,
@@ -271,7 +293,8 @@ def main(argv=None) -> int:
 
     rows = [] if args.no_scenes else scene_rows(
         common.scene_paths(args.scenes), span_scale=args.span_scale, max_span=args.max_span,
-        budget=args.budget, reference_tolerance=args.reference_tolerance, log=log)
+        budget=args.budget, reference_tolerance=args.reference_tolerance,
+        fmu_methods=args.fmu_methods or [None], log=log)
     long = None
     if args.periods > 0:
         long_scene = args.long_scene or next(
