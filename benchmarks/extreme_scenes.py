@@ -177,7 +177,8 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
              *common.machine_record(command), ""]
     if rows:
         bases = {r["method"]: r for r in rows if r["scene"] == "reference"}
-        lines += ["Each scene through its FMU at the FMU's default settings, communication step "
+        lines += ["Each scene through its FMU at the FMU's default settings (but solver_method "
+                  "where the FMU method column names one), communication step "
                   "= the scene's output interval. Error: the largest |x − x_ref| of F_mesh and "
                   "the bearing reactions at the communication points, relative to the static "
                   f"mesh force; reference: `reference_simulate` at tolerance "
