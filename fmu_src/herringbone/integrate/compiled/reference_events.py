@@ -36,8 +36,9 @@ def bumps(values, slopes, times):
 @njit(**COUNTED)
 def crossing_candidates(values, slopes, times):
     """(candidates, bumps): per event and node interval, whether the function may rise through
-    zero there: it rises through zero between the nodes (from the step's start, on zero or
-    below, it is due at once), or `bumps` flags a bulge."""
+    zero there: it rises through zero between the nodes (in the first interval it need only
+    end above zero: the step's start is on the near side, since had it been past, the step
+    before would have ended there), or `bumps` flags a bulge."""
     flagged = bumps(values, slopes, times)
     candidates = flagged.copy()
     events, nodes = values.shape
