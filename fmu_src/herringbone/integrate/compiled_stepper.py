@@ -269,18 +269,18 @@ class CompiledStepper:
     def _exact_tables(self, model, method, modes, step_tolerance):
         """The exponential method's modal forms of every contact set; where a set's linear
         system has no such form (a defective one: the gear pair alone with its points
-        unloaded has two free bodies), "auto" takes `runge_kutta_method`'s choice instead and
-        an explicit "exponential" is refused (ValueError)."""
+        unloaded has two free bodies), "auto" takes `runge_kutta_method`'s choice instead (its
+        rule was measured on scenes with every form), and an explicit "exponential" steps that
+        set by DOP853, as it does every set that is not exact."""
         force = model.force_scale()
         torque_scales = (force * model.geometry.radius_pinion, force * model.geometry.radius_wheel)
+        arguments = (model.system, model.mesh.period_table(), model.state_scales(),
+                     torque_scales, step_tolerance)
         try:
-            return exponential.build_tables(model.system, model.mesh.period_table(),
-                                            model.state_scales(), torque_scales, step_tolerance)
-        except np.linalg.LinAlgError as error:
+            return exponential.build_tables(*arguments)
+        except np.linalg.LinAlgError:
             if method == "exponential":
-                raise ValueError(f"method 'exponential' cannot take this scene: a contact set's "
-                                 f"linear system has no modal form ({error}); allowed: "
-                                 "'auto', 'dop853' or 'radau'") from None
+                return exponential.build_tables(*arguments, skip_defective=True)
             self.method = runge_kutta_method(modes)
             return None
 

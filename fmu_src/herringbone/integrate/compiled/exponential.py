@@ -248,16 +248,19 @@ def kept_modes(rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_tables(system: System, period_table, state_scales: np.ndarray,
-                 torque_scales: tuple[float, float], step_tolerance: float) -> ExactTables:
+                 torque_scales: tuple[float, float], step_tolerance: float,
+                 skip_defective: bool = False) -> ExactTables:
     """The ExactTables of a mesh period (mesh.period_table's lengths, counts, tables) for the
     stepper's state scales (GearTrainModel.state_scales), the torques' scales (N·m: motor,
-    load) and the step tolerance."""
+    load) and the step tolerance. A set and variant whose linear system has no modal form
+    raises np.linalg.LinAlgError, or with `skip_defective` is left out of the exact ones (its
+    segments are stepped by DOP853)."""
     scales = np.concatenate([state_scales, torque_scales, [1.0]])
     # The pinion angle runs over a whole contact interval, hundreds of its error scale, and the
     # rounding of the modal round trip grows with the largest scaled entry: it is measured by
     # the longest interval instead.
     scales[system.pinion] = max(scales[system.pinion], float(np.max(period_table[0])))
-    valid, forms, rows_of = _exact_forms(system, period_table, scales)
+    valid, forms, rows_of = _exact_forms(system, period_table, scales, skip_defective)
     size = 2 * system.mass.shape[0]
     width = size + INPUTS
     slow_width = max([len(form[3]) for form in forms.values()], default=1)
@@ -275,10 +278,11 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
         series=np.zeros((2, slow_width)))
 
 
-def _exact_forms(system: System, period_table, scales: np.ndarray):
+def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defective: bool):
     """(valid, forms, rows): per exact form's index interval·VARIANTS + variant, 1 where the
-    set and variant meet exact_condition; for those, (R, L, Λ, T_slow, the places of the fast
-    modes kept, their weights) and the tilt rows."""
+    set and variant meet exact_condition and have a modal form; for those, (R, L, Λ, T_slow,
+    the places of the fast modes kept, their weights) and the tilt rows. A set without a modal
+    form raises np.linalg.LinAlgError unless `skip_defective`."""
     lengths, counts, tables = period_table
     forms, rows_of = {}, {}
     valid = np.zeros(len(lengths) * VARIANTS, dtype=np.int64)
@@ -288,13 +292,19 @@ def _exact_forms(system: System, period_table, scales: np.ndarray):
             loaded = np.full(count, 1.0 if variant == ALL_LOADED else 0.0)
             a, b = linear_system(system, tables[interval], count, loaded)
             rows = tilt_rows(system, a)
-            if exact_condition(system, tables[interval], count, loaded, b, rows):
+            if not exact_condition(system, tables[interval], count, loaded, b, rows):
+                continue
+            try:
                 right, left, rates, slow = modal_form(a, b, scales)
                 kept, weights = kept_modes(rates[len(slow):])
-                place = interval * VARIANTS + variant
-                forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
-                rows_of[place] = rows
-                valid[place] = 1
+            except np.linalg.LinAlgError:
+                if not skip_defective:
+                    raise
+                continue
+            place = interval * VARIANTS + variant
+            forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
+            rows_of[place] = rows
+            valid[place] = 1
     return valid, forms, rows_of
 
 
