@@ -5,48 +5,17 @@ a fresh process with numba's allocation statistics on; every allocation must be 
 array passed in must end with the references it had."""
 
 import pytest
-from helpers.memory_probe import assert_kept, run_probe
+from helpers.memory_probe import assert_kept, probe, run_probe
 
-PROBE = r"""
-import json, sys
-import numpy as np
-from numba.core.runtime import rtsys
-import herringbone
-from herringbone.integrate.compiled_stepper import CompiledStepper
-from herringbone.integrate.contract import start_position
-from herringbone.model.assembly import GearTrainModel
-
-scene = herringbone.load_scene(sys.argv[1])
-model = GearTrainModel(scene)
-stepper = CompiledStepper(model, 1e-7, sys.argv[2])
-start = start_position(model, scene.inputs.at(0.0)[0])
-run = stepper.start(start)
-stepper.run_to(run, 1e-4, scene.inputs.at(0.0))  # loads (or compiles) the kernels first
-
-def arrays(value):
-    if isinstance(value, np.ndarray):
-        yield value
-    elif isinstance(value, tuple):
-        for item in value:
-            yield from arrays(item)
-
-given = list(arrays((stepper.system_arrays, stepper.mesh, stepper.settings, run.clock, run.place,
-                     run.state, run.loaded, run.first_steps, run.outputs, run.workspace)))
-def references():  # (one way of counting, before and after: a loop's own tuples hold one)
-    return [sys.getrefcount(array) for array in given]
-
-counted = references()
+PROBE = probe(
+    setup="stepper.run_to(run, 1e-4, torques)\n",
+    body="""
 before = rtsys.get_allocation_stats()
 for k in range(1, 41):
-    stepper.run_to(run, 1e-4 + k * float(sys.argv[3]), scene.inputs.at(0.0))
+    stepper.run_to(run, 1e-4 + k * interval, torques)
 after = rtsys.get_allocation_stats()
-print(json.dumps({
-    "allocated": after.alloc - before.alloc, "freed": after.free - before.free,
-    "records_made": after.mi_alloc - before.mi_alloc,
-    "records_freed": after.mi_free - before.mi_free,
-    "references_changed": sum(now != then for now, then in zip(references(), counted)),
-    "arrays": len(given)}))
-"""
+extra = {}
+""", given="()")
 
 
 @pytest.mark.parametrize("scene, method, interval", [

@@ -8,7 +8,7 @@ reference counts as walk.advance is, frees what it allocates and keeps what it i
 import numpy as np
 import pytest
 from helpers import MODELS
-from helpers.memory_probe import assert_kept, run_probe
+from helpers.memory_probe import assert_kept, probe, run_probe
 
 import herringbone
 from herringbone.integrate.compiled_stepper import (
@@ -157,48 +157,17 @@ def test_rows_of_the_wrong_shape_are_refused():
 
 
 # test_compiled_memory's check, of one call of CompiledStepper.sample through 40 sample times
-PROBE = r"""
-import json, sys
-import numpy as np
-from numba.core.runtime import rtsys
-import herringbone
-from herringbone.integrate.compiled_stepper import CompiledStepper
-from herringbone.integrate.contract import start_position
-from herringbone.model.assembly import GearTrainModel
-
-scene = herringbone.load_scene(sys.argv[1])
-model = GearTrainModel(scene)
-stepper = CompiledStepper(model, 1e-7, sys.argv[2])
-run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-interval, torques = float(sys.argv[3]), scene.inputs.at(0.0)
+PROBE = probe(
+    setup="""
 rows = np.empty((40, len(run.outputs)))
-stepper.sample(run, np.array([1e-4]), rows[:1], 1e-4, torques)  # loads (or compiles) it first
+stepper.sample(run, np.array([1e-4]), rows[:1], 1e-4, torques)
 times = 1e-4 + interval * np.arange(1, 41)
-
-def arrays(value):
-    if isinstance(value, np.ndarray):
-        yield value
-    elif isinstance(value, tuple):
-        for item in value:
-            yield from arrays(item)
-
-given = list(arrays((stepper.system_arrays, stepper.mesh, stepper.settings, run.clock, run.place,
-                     run.state, run.loaded, run.first_steps, run.outputs, run.workspace, times,
-                     rows)))
-def references():
-    return [sys.getrefcount(array) for array in given]
-
-counted = references()
+""", body="""
 before = rtsys.get_allocation_stats()
 stepper.sample(run, times, rows, times[-1] + interval, torques)
 after = rtsys.get_allocation_stats()
-print(json.dumps({
-    "allocated": after.alloc - before.alloc, "freed": after.free - before.free,
-    "records_made": after.mi_alloc - before.mi_alloc,
-    "records_freed": after.mi_free - before.mi_free,
-    "references_changed": sum(now != then for now, then in zip(references(), counted)),
-    "arrays": len(given), "sampled": bool(np.ptp(rows, axis=0).max() > 0.0)}))
-"""
+extra = {"sampled": bool(np.ptp(rows, axis=0).max() > 0.0)}
+""", given="times, rows")
 
 
 @pytest.mark.parametrize("scene, method, interval", [
