@@ -12,6 +12,8 @@ map from it (docs/monodromy.md).
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..model.assembly import GearTrainModel
@@ -26,6 +28,7 @@ FAILURES = {variational.Status.TOO_MANY_EVENTS: "events without end (chattering 
             variational.Status.NOT_FINITE: "the state is no longer finite"}
 
 
+@functools.cache
 def error_constant() -> float:
     """C of DOP853's eigenvalue error C·|λ|⁹·h⁸, the largest over the left half-plane's
     directions at |h·λ| = ERROR_CONSTANT_AT (above it where the error grows faster)."""

@@ -215,7 +215,7 @@ def point_at(points, i, travel):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _contact_motion(system, state):
+def contact_motion(system, state):
     """g̃·y and g̃·ẏ of the base and tilt parts of a contact row (m, m/s per unit lever arm
     for the tilt), and the axial travel (m)."""
     n = system.mass.shape[0]
@@ -231,7 +231,7 @@ def _contact_motion(system, state):
 @njit(cache=True, error_model="numpy", inline="always")
 def point_approach(system, motion, lever_arm, lead_error):
     """δ + η·δ̇ (m) of a point with this lever arm (m) and lead error (m), from
-    _contact_motion's sums: its load per unit stiffness (the point's force, N, is its stiffness
+    contact_motion's sums: its load per unit stiffness (the point's force, N, is its stiffness
     times this)."""
     base, tilt, base_rate, tilt_rate, _ = motion
     return (base + lever_arm * tilt + lead_error
@@ -255,7 +255,7 @@ def point_geometry(system, points, count, pinion_travel_angle):
 def approaches(system, points, count, state, out):
     """out[i] = δ + η·δ̇ (m) of point i < count at `state`: its load per unit stiffness. A
     point is loaded while this is positive, even where its stiffness ramps from zero."""
-    motion = _contact_motion(system, state)
+    motion = contact_motion(system, state)
     travel = motion[4]
     for i in range(count):
         _, lever_arm, lead_error = point_at(points, i, travel)
@@ -268,9 +268,9 @@ def approach_rates(system, points, count, state, rate, out):
     """out[i] = d/dt (δ + η·δ̇) (m/s) of point i < count, from the state and its derivative
     `rate` (as `derivative` writes it): with the values of `approaches` at both ends of a step,
     it shows a point that lifts off and lands again within the step (walk.py)."""
-    _, tilt, _, tilt_rate, travel = _contact_motion(system, state)
+    _, tilt, _, tilt_rate, travel = contact_motion(system, state)
     # the same sums over the derivative: g̃·ẏ and g̃·ÿ of the base and tilt parts
-    base_rate, _, base_acceleration, tilt_acceleration, _ = _contact_motion(system, rate)
+    base_rate, _, base_acceleration, tilt_acceleration, _ = contact_motion(system, rate)
     travel_rate = system.axial_travel_per_radian * rate[system.pinion]
     eta = system.mesh_damping_factor
     for i in range(count):
@@ -300,7 +300,7 @@ def derivative(system, points, count, loaded, motor_torque, load_torque, state, 
     and its loaded points (loaded[i] = 1.0) fixed, the motor driving with `motor_torque` and the
     load resisting with `load_torque` (N·m). `out` must not be `state`."""
     n = system.mass.shape[0]
-    motion = _contact_motion(system, state)
+    motion = contact_motion(system, state)
     travel = motion[4]
     total = moment = 0.0  # Σ F and Σ ζ·F of the points
     for i in range(count):
@@ -354,7 +354,7 @@ def outputs(system, points, count, loaded, state, out):
     holds FIRST_ELEMENT_FORCE + elements + coordinates entries."""
     n = system.mass.shape[0]
     out[:FIRST_ELEMENT_FORCE] = 0.0
-    motion = _contact_motion(system, state)
+    motion = contact_motion(system, state)
     travel = motion[4]
     for i in range(count):
         if loaded[i] != 0.0:

@@ -41,7 +41,9 @@ from .equations import (
     STIFFNESS_SLOPE,
     Event,
     PeriodTable,
+    contact_motion,
     derivative,
+    point_approach,
     point_at,
     unpack_system,
 )
@@ -72,21 +74,15 @@ def contact_gradients(system, points, count, loaded, state, total_row, moment_ro
     n = system.mass.shape[0]
     base_row, tilt_row = system.contact_row_base_relative, system.contact_row_tilt_relative
     eta, speed_of_travel = system.mesh_damping_factor, system.axial_travel_per_radian
-    base = tilt = base_rate = tilt_rate = 0.0
-    for j in range(n):
-        base += base_row[j] * state[j]
-        tilt += tilt_row[j] * state[j]
-        base_rate += base_row[j] * state[n + j]
-        tilt_rate += tilt_row[j] * state[n + j]
-    travel = speed_of_travel * state[system.pinion]
+    motion = contact_motion(system, state)
+    _, tilt, _, tilt_rate, travel = motion
     stiffness_sum = lever_sum = lever_square_sum = 0.0  # Σ c, Σ c·ζ, Σ c·ζ²
     total_travel = moment_travel = 0.0  # ∂/∂(travel) of Σ F and Σ ζ·F
     for i in range(count):
         if loaded[i] == 0.0:
             continue
         stiffness, lever_arm, lead_error = point_at(points, i, travel)
-        approach = (base + lever_arm * tilt + lead_error
-                    + eta * (base_rate + lever_arm * tilt_rate))
+        approach = point_approach(system, motion, lever_arm, lead_error)
         # ∂(approach)/∂(travel): the lever arm and lead error move with it
         approach_travel = (points[LEVER_ARM_SLOPE, i] * (tilt + eta * tilt_rate)
                            + points[LEAD_ERROR_SLOPE, i])
@@ -137,39 +133,46 @@ def sensitivity_rate(system, points, count, loaded, state, sensitivity, rows, su
             out[row, c] += elastic * sensitivity[k, c] + damping * sensitivity[n + k, c]
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def weighted_sum(weights, stages, count, j):
+    """Σ_k<count weights[k]·stages[k, j]: a stage's or the solution's sum of DOP853, in one
+    order wherever it is formed, so that the state's steps end on the same bits."""
+    total = 0.0
+    for k in range(count):
+        total += weights[k] * stages[k, j]
+    return total
+
+
 @njit(cache=True, error_model="numpy")
-def dop853_step(system, segment, state, h, stages, stage_state, out):
-    """One fixed DOP853 step of h (s) of the state alone into `out` (stages: N_STAGES rows of
-    the state's size, stage_state one: scratch). Its sums are variational_step's, term by
-    term, so that the two end on the same bits."""
+def dop853_step(system, segment, state, h, stages, stage_states, out):
+    """One fixed DOP853 step of h (s) of the state alone into `out`; stages and stage_states
+    (N_STAGES rows of the state's size) keep each stage's derivative and state, which
+    variational_step then takes over for a step of the same h from the same state."""
     size = state.shape[0]
     for stage in range(N_STAGES):
         for j in range(size):
-            total = 0.0
-            for k in range(stage):
-                total += STAGE_WEIGHTS[stage, k] * stages[k, j]
-            stage_state[j] = state[j] + h * total
+            stage_states[stage, j] = state[j] + h * weighted_sum(STAGE_WEIGHTS[stage], stages,
+                                                                  stage, j)
         derivative(system, segment.points, segment.point_count, segment.loaded,
-                   segment.motor_torque, segment.load_torque, stage_state, stages[stage])
+                   segment.motor_torque, segment.load_torque, stage_states[stage],
+                   stages[stage])
     for j in range(size):
-        total = 0.0
-        for k in range(N_STAGES):
-            total += SOLUTION_WEIGHTS[k] * stages[k, j]
-        out[j] = state[j] + h * total
+        out[j] = state[j] + h * weighted_sum(SOLUTION_WEIGHTS, stages, N_STAGES, j)
 
 
 @njit(cache=True, error_model="numpy")
-def variational_step(system, segment, state, sensitivity, h, work):
+def variational_step(system, segment, state, sensitivity, h, work, stepped):
     """One fixed DOP853 step of h (s) of the state and its sensitivity together, in place: the
-    sensitivity's stages are the linearized stages J(stage state)·(stage sensitivity)."""
-    stages, stage_state, sensitivity_stages, stage_sensitivity, rows, sums = work
+    sensitivity's stages are the linearized stages J(stage state)·(stage sensitivity).
+    `stepped`: dop853_step has just made this step of the state (same h, same start) into
+    work's stages and stage states, which are taken as they are."""
+    stages, stage_states, sensitivity_stages, stage_sensitivity, rows, sums = work
     size, columns = sensitivity.shape
     for stage in range(N_STAGES):
         for j in range(size):
-            total = 0.0
-            for k in range(stage):
-                total += STAGE_WEIGHTS[stage, k] * stages[k, j]
-            stage_state[j] = state[j] + h * total
+            if not stepped:
+                stage_states[stage, j] = state[j] + h * weighted_sum(STAGE_WEIGHTS[stage],
+                                                                      stages, stage, j)
             # the sensitivity's sums by columns, each term independent of the last: the
             # columns' loop is the innermost and vectorizes
             for c in range(columns):
@@ -179,15 +182,15 @@ def variational_step(system, segment, state, sensitivity, h, work):
                 if weight != 0.0:
                     for c in range(columns):
                         stage_sensitivity[j, c] += weight * sensitivity_stages[k, j, c]
-        derivative(system, segment.points, segment.point_count, segment.loaded,
-                   segment.motor_torque, segment.load_torque, stage_state, stages[stage])
+        if not stepped:
+            derivative(system, segment.points, segment.point_count, segment.loaded,
+                       segment.motor_torque, segment.load_torque, stage_states[stage],
+                       stages[stage])
         sensitivity_rate(system, segment.points, segment.point_count, segment.loaded,
-                         stage_state, stage_sensitivity, rows, sums, sensitivity_stages[stage])
+                         stage_states[stage], stage_sensitivity, rows, sums,
+                         sensitivity_stages[stage])
     for j in range(size):
-        total = 0.0
-        for k in range(N_STAGES):
-            total += SOLUTION_WEIGHTS[k] * stages[k, j]
-        state[j] += h * total
+        state[j] += h * weighted_sum(SOLUTION_WEIGHTS, stages, N_STAGES, j)
         for k in range(N_STAGES):
             weight = h * SOLUTION_WEIGHTS[k]
             if weight != 0.0:
@@ -201,7 +204,7 @@ def locate(system, segment, state, event, high, values_low, values_high, work):
     step's ends in values_low, values_high), by regula falsi (Illinois) on trial steps of the
     state; another event found to cross first is located instead. Returns (the event, the
     bracket's high end, s: the event has crossed there)."""
-    stages, stage_state, trial, trial_values, approach = work
+    stages, stage_states, trial, trial_values, approach = work
     low = 0.0
     tolerance = EVENT_LOCATION * high
     low_value, high_value = values_low[event], values_high[event]
@@ -213,7 +216,7 @@ def locate(system, segment, state, event, high, values_low, values_high, work):
                     if high_value != low_value else 0.5 * (low + high))
         if not low < estimate < high:
             estimate = 0.5 * (low + high)
-        dop853_step(system, segment, state, estimate, stages, stage_state, trial)
+        dop853_step(system, segment, state, estimate, stages, stage_states, trial)
         event_values(system, segment, trial, approach, trial_values)
         crossed = first_crossing(values_low, trial_values, segment.events, segment.loaded)
         if crossed < 0:
@@ -279,11 +282,11 @@ def flow_sensitivity(floats, ints, mesh_arrays, interval, cycle, loaded_in, stat
     state, sensitivity = state_in.copy(), directions.copy()
     loaded = loaded_in.copy()
     width = Event.CONTACT + loaded.shape[0]
-    stages, stage_state = np.empty((N_STAGES, size)), np.empty(size)
-    work = (stages, stage_state, np.empty((N_STAGES, size, columns)),
+    stages, stage_states = np.empty((N_STAGES, size)), np.empty((N_STAGES, size))
+    work = (stages, stage_states, np.empty((N_STAGES, size, columns)),
             np.empty((size, columns)), np.empty((2, size)), np.empty((2, columns)))
     trial, values = np.empty(size), np.empty((4, width))
-    location = (stages, stage_state, trial, values[2], np.empty(loaded.shape[0]))
+    location = (stages, stage_states, trial, values[2], np.empty(loaded.shape[0]))
     rates = np.empty((2, size))
     time, events, status = 0.0, 0, Status.OK
     while time < duration and status == Status.OK:
@@ -292,13 +295,14 @@ def flow_sensitivity(floats, ints, mesh_arrays, interval, cycle, loaded_in, stat
         if duration - time - h <= 1e-12 * duration:
             h = duration - time
         event_values(system, segment, state, location[4], values[0])
-        dop853_step(system, segment, state, h, stages, stage_state, trial)
+        dop853_step(system, segment, state, h, stages, stage_states, trial)
         event_values(system, segment, trial, location[4], values[1])
         event = first_crossing(values[0], values[1], segment.events, loaded)
         if event >= 0:
             event, h = locate(system, segment, state, event, h, values[0], values[1],
                               location)
-        variational_step(system, segment, state, sensitivity, h, work)
+        # without an event the trial was this very step: its stages are taken over
+        variational_step(system, segment, state, sensitivity, h, work, event < 0)
         time = duration if h == duration - time else time + h
         if event >= 0:
             events += 1
