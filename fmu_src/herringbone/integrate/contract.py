@@ -132,13 +132,22 @@ def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
             on_sample(t, outputs)
 
     position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
-    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
-    for start, end in zip([0.0] + changes, changes + [stop_time]):
+    for start, end in input_pieces(scene, stop_time):
         position = stepper.advance(position, end, scene.inputs.at(start), times, store)
-    # the stop time itself, with the segment that holds from there on
-    store(times[-1], model.outputs(position.state, position.segment.contact_set,
-                                   position.segment.loaded))
+    store(times[-1], final_outputs(model, position))
     return Result(time=times, **results)
+
+
+def input_pieces(scene, stop_time: float) -> list[tuple[float, float]]:
+    """(start, end) of each piece of the scene's input table within [0, stop_time] (s): the
+    torques hold over each."""
+    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
+    return list(zip([0.0] + changes, changes + [stop_time]))
+
+
+def final_outputs(model, position: Position) -> dict[str, float]:
+    """The outputs at the stop time itself, with the segment that holds from there on."""
+    return model.outputs(position.state, position.segment.contact_set, position.segment.loaded)
 
 
 def sampled_run(stepper: SamplingStepper, scene, stop_time: float, times: np.ndarray,
@@ -149,15 +158,12 @@ def sampled_run(stepper: SamplingStepper, scene, stop_time: float, times: np.nda
     model = stepper.model
     rows = np.empty((len(times), model.output_layout_size))
     position = start_position(model, scene.inputs.at(0.0)[0], initial_pinion_angle)
-    changes = [t for t in scene.inputs.change_times() if 0.0 < t < stop_time]
-    for start, end in zip([0.0] + changes, changes + [stop_time]):
+    for start, end in input_pieces(scene, stop_time):
         first, after = np.searchsorted(times, [position.time, end])
         position = stepper.advance_sampled(position, end, scene.inputs.at(start),
                                            times[first:after], rows[first:after])
     slots = dict(model.output_layout)
     results = {name: np.ascontiguousarray(rows[:, slots[name]]) for name in model.output_names}
-    # the stop time itself, with the segment that holds from there on
-    final = model.outputs(position.state, position.segment.contact_set, position.segment.loaded)
-    for name, value in final.items():
+    for name, value in final_outputs(model, position).items():
         results[name][-1] = value
     return Result(time=times, **results)
