@@ -176,7 +176,6 @@ NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 # is shared by as many
 SAMPLES_PER_CALL = 64
 
-PHASE_SLACK = walk.PHASE_SLACK  # its home: compiled/walk.py
 COMPLETED = int(walk.Status.OK)  # as an int: compared after every call, unlike an enum's lookup
 
 
@@ -252,10 +251,6 @@ class CompiledStepper:
         self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
                               if check_contact else -1.0)
         self.lengths, self.counts, self.tables = model.mesh.period_table()
-        # the same as Python floats, and the pinion's index as an int: the check after every
-        # call reads them in plain Python, where numpy's scalars cost a microsecond a call
-        self.interval_lengths = [float(length) for length in self.lengths]
-        self.pinion = int(model.pinion)
         self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
         self.system_arrays = model.packed_system
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
@@ -324,11 +319,6 @@ class CompiledStepper:
         self.accepted_steps += steps
         if status != COMPLETED:
             self._fail(status, run, steps, end)
-        # every method ends within its contact interval; a state past it (one so large that
-        # its rounding hides the phase events: a torque of 1e300 N·m) is no result to return
-        length = self.interval_lengths[run.place.item(0)]
-        if not -PHASE_SLACK * length <= run.state.item(self.pinion) <= (1 + PHASE_SLACK) * length:
-            self._fail(walk.Status.LEFT_INTERVAL, run, steps, end)
 
     def sample(self, run: Run, times: np.ndarray, rows: np.ndarray, end: float,
                torques: tuple[float, float], max_steps: int | None = None,

@@ -77,6 +77,11 @@ from .equations import (
     unpack_system,
 )
 
+# How far past its contact interval (a fraction of its length) a run's pinion may end: the
+# event rules place it within 1e-12 of a pitch. A state past that is one so large that its
+# rounding hides the phase events (a torque of 1e300 N·m), no result to return.
+PHASE_SLACK = 1e-6
+
 
 class Status(IntEnum):
     """How `advance` ended (CompiledStepper.run_to raises for all but OK)."""
@@ -88,7 +93,7 @@ class Status(IntEnum):
     CHATTER = 4  # MAX_PHASE_REVERSALS phase events in a row, each undoing the last
     CONTACT_VIOLATED = 5  # the debug check found tension or penetration inside a step
     OVER_BUDGET = 6  # `max_steps` steps taken short of `end`
-    LEFT_INTERVAL = 7  # the pinion ended outside its contact interval (advance_sampled's check)
+    LEFT_INTERVAL = 7  # the pinion ended outside its contact interval, past PHASE_SLACK
 
 
 class Method(IntEnum):
@@ -1013,6 +1018,12 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     if status == Status.OK and not all_finite(run.state):
         status = Status.NOT_FINITE
     interval = run.place[0]
+    # every method ends within its contact interval; a state past it (one so large that its
+    # rounding hides the phase events: a torque of 1e300 N·m) is no result to return
+    length = mesh.lengths[interval]
+    if status == Status.OK and not (-PHASE_SLACK * length <= run.state[system.pinion]
+                                    <= (1 + PHASE_SLACK) * length):
+        status = Status.LEFT_INTERVAL
     outputs(system, mesh.tables[interval], mesh.counts[interval], run.loaded, run.state,
             run.outputs)
     return status.value, steps  # an int: numba hands an IntEnum member back at 0.8 µs a call
@@ -1133,54 +1144,29 @@ def begin_walk(workspace):
 
 # --- a run sampled in one call ----------------------------------------------------------------
 
-# How far past its contact interval (a fraction of its length) a run's pinion may end: the
-# event rules place it within 1e-12 of a pitch. A state past that is one so large that its
-# rounding hides the phase events (a torque of 1e300 N·m), no result to return.
-PHASE_SLACK = 1e-6
-
-
 @njit(**UNCOUNTED)
 def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, end, torques,
                     max_steps):
     """Integrate a run through its sample times to `end` (s) in one call, with the torques
     (motor, load; N·m) held: to each of `times` (s, rising, none past `end`) in turn, its
     outputs (equations.outputs, as the run's `outputs`) then written into the row of `rows` of
-    the same index, and on to `end`. Each stretch is one call of `advance` (`advance_stretch`),
-    so the run and the rows are to the bit those of one `advance` per time. At most
-    `max_steps` steps in all. Returns (the Status's value, accepted steps, rows written): it
-    stops at the first stretch that fails, or that leaves the pinion outside its contact
-    interval (Status.LEFT_INTERVAL), with the run where that stretch left it.
+    the same index, and on to `end`. Each stretch is one call of `advance`, so the run and the
+    rows are to the bit those of one `advance` per time. At most `max_steps` steps in all.
+    Returns (the Status's value, accepted steps, rows written): it stops at the first stretch
+    that fails, with the run where that stretch left it.
 
     The records come as `advance` takes them; `rows` is C-contiguous, a row as long as the
     run's outputs. Compiled UNCOUNTED, as `advance`."""
-    pinion = unpack_system(system_arrays[0], system_arrays[1]).pinion
+    position = RunArrays(*run)
     samples, steps = times.shape[0], 0
     for k in range(samples + 1):
         target = times[k] if k < samples else end
-        status, taken = advance_stretch(system_arrays, mesh, settings, run, workspace, target,
-                                        torques, max_steps - steps, pinion)
-        steps += taken
-        if status != Status.OK.value:
-            return status, steps, k
+        if target > position.clock[0]:
+            status, taken = advance(system_arrays, mesh, settings, run, workspace, target,
+                                    torques, max_steps - steps)
+            steps += taken
+            if status != Status.OK.value:
+                return status, steps, k
         if k < samples:
-            copy_into(rows[k], RunArrays(*run).outputs)
+            copy_into(rows[k], position.outputs)
     return Status.OK.value, steps, samples
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def advance_stretch(system_arrays, mesh, settings, run, workspace, end, torques, max_steps,
-                    pinion):
-    """One stretch of advance_sampled: `advance` to `end` (s) where that is past the run's
-    time, then the check that the pinion (its index in the state: `pinion`) ended within its
-    contact interval, to PHASE_SLACK of its length. Returns (the Status's value, accepted
-    steps)."""
-    position = RunArrays(*run)
-    if end <= position.clock[0]:
-        return Status.OK.value, 0
-    status, steps = advance(system_arrays, mesh, settings, run, workspace, end, torques,
-                            max_steps)
-    length = PeriodTable(*mesh).lengths[position.place[0]]
-    if status == Status.OK.value and not (-PHASE_SLACK * length <= position.state[pinion]
-                                          <= (1 + PHASE_SLACK) * length):
-        return Status.LEFT_INTERVAL.value, steps
-    return status, steps
