@@ -5,8 +5,9 @@ start from `position`, integrate with the torques held to exactly `end`, stoppin
 switch, contact loss and regain; the result depends only on the position passed in, so a saved
 position re-runs identically. One call is one pass through compiled code, however many switches
 the span holds, and through any number of sample times: `sample` (compiled/walk.py's
-advance_sampled) stops at each and writes its outputs into a row of an array, the same to the
-bit as stopping there by a call of its own. A caller that steps on and on (the FMU) keeps a
+advance_sampled) writes the outputs at each into a row of an array, stopping there as a call
+of its own would, to the bit, or where the segment is exact, taking them from its exact
+solution inside the step that passes them. A caller that steps on and on (the FMU) keeps a
 `Run` instead, which `run_to` advances in place, and takes a Position of it only to save it.
 
 Methods (`method`):
@@ -325,12 +326,14 @@ class CompiledStepper:
                on_sample=None) -> None:
         """Integrate the run through `times` (s, rising, in [run's time, end]) to `end` with
         the torques held, in place, in one call of compiled code (walk.advance_sampled): rows[k]
-        gets the outputs (model.output_layout) at times[k]. The run and the rows are to the bit
-        those of run_to to each time in turn, then to `end`; a time not past the run's takes
-        the outputs the run holds. Raises as run_to would (a budget of `max_steps` steps for
-        the whole call), once on_sample(t, outputs by name), if given, has been called for
-        every row written before the failure. `rows`: C-contiguous, len(times) rows of the
-        run's outputs' length."""
+        gets the outputs (model.output_layout) at times[k]. Where the run's segments are exact
+        (the exponential method), a sample comes from the exact solution inside the step that
+        passes it, and the steps are those of run_to straight to `end`; elsewhere the run and
+        the rows are to the bit those of run_to to each time in turn, then to `end`. A time not
+        past the run's takes the outputs the run holds. Raises as run_to would (a budget of
+        `max_steps` steps for the whole call), once on_sample(t, outputs by name), if given,
+        has been called for every row written before the failure. `rows`: C-contiguous,
+        len(times) rows of the run's outputs' length."""
         times = np.ascontiguousarray(times, dtype=float)
         if rows.shape != (len(times), len(run.outputs)) or not rows.flags.c_contiguous:
             raise ValueError(f"rows: {rows.shape}, C-contiguous {rows.flags.c_contiguous}; "
@@ -359,27 +362,35 @@ class CompiledStepper:
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:
         """Integrate to `end`; for every t in `sample_times` (rising) with position.time <= t <
-        end, call on_sample(t, outputs) with the outputs at t (the run stops there exactly).
-        The samples of SAMPLES_PER_CALL times at a time are taken in one compiled call
+        end, call on_sample(t, outputs) with the outputs at t. The samples are taken as
+        advance_sampled takes them, to the bit: SAMPLES_PER_CALL at a time in one compiled call
         (`sample`), and handed to on_sample after it."""
         run = self.start(position)
         times = np.asarray(sample_times, dtype=float)
         times = times[(position.time <= times) & (times < end)]
-        rows = np.empty((min(len(times), SAMPLES_PER_CALL), len(run.outputs)))
-        for first in range(0, max(len(times), 1), SAMPLES_PER_CALL):
-            chunk = times[first:first + SAMPLES_PER_CALL]
-            after = first + SAMPLES_PER_CALL
-            self.sample(run, chunk, rows[:len(chunk)], times[after] if after < len(times) else end,
-                        torques, on_sample=on_sample)
+        self._sample_in_calls(run, times, None, end, torques, on_sample)
         return self.position(run)
 
     def advance_sampled(self, position: Position, end: float, torques: tuple[float, float],
                         times: np.ndarray, rows: np.ndarray) -> Position:
         """Integrate to `end`; rows[k] gets the outputs (model.output_layout) at times[k]
-        (rising, in [position.time, end)), all in one compiled call (`sample`)."""
+        (rising, in [position.time, end)), SAMPLES_PER_CALL at a time in one compiled call
+        (`sample`)."""
         run = self.start(position)
-        self.sample(run, times, rows, end, torques)
+        self._sample_in_calls(run, times, rows, end, torques)
         return self.position(run)
+
+    def _sample_in_calls(self, run: Run, times: np.ndarray, rows: np.ndarray | None,
+                         end: float, torques: tuple[float, float], on_sample=None) -> None:
+        """`sample` over SAMPLES_PER_CALL times at a time, each call ending at the next one's
+        first time (so that a run sampled with a callback and one sampled into an array take
+        the same steps): into `rows`, or where None, into rows of scratch."""
+        scratch = np.empty((min(len(times), SAMPLES_PER_CALL), len(run.outputs)))
+        for first in range(0, max(len(times), 1), SAMPLES_PER_CALL):
+            chunk, after = times[first:first + SAMPLES_PER_CALL], first + SAMPLES_PER_CALL
+            self.sample(run, chunk, scratch[:len(chunk)] if rows is None else rows[first:after],
+                        times[after] if after < len(times) else end, torques,
+                        on_sample=on_sample)
 
 
 def warm_up(stepper: CompiledStepper, position: Position) -> float | None:

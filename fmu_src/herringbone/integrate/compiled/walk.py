@@ -216,6 +216,13 @@ class StepPlan(NamedTuple):
     aimed: bool  # whether it is aimed to end just past a predicted phase event
 
 
+class Samples(NamedTuple):
+    """The sample times of a run sampled in one call (`advance_sampled`) and the rows their
+    outputs go to."""
+    times: np.ndarray  # s, rising
+    rows: np.ndarray  # one row of equations.outputs per time
+
+
 class StepRows(NamedTuple):
     """Views of the rows of the workspace and the settings that every step uses, made once
     per call of `advance` (`step_rows`): a view made at every step is an array numba
@@ -370,6 +377,52 @@ def _exact_step(system, segment, state, workspace, h, out):
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
         == exponential.ALL_LOADED else -1.0, out)
+
+
+def stop_at(samples, k, end, exact):
+    """Where the loop stops: at `end`, or where the segment is not exact (its exact form
+    `exact` < 0), at the sample time `k` of `samples` if that comes first (a sampled run's
+    other segments take their samples inside their steps: `sample_inside`). `end` for a run
+    without samples (None)."""
+
+
+@overload(stop_at, inline="always")
+def _stop_at(samples, k, end, exact):
+    if isinstance(samples, types.NoneType):
+        return lambda samples, k, end, exact: end
+
+    def stop(samples, k, end, exact):
+        if exact >= 0 or k >= samples.times.shape[0]:
+            return end
+        return min(end, samples.times[k])
+    return stop
+
+
+def sample_inside(samples, k, system, segment, state, workspace, time, until):
+    """exact_samples where the run has samples; k (none taken) for a run without (None)."""
+
+
+@overload(sample_inside, inline="always")
+def _sample_inside(samples, k, system, segment, state, workspace, time, until):
+    if isinstance(samples, types.NoneType):
+        return lambda samples, k, system, segment, state, workspace, time, until: k
+    return lambda samples, k, system, segment, state, workspace, time, until: exact_samples(
+        system, segment, state, workspace, samples.times, samples.rows, k, time, until)
+
+
+@njit(**NUMBERS_ONLY)
+def exact_samples(system, segment, state, workspace, times, rows, k, time, until):
+    """The outputs (equations.outputs) at every sample time from the `k`-th on that lies in
+    [time, until) (s) into its row of `rows`, each from the exact solution of the segment (an
+    exact one) from `state` at `time`: an accepted step, or the bracket of a located event,
+    covers them, and the solution anywhere in it is as exact as at its end. Returns the index
+    of the first sample left."""
+    scratch = workspace.vectors[Vector.TRIAL]
+    while k < times.shape[0] and times[k] < until:
+        exact_step(system, segment, state, workspace, times[k] - time, scratch)
+        outputs(system, segment.points, segment.point_count, segment.loaded, scratch, rows[k])
+        k += 1
+    return k
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -914,8 +967,8 @@ def count_progress(counters, event, high, h_step):
 @njit(cache=True, error_model="numpy", inline="always")
 def pass_event(state, workspace, clock, time, end, plan, high, event):
     """Move the run past the crossing of `event` located at `high` (s from the step's start)
-    by the accepted step of `plan` (a StepPlan) from `time` (s; the run's end: `end`): the
-    state there (NEW_STATE) and the time. Returns count_progress's Status."""
+    by the accepted step of `plan` (a StepPlan) from `time` (s; where the step would land:
+    `end`): the state there (NEW_STATE) and the time. Returns count_progress's Status."""
     copy_into(state, workspace.vectors[Vector.NEW_STATE])
     clock[0] = end if plan.landing and high == plan.h_step else time + high
     return count_progress(workspace.counters, event, high, plan.h_step)
@@ -1011,10 +1064,23 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
     written back, also where the run fails; its `outputs` get equations.outputs there);
     workspace, a Workspace. Compiled UNCOUNTED (counting.py): its body neither allocates nor
     copies by slices."""
+    status, steps, _ = advance_to(system_arrays, mesh, settings, run, workspace, end, torques,
+                                  max_steps, None, 0)
+    return status, steps
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def advance_to(system_arrays, mesh, settings, run, workspace, end, torques, max_steps, samples,
+               k):
+    """advance's body, and one stretch of advance_sampled's (`samples`: its Samples, the
+    `k`-th the next to take; None in advance): the run integrated to `end`, or to where
+    `stop_at` stops it first. Returns (the Status's value, accepted steps, the next sample's
+    index)."""
     system = unpack_system(system_arrays[0], system_arrays[1])
     mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), open_workspace(workspace)
     begin_walk(workspace)
-    status, steps = walk(system, mesh, settings, run, workspace, end, torques, max_steps)
+    status, steps, k = walk(system, mesh, settings, run, workspace, end, torques, max_steps,
+                            samples, k)
     if status == Status.OK and not all_finite(run.state):
         status = Status.NOT_FINITE
     interval = run.place[0]
@@ -1026,24 +1092,29 @@ def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_ste
         status = Status.LEFT_INTERVAL
     outputs(system, mesh.tables[interval], mesh.counts[interval], run.loaded, run.state,
             run.outputs)
-    return status.value, steps  # an int: numba hands an IntEnum member back at 0.8 µs a call
+    return status.value, steps, k  # an int: numba hands an IntEnum member back at 0.8 µs a call
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
+def walk(system, mesh, settings, run, workspace, end, torques, max_steps, samples, k):
     """advance's loop (after begin_walk): steps, and segments ended at events (cross_event),
-    until the run's time is `end` or the run fails. Returns (Status, accepted steps). What
-    runs at every step is written out here: an inlined helper given a record counts it."""
+    until the run's time is `end`, or where stop_at stops it first, or the run fails; on the
+    way, the samples from the `k`-th on (a Samples; None: none) that its exact segments pass
+    (sample_inside). Returns (Status, accepted steps, the next sample's index). What runs at
+    every step is written out here: an inlined helper given a record counts it."""
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit, rtol = is_explicit(workspace), settings[Setting.RELATIVE_TOLERANCE]
     segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques, workspace)
     steps, status, controller, h = 0, Status.OK, Controller(1e-4, False), clock[1]
-    while clock[0] < end and status == Status.OK:
+    while status == Status.OK:
+        target = stop_at(samples, k, end, segment.exact)
+        if clock[0] >= target:
+            break
         time, h = clock[0], clock[1]
         ahead = phase_event_ahead(system, state, rows.rate, segment.length) if explicit else NEVER
         plan = plan_step(settings[Setting.EXACT_MAX_STEP if segment.exact >= 0
-                                  else Setting.MAX_STEP], time, end, h, ahead)
+                                  else Setting.MAX_STEP], time, target, h, ahead)
         status = step_allowed(steps, max_steps, time, plan)
         if status != Status.OK:
             break
@@ -1080,16 +1151,19 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps):
             event, high = grazing_probe(system, segment, settings, state, workspace,
                                         plan.h_step, event)
         if event >= 0:
-            status, segment = cross_event(system, mesh, settings, run, workspace, torques,
-                                          segment, plan, end, event, high)
+            status, segment, k = cross_event(system, mesh, settings, run, workspace, torques,
+                                             segment, plan, target, event, high, samples, k)
         elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
                 contact_violated_inside(system, segment, settings, state, workspace, plan.h_step):
             status = Status.CONTACT_VIOLATED
         else:
+            reached = target if plan.landing else time + plan.h_step
+            if segment.exact >= 0:
+                k = sample_inside(samples, k, system, segment, state, workspace, time, reached)
             finish_step(state, workspace)
-            clock[0], counters[Counter.STALLED] = end if plan.landing else time + plan.h_step, 0
+            clock[0], counters[Counter.STALLED] = reached, 0
     clock[1] = h if status == Status.CONTACT_VIOLATED else clock[1]
-    return status, steps
+    return status, steps, k
 
 
 @njit(cache=True, error_model="numpy")
@@ -1107,20 +1181,23 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event):
 
 @njit(**COUNTED)
 def cross_event(system, mesh, settings, run, workspace, torques, segment, plan, end, event,
-                high):
+                high, samples, k):
     """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
     crossed `event` by `high` (s from the step's start; its state in NEW_STATE): the crossing
-    located (locate_event), a debug run's check up to it (violated_before), the run moved
-    past it (pass_event; `end`: the run's end, s) and the next segment begun (end_segment).
-    Returns (Status; the segment the run is in)."""
-    state, h_step = run.state, plan.h_step
+    located (locate_event), a debug run's check up to it (violated_before), the samples from
+    the `k`-th on before it taken where the segment is exact (sample_inside), the run moved
+    past it (pass_event; `end`: where the step would land, s) and the next segment begun
+    (end_segment). Returns (Status; the segment the run is in; the next sample's index)."""
+    state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     if violated_before(system, segment, settings, state, workspace, high, h_step):
-        return Status.CONTACT_VIOLATED, segment
-    status = pass_event(state, workspace, run.clock, run.clock[0], end, plan, high, event)
+        return Status.CONTACT_VIOLATED, segment, k
+    if segment.exact >= 0:
+        k = sample_inside(samples, k, system, segment, state, workspace, time, time + high)
+    status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     if status != Status.OK:
-        return status, segment
-    return status, end_segment(system, mesh, run, workspace, torques, event)
+        return status, segment, k
+    return status, end_segment(system, mesh, run, workspace, torques, event), k
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1148,25 +1225,31 @@ def begin_walk(workspace):
 def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, end, torques,
                     max_steps):
     """Integrate a run through its sample times to `end` (s) in one call, with the torques
-    (motor, load; N·m) held: to each of `times` (s, rising, none past `end`) in turn, its
-    outputs (equations.outputs, as the run's `outputs`) then written into the row of `rows` of
-    the same index, and on to `end`. Each stretch is one call of `advance`, so the run and the
-    rows are to the bit those of one `advance` per time. At most `max_steps` steps in all.
-    Returns (the Status's value, accepted steps, rows written): it stops at the first stretch
-    that fails, with the run where that stretch left it.
+    (motor, load; N·m) held, the outputs (equations.outputs, as the run's `outputs`) at each of
+    `times` (s, rising, none past `end`) written into the row of `rows` of the same index.
+    Where the segment is exact (the exponential method), a sample is taken from the exact
+    solution inside the step that passes it (sample_inside), and the steps are those of a run
+    without samples; elsewhere the run stops at each time as `advance` would, and the run and
+    the rows are to the bit those of one `advance` per time. At most `max_steps` steps in all.
+    Returns (the Status's value, accepted steps, rows written): where the run fails it stops
+    there, with the rows it passed written (none of the failing stretch where its end
+    showed the failure: a state not finite, or past its contact interval).
 
     The records come as `advance` takes them; `rows` is C-contiguous, a row as long as the
     run's outputs. Compiled UNCOUNTED, as `advance`."""
-    position = RunArrays(*run)
-    samples, steps = times.shape[0], 0
-    for k in range(samples + 1):
-        target = times[k] if k < samples else end
-        if target > position.clock[0]:
-            status, taken = advance(system_arrays, mesh, settings, run, workspace, target,
-                                    torques, max_steps - steps)
-            steps += taken
-            if status != Status.OK.value:
-                return status, steps, k
-        if k < samples:
+    position, samples = RunArrays(*run), Samples(times, rows)
+    k, steps = 0, 0
+    while True:
+        while k < times.shape[0] and times[k] <= position.clock[0]:
             copy_into(rows[k], position.outputs)
-    return Status.OK.value, steps, samples
+            k += 1
+        if position.clock[0] >= end:
+            return Status.OK.value, steps, k
+        first = k
+        status, taken, k = advance_to(system_arrays, mesh, settings, run, workspace, end,
+                                      torques, max_steps - steps, samples, k)
+        steps += taken
+        if status != Status.OK.value:
+            failed_at_end = (status == Status.NOT_FINITE.value
+                             or status == Status.LEFT_INTERVAL.value)
+            return status, steps, first if failed_at_end else k
