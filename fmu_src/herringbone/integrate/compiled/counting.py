@@ -20,9 +20,9 @@ from typing import Any
 
 # walk.advance alone: the entry from Python, and what it inlines
 UNCOUNTED: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": False}
-# a kernel that returns numbers only and allocates nothing, called also from kernels compiled
-# COUNTED (walk.cross_event's event location): it would inherit their counts, and count every
-# array of every record it is handed at every call
+# a kernel that returns numbers only and allocates nothing: called from a kernel compiled
+# COUNTED, it would inherit its counts and count every array of every record it is handed at
+# every call; so it names its own
 NUMBERS_ONLY: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": False}
 # every kernel that allocates or hands back arrays
 COUNTED: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": True}

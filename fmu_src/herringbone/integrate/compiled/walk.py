@@ -39,18 +39,18 @@ next phase event is aimed to end just past its predicted crossing, so one trial 
 it; and each contact interval starts with the step size its last entry settled on
 (`first_steps`), since the vibration a switch sets off is one the step before it did not see.
 
-The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), the method's
-step (dop853.step, or `implicit_step` with its Jacobian and factors), `control_step` (accept
-or reject it, and the next step size), `crossed_event` and `grazing_check` (which event the
-step crossed; where a point may have lifted off and landed again inside it, `grazing_probe`
-looks), then `finish_step` (no event: the step's end is the new start) or `cross_event` (the
-crossing located by `locate_event` to the event time tolerance, the next segment begun by
-`end_segment`). Trial steps (`trial_step`) serve the location, the probe and the debug check.
-They work on records laid out once: the stepper's settings (one float array, `Setting`), the
-run's arrays (`RunArrays`, its position), the mesh period (`equations.PeriodTable`) and the
-run's `Workspace`, the scratch arrays that `allocate_workspace` makes once per run (rows named
-by `Vector` and `Values`, the loop's memory by `Counter` and `Memory`). They come from Python
-as plain tuples, which `advance` names.
+The loop (`walk`) is a few named steps: `plan_step` (how long a step to try), the method's step
+(dop853.step, or `implicit_step` with its Jacobian and factors), `control_step` (accept or
+reject it, and the next step size), `crossed_event` and `grazing_check` (which event the step
+crossed; where a point may have lifted off and landed again inside it, `grazing_probe` looks),
+then `finish_step` (no event: the step's end is the new start) or `cross_event` (the crossing
+located by `locate_event` to the event time tolerance, the run moved into the next segment by
+`end_segment`, which the loop then begins: `begin_segment`). Trial steps (`trial_step`) serve
+the location, the probe and the debug check. They work on records laid out once: the stepper's
+settings (one float array, `Setting`), the run's arrays (`RunArrays`, its position), the mesh
+period (`equations.PeriodTable`) and the run's `Workspace`, the scratch arrays that
+`allocate_workspace` makes once per run (rows named by `Vector` and `Values`, the loop's memory
+by `Counter` and `Memory`). They come from Python as plain tuples, which `advance` names.
 
 Units: time and step sizes in s, angles in rad, the state as model.py lays it out, approaches
 in m (their rates in m/s), torques in N·m.
@@ -66,7 +66,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from . import dop853, exponential, radau
-from .counting import COUNTED, NUMBERS_ONLY, UNCOUNTED
+from .counting import NUMBERS_ONLY, UNCOUNTED
 from .equations import (
     Event,
     PeriodTable,
@@ -278,8 +278,8 @@ NEVER = math.inf  # s: the time to an event that is not ahead
 # 2 µs). So the loop calls the method's step with its own arrays, and the helpers it runs at
 # every step take only what they use on every path: plan_step and control_step scalars alone,
 # with what depends on the method or on contact loss decided in the loop. What runs once per
-# event or less (locate_event, end_segment, probe_inside, contact_violated_inside, trial_step)
-# stays a call; end_segment inlines all it calls, so that numba need count none of its arrays.
+# event or less (cross_event, locate_event, probe_inside, contact_violated_inside, trial_step)
+# stays a call, and returns numbers only, so that numba need count none of its arrays.
 
 
 # --- the records ------------------------------------------------------------------------------
@@ -974,26 +974,23 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
     return count_progress(workspace.counters, event, high, plan.h_step)
 
 
-@njit(**COUNTED)
-def end_segment(system, mesh, run, workspace, torques, event):
-    """Begin the segment that follows `event` at the run's state: the next contact set and its
-    loaded points (next_segment, into the run's place and loaded points), the rate, event
-    values and slopes there (begin_segment), and after a phase event into the next set, its
-    first step size. Returns the CompiledSegment (a record of arrays: so compiled COUNTED,
-    counting.py)."""
+@njit(cache=True, error_model="numpy", inline="always")
+def end_segment(system, mesh, run, workspace, event):
+    """Move the run into the segment that follows `event` at its state: the next contact set
+    and its loaded points (next_segment, into the run's place and loaded points), and after a
+    phase event into the next set, its first step size. (The loop then begins the segment
+    there: begin_segment.)"""
     clock, place, state, loaded = run.clock, run.place, run.state, run.loaded
     counters = workspace.counters
     place[0], place[1] = next_segment(system, mesh, event, place[0], place[1], state, loaded,
                                       workspace.values[Values.APPROACH])
     counters[Counter.SEGMENT] += 1
     interval = place[0]
-    segment = begin_segment(system, mesh, interval, state, loaded, torques, workspace)
     # The switch sets off vibration that the step before it did not see: start the set as the
     # step taken after the last entry into it proposed (the mesh repeats).
     entered, first = event == Event.PHASE_END, run.first_steps[interval]
     clock[1] = min(clock[1], first) if entered and first > 0.0 else clock[1]
     counters[Counter.OPENING] = interval if entered else counters[Counter.OPENING]
-    return segment
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1151,8 +1148,11 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             event, high = grazing_probe(system, segment, settings, state, workspace,
                                         plan.h_step, event)
         if event >= 0:
-            status, segment, k = cross_event(system, mesh, settings, run, workspace, torques,
-                                             segment, plan, target, event, high, samples, k)
+            status, k = cross_event(system, mesh, settings, run, workspace, segment, plan,
+                                    target, event, high, samples, k)
+            if status == Status.OK:
+                segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques,
+                                        workspace)
         elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
                 contact_violated_inside(system, segment, settings, state, workspace, plan.h_step):
             status = Status.CONTACT_VIOLATED
@@ -1179,25 +1179,28 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event):
     return event, h_step
 
 
-@njit(**COUNTED)
-def cross_event(system, mesh, settings, run, workspace, torques, segment, plan, end, event,
-                high, samples, k):
+@njit(**NUMBERS_ONLY)
+def cross_event(system, mesh, settings, run, workspace, segment, plan, end, event, high,
+                samples, k):
     """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
     crossed `event` by `high` (s from the step's start; its state in NEW_STATE): the crossing
     located (locate_event), a debug run's check up to it (violated_before), the samples from
     the `k`-th on before it taken where the segment is exact (sample_inside), the run moved
-    past it (pass_event; `end`: where the step would land, s) and the next segment begun
-    (end_segment). Returns (Status; the segment the run is in; the next sample's index)."""
+    past it (pass_event; `end`: where the step would land, s) and into the next segment
+    (end_segment), which the loop begins where this returns Status.OK. Returns (Status; the
+    next sample's index). It returns numbers only, so it is compiled without reference counts
+    (counting.py): it runs at every event, and counting every array of the records it is
+    handed cost a fifth of the exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     if violated_before(system, segment, settings, state, workspace, high, h_step):
-        return Status.CONTACT_VIOLATED, segment, k
+        return Status.CONTACT_VIOLATED, k
     if segment.exact >= 0:
         k = sample_inside(samples, k, system, segment, state, workspace, time, time + high)
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
-    if status != Status.OK:
-        return status, segment, k
-    return status, end_segment(system, mesh, run, workspace, torques, event), k
+    if status == Status.OK:
+        end_segment(system, mesh, run, workspace, event)
+    return status, k
 
 
 @njit(cache=True, error_model="numpy", inline="always")
