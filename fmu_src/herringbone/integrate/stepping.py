@@ -19,7 +19,9 @@ Error control (with a `horizon`, as reference_simulate gives it): the tolerance 
 forces over the whole run. Every step's error rings on in the train's modes, for the run or for
 1/ζ radians, whichever is shorter, and the errors of the steps add up over those radians; the
 step tolerance is cut by the radians the train rings (ringing_radians, step_tolerance), which
-this module works out from the model's own matrices. And an explicit method's step spans at most
+this module works out from the model's own matrices: with every point loaded and, with contact
+loss, with the points loaded that the static deflection loads (a point without load carries no
+mesh damping). And an explicit method's step spans at most
 STEP_RADIANS of the train's fastest mode, where its error estimate still reads that mode's error.
 """
 from __future__ import annotations
@@ -278,34 +280,95 @@ class ScipyStepper:
                 f"{approach[point, node]:.3e} m")
 
 
-def _eigenvalues(model: GearTrainModel) -> np.ndarray:
+def linearized_eigenvalues(model: GearTrainModel, stiffness=None, damping=None) -> np.ndarray:
     """The eigenvalues of the linearized train (mass, mean stiffness and mean damping over a
-    mesh period, every point loaded): −ζω ± iω√(1−ζ²) of each mode, 1/s."""
+    mesh period, every point loaded; or the given stiffness and damping matrices over q):
+    −ζω ± iω√(1−ζ²) of each mode, 1/s."""
     size = model.size
+    stiffness = model.mean_stiffness_matrix() if stiffness is None else stiffness
+    damping = model.mean_damping_matrix() if damping is None else damping
     inverse_mass = 1.0 / model.mass[:, None]
     state_matrix = np.block([
         [np.zeros((size, size)), np.eye(size)],
-        [-inverse_mass * model.mean_stiffness_matrix(),
-         -inverse_mass * model.mean_damping_matrix()]])
+        [-inverse_mass * stiffness, -inverse_mass * damping]])
     return np.linalg.eigvals(state_matrix)
 
 
+def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
+                               ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Stiffness and damping over q averaged over one mesh period (the Gauss-Legendre nodes of
+    GearTrainModel.mean_stiffness_matrix), each node's contact points loaded as the run's start
+    loads them (segments.start): on the static deflection under `motor_torque`, the points whose
+    approach is not negative. A point without load carries no mesh damping (η·c acts through
+    the loaded points alone), so where a lead error or a tilt leaves part of the face unloaded
+    the mesh damps the train less than with every point loaded. None where every point of
+    every node is loaded: the train is the one of every point loaded (linearized_eigenvalues's
+    own matrices)."""
+    nodes, weights = np.polynomial.legendre.leggauss(3)
+    stiffness = np.zeros((model.size, model.size))
+    damping = np.zeros((model.size, model.size))
+    eta = model.mesh_damping_factor
+    every_point_loaded = True
+    for interval in range(len(model.mesh.switch_phases)):
+        contact_set = model.mesh.contact_set(0, interval)
+        for node, weight in zip(nodes, weights):
+            y = np.zeros(model.size)
+            y[model.pinion] = 0.5 * (node + 1.0) * contact_set.length
+            y = model.static_deflection(y, contact_set, motor_torque)
+            state = np.concatenate([y, np.zeros(model.size)])
+            loaded = (segments.point_approaches(model, contact_set, state) >= 0.0).astype(float)
+            every_point_loaded = every_point_loaded and bool(loaded.all())
+            every_point = model.stiffness_matrix(y, contact_set)
+            loaded_stiffness = model.stiffness_matrix(y, contact_set, loaded)
+            share = 0.5 * weight * contact_set.length
+            stiffness += share * loaded_stiffness
+            damping += share * (model.damping_matrix(y, contact_set)
+                                - eta * (every_point - loaded_stiffness))
+    if every_point_loaded:
+        return None
+    pitch = model.geometry.angular_pitch
+    return stiffness / pitch, damping / pitch
+
+
+def mode_radians(eigenvalues: np.ndarray, horizon: float) -> float:
+    """The most radians any oscillating mode of the eigenvalues (linearized_eigenvalues) rings
+    within `horizon` seconds: max of min(ω·horizon, 1/ζ); 0 where none oscillates."""
+    frequency = np.abs(eigenvalues)  # ω, rad/s
+    decay = np.maximum(-eigenvalues.real, 0.0)  # ζω, 1/s
+    oscillating = np.abs(eigenvalues.imag) > 1e-6 * max(frequency.max(), 1.0)
+    radians = np.minimum(frequency * horizon, frequency / np.maximum(decay, 1e-300))
+    return float(np.max(radians[oscillating], initial=0.0))
+
+
 def fastest_rate(model: GearTrainModel) -> float:
-    """|λ|max over the eigenvalues of the linearized train (_eigenvalues), 1/s."""
-    return float(np.abs(_eigenvalues(model)).max())
+    """|λ|max over the eigenvalues of the linearized train (linearized_eigenvalues), 1/s."""
+    return float(np.abs(linearized_eigenvalues(model)).max())
+
+
+def driving_torques(model: GearTrainModel, horizon: float) -> list[float]:
+    """The positive motor torques (N·m) of the scene's input table that hold within the first
+    `horizon` seconds: those under which the static deflection says which points carry load."""
+    inputs = model.scene.inputs
+    return sorted({float(torque) for time, torque in zip(inputs.times, inputs.M_motor)
+                   if time < horizon and torque > 0.0})
 
 
 def ringing_radians(model: GearTrainModel, horizon: float) -> float:
     """The most radians any mode of the train rings within `horizon` seconds before its damping
     has taken the amplitude down by e: max over the modes of min(ω·horizon, 1/ζ), where
     −ζω ± iω√(1−ζ²) are the eigenvalues of the linearized train (mass, mean stiffness and mean
-    damping over a mesh period, every point loaded). Modes that do not oscillate ring 0."""
-    eigenvalues = _eigenvalues(model)
-    frequency = np.abs(eigenvalues)  # ω, rad/s
-    decay = np.maximum(-eigenvalues.real, 0.0)  # ζω, 1/s
-    oscillating = np.abs(eigenvalues.imag) > 1e-6 * max(frequency.max(), 1.0)
-    radians = np.minimum(frequency * horizon, frequency / np.maximum(decay, 1e-300))
-    return float(np.max(radians[oscillating], initial=0.0))
+    damping over a mesh period), every point loaded; and, with contact loss, the points loaded
+    that the static deflection under each motor torque of the scene's input table within the
+    horizon loads (statically_loaded_matrices): the most of these. Modes that do not oscillate
+    ring 0."""
+    radians = mode_radians(linearized_eigenvalues(model), horizon)
+    if model.contact_loss:
+        for torque in driving_torques(model, horizon):
+            matrices = statically_loaded_matrices(model, torque)
+            if matrices is not None:
+                radians = max(radians, mode_radians(linearized_eigenvalues(model, *matrices),
+                                                    horizon))
+    return radians
 
 
 def step_tolerance(model: GearTrainModel, tolerance: float, horizon: float) -> float:
