@@ -296,34 +296,28 @@ def linearized_eigenvalues(model: GearTrainModel, stiffness=None, damping=None) 
 
 def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
                                ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Stiffness and damping over q averaged over one mesh period (the Gauss-Legendre nodes of
-    GearTrainModel.mean_stiffness_matrix), each node's contact points loaded as the run's start
-    loads them (segments.start): on the static deflection under `motor_torque`, the points whose
-    approach is not negative. A point without load carries no mesh damping (η·c acts through
-    the loaded points alone), so where a lead error or a tilt leaves part of the face unloaded
-    the mesh damps the train less than with every point loaded. None where every point of
-    every node is loaded: the train is the one of every point loaded (linearized_eigenvalues's
-    own matrices)."""
-    nodes, weights = np.polynomial.legendre.leggauss(3)
+    """Stiffness and damping over q averaged over one mesh period (the nodes of
+    GearTrainModel.mesh_period_nodes, as mean_stiffness_matrix), each node's contact points
+    loaded as the run's start loads them (segments.start): on the static deflection under
+    `motor_torque`, the points whose approach is not negative. A point without load carries no
+    mesh damping (η·c acts through the loaded points alone), so where a lead error or a tilt
+    leaves part of the face unloaded the mesh damps the train less than with every point loaded.
+    None where every point of every node is loaded: the train is the one of every point loaded
+    (linearized_eigenvalues's own matrices)."""
     stiffness = np.zeros((model.size, model.size))
     damping = np.zeros((model.size, model.size))
     eta = model.mesh_damping_factor
     every_point_loaded = True
-    for interval in range(len(model.mesh.switch_phases)):
-        contact_set = model.mesh.contact_set(0, interval)
-        for node, weight in zip(nodes, weights):
-            y = np.zeros(model.size)
-            y[model.pinion] = 0.5 * (node + 1.0) * contact_set.length
-            y = model.static_deflection(y, contact_set, motor_torque)
-            state = np.concatenate([y, np.zeros(model.size)])
-            loaded = (segments.point_approaches(model, contact_set, state) >= 0.0).astype(float)
-            every_point_loaded = every_point_loaded and bool(loaded.all())
-            every_point = model.stiffness_matrix(y, contact_set)
-            loaded_stiffness = model.stiffness_matrix(y, contact_set, loaded)
-            share = 0.5 * weight * contact_set.length
-            stiffness += share * loaded_stiffness
-            damping += share * (model.damping_matrix(y, contact_set)
-                                - eta * (every_point - loaded_stiffness))
+    for y, contact_set, share in model.mesh_period_nodes():
+        y = model.static_deflection(y, contact_set, motor_torque)
+        state = np.concatenate([y, np.zeros(model.size)])
+        loaded = (segments.point_approaches(model, contact_set, state) >= 0.0).astype(float)
+        every_point_loaded = every_point_loaded and bool(loaded.all())
+        every_point = model.stiffness_matrix(y, contact_set)
+        loaded_stiffness = model.stiffness_matrix(y, contact_set, loaded)
+        stiffness += share * loaded_stiffness
+        damping += share * (model.damping_matrix(y, contact_set)
+                            - eta * (every_point - loaded_stiffness))
     if every_point_loaded:
         return None
     pitch = model.geometry.angular_pitch

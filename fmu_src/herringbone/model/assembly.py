@@ -317,17 +317,26 @@ class GearTrainModel:
         contact terms are cubic in φp). Computed once per model: scales, modes and the choice
         of integrator all read it."""
         if self._mean_stiffness is None:
-            nodes, weights = np.polynomial.legendre.leggauss(3)
             total = np.zeros((self.size, self.size))
-            for interval in range(len(self.mesh.switch_phases)):
-                contact_set = self.mesh.contact_set(0, interval)
-                for node, weight in zip(nodes, weights):
-                    y = np.zeros(self.size)
-                    y[self.pinion] = 0.5 * (node + 1.0) * contact_set.length
-                    total += (0.5 * weight * contact_set.length
-                              * self.stiffness_matrix(y, contact_set))
+            for y, contact_set, share in self.mesh_period_nodes():
+                total += share * self.stiffness_matrix(y, contact_set)
             self._mean_stiffness = total / self.geometry.angular_pitch
         return self._mean_stiffness.copy()
+
+    def mesh_period_nodes(self) -> list[tuple[np.ndarray, ContactSet, float]]:
+        """The nodes of an average over one mesh period: (y at rest with φp at the node, the
+        node's contact set, its share in rad), Gauss-Legendre with 3 nodes on each contact
+        interval (the contact terms are cubic in φp). The shares add up to the angular pitch:
+        a sum over the nodes, over the pitch, is the average."""
+        nodes, weights = np.polynomial.legendre.leggauss(3)
+        result = []
+        for interval in range(len(self.mesh.switch_phases)):
+            contact_set = self.mesh.contact_set(0, interval)
+            for node, weight in zip(nodes, weights):
+                y = np.zeros(self.size)
+                y[self.pinion] = 0.5 * (node + 1.0) * contact_set.length
+                result.append((y, contact_set, 0.5 * weight * contact_set.length))
+        return result
 
     def mean_damping_matrix(self) -> np.ndarray:
         """C = Σ h·g·gᵀ of shafts and bearings plus η·(the contact points' mean stiffness)."""
