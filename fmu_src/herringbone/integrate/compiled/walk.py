@@ -1095,13 +1095,12 @@ def advance_to(system_arrays, mesh, settings, run, workspace, end, torques, max_
 @njit(cache=True, error_model="numpy", inline="always")
 def walk(system, mesh, settings, run, workspace, end, torques, max_steps, samples, k):
     """advance's loop (after begin_walk): steps, and segments ended at events (cross_event),
-    until the run's time is `end`, or where stop_at stops it first, or the run fails; on the
-    way, the samples from the `k`-th on (a Samples; None: none) that its exact segments pass
-    (sample_inside). Returns (Status, accepted steps, the next sample's index). What runs at
-    every step is written out here: an inlined helper given a record counts it."""
+    to `end` (or where stop_at stops it) unless the run fails, taking the samples from the
+    `k`-th on (a Samples; None: none) that its exact segments pass (sample_inside). Returns
+    (Status, accepted steps, the next sample's index). Inlined into advance: no counts."""
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
-    explicit, rtol = is_explicit(workspace), settings[Setting.RELATIVE_TOLERANCE]
+    explicit = is_explicit(workspace)
     segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques, workspace)
     steps, status, controller, h = 0, Status.OK, Controller(1e-4, False), clock[1]
     while status == Status.OK:
@@ -1120,17 +1119,11 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
             accepted, clock[1] = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
         else:
-            if explicit:
-                error, iterations = dop853.step(
-                    system, segment, state, rows.rate, plan.h_step, rows.tolerance, rtol,
-                    rows.stages, rows.work, rows.new_state), 0
-            else:
-                retry, error, iterations = implicit_step(system, segment, settings, state,
-                                                         workspace, plan.h_step)
-                if retry:  # (Newton failed on an old Jacobian: again on a fresh one)
-                    continue
-            accepted, clock[1], controller = control_step(explicit, error, iterations, plan,
-                                                          controller)
+            retry, accepted, h_next, controller = runge_kutta_step(
+                system, segment, settings, state, workspace, rows, plan, controller)
+            if retry:  # (Newton failed on an old Jacobian: again on a fresh one)
+                continue
+            clock[1] = h_next
         if not accepted:
             continue
         steps, counters[Counter.JACOBIAN_FRESH] = steps + 1, 0
@@ -1139,11 +1132,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             first_steps[counters[Counter.OPENING]] = clock[1]
         counters[Counter.OPENING] = -1
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
-        if explicit and segment.exact < 0:  # its last stage is the rate at the step's end
-            copy_into(rows.rate_after, rows.last_stage)
-        else:
-            derivative(system, segment.points, segment.point_count, segment.loaded,
-                       segment.motor_torque, segment.load_torque, rows.new_state, rows.rate_after)
+        rate_after_step(system, segment, explicit, rows)
         if system.contact_loss and not certified:  # (a certified step has no grazing inside)
             event, high = grazing_probe(system, segment, settings, state, workspace,
                                         plan.h_step, event)
@@ -1164,6 +1153,38 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             clock[0], counters[Counter.STALLED] = reached, 0
     clock[1] = h if status == Status.CONTACT_VIOLATED else clock[1]
     return status, steps, k
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, controller):
+    """The step of `plan` (a StepPlan) from `state` by the workspace's Runge-Kutta method
+    (DOP853, or Radau IIA by implicit_step) into NEW_STATE, judged by control_step with the
+    Controller's memory. Returns (whether to try again: Radau IIA's Newton failed on an old
+    Jacobian, so it takes a fresh one; accepted; the step size to try next, s; the
+    Controller)."""
+    explicit = is_explicit(workspace)
+    if explicit:
+        error, iterations = dop853.step(
+            system, segment, state, rows.rate, plan.h_step, rows.tolerance,
+            settings[Setting.RELATIVE_TOLERANCE], rows.stages, rows.work, rows.new_state), 0
+    else:
+        retry, error, iterations = implicit_step(system, segment, settings, state, workspace,
+                                                 plan.h_step)
+        if retry:
+            return True, False, plan.h_step, controller
+    accepted, h_next, controller = control_step(explicit, error, iterations, plan, controller)
+    return False, accepted, h_next, controller
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rate_after_step(system, segment, explicit, rows):
+    """The rate at an accepted step's end (NEW_STATE) into RATE_AFTER: DOP853's last stage
+    where it took the step, else the equations there."""
+    if explicit and segment.exact < 0:
+        copy_into(rows.rate_after, rows.last_stage)
+    else:
+        derivative(system, segment.points, segment.point_count, segment.loaded,
+                   segment.motor_torque, segment.load_torque, rows.new_state, rows.rate_after)
 
 
 @njit(cache=True, error_model="numpy")
