@@ -270,16 +270,13 @@ EXACT_GROWTH = 4.0
 EXACT_SHRINK = 0.25
 NEVER = math.inf  # s: the time to an event that is not ahead
 
-# Inlining and speed. The helpers the loop runs at every step are inlined (inline="always"):
-# a compiled call hands over each array it is given by reference, which numba counts
-# atomically on the way in and out (the System alone has 15 arrays). An inlined helper's
-# arguments are copies, counted the same way, unless the copy is used on every path through
-# the helper and not handed on to a call (measured: 3-8 ns an array, against a step of about
-# 2 µs). So the loop calls the method's step with its own arrays, and the helpers it runs at
-# every step take only what they use on every path: plan_step and control_step scalars alone,
-# with what depends on the method or on contact loss decided in the loop. What runs once per
-# event or less (cross_event, locate_event, probe_inside, contact_violated_inside, trial_step)
-# stays a call, and returns numbers only, so that numba need count none of its arrays.
+# Inlining and speed. The helpers the loop runs at every step are inlined (inline="always")
+# into `advance` and `advance_sampled`, which are compiled without numba's reference counts
+# (counting.py): a compiled call would cost its call and, compiled with counts, an atomic
+# count of every array of every record it is handed, on the way in and out (the System alone
+# has 15 arrays, the exact tables 26). What runs once per event or less (cross_event,
+# locate_event, probe_inside, contact_violated_inside, trial_step, exact_samples) stays a
+# call, and returns numbers only, so that it too is compiled without counts.
 
 
 # --- the records ------------------------------------------------------------------------------
