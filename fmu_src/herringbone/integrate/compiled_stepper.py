@@ -172,9 +172,9 @@ FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing con
                                        "is beyond the integrator's resolution)"}
 
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
-# A callback (`advance`'s on_sample) is handed the samples of one compiled call after it: a
-# progress bar or a budget watch so lags this many samples, and the call's own cost (a few µs)
-# is shared by as many
+# Samples per compiled call (`advance`, `advance_sampled`): a callback (on_sample) is handed
+# them after the call, so a progress bar or a budget watch lags this many samples; the call's
+# own cost (a few µs) and the step that ends on its last time are shared by as many
 SAMPLES_PER_CALL = 64
 
 COMPLETED = int(walk.Status.OK)  # as an int: compared after every call, unlike an enum's lookup
