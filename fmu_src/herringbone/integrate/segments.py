@@ -65,6 +65,14 @@ def start(model: GearTrainModel, pinion_angle: float, motor_torque: float,
     contact_set = model.mesh.contact_set(*model.mesh.locate(pinion_angle))
     y = np.zeros(model.size)
     y[model.pinion] = pinion_angle - contact_set.pinion_angle
+    return static_start(model, contact_set, y, motor_torque, pinion_speed)
+
+
+def static_start(model: GearTrainModel, contact_set: ContactSet, y: np.ndarray,
+                 motor_torque: float, pinion_speed: float) -> tuple[Segment, np.ndarray]:
+    """`start`'s segment and state in `contact_set` from `y` (its pinion coordinate from the
+    set's start): rigid rotation at `pinion_speed` on the static deflection under
+    `motor_torque`, every point whose approach is not negative loaded."""
     y = model.static_deflection(y, contact_set, motor_torque)
     y_rate = np.zeros(model.size)
     y_rate[model.pinion] = pinion_speed

@@ -298,7 +298,7 @@ def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
                                ) -> tuple[np.ndarray, np.ndarray] | None:
     """Stiffness and damping over q averaged over one mesh period (the nodes of
     GearTrainModel.mesh_period_nodes, as mean_stiffness_matrix), each node's contact points
-    loaded as the run's start loads them (segments.start): on the static deflection under
+    loaded as the run's start loads them (segments.static_start): on the static deflection under
     `motor_torque`, the points whose approach is not negative. A point without load carries no
     mesh damping (η·c acts through the loaded points alone), so where a lead error or a tilt
     leaves part of the face unloaded the mesh damps the train less than with every point loaded.
@@ -309,9 +309,8 @@ def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
     eta = model.mesh_damping_factor
     every_point_loaded = True
     for y, contact_set, share in model.mesh_period_nodes():
-        y = model.static_deflection(y, contact_set, motor_torque)
-        state = np.concatenate([y, np.zeros(model.size)])
-        loaded = (segments.point_approaches(model, contact_set, state) >= 0.0).astype(float)
+        segment, state = segments.static_start(model, contact_set, y, motor_torque, 0.0)
+        y, loaded = state[:model.size], segment.loaded
         every_point_loaded = every_point_loaded and bool(loaded.all())
         every_point = model.stiffness_matrix(y, contact_set)
         loaded_stiffness = model.stiffness_matrix(y, contact_set, loaded)
