@@ -2,6 +2,8 @@
 matrix exponential, which contact sets it takes exactly, agreement with the scipy reference on
 the reference scene and on scenes that lose and regain contact, exact re-runs from a saved
 position, and DOP853's results, bit for bit, where no segment is exact."""
+from typing import NamedTuple
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -202,3 +204,62 @@ def test_a_scene_without_a_modal_form_runs_by_runge_kutta_under_auto_and_by_part
     reference = herringbone.reference_simulate(scene, stop_time=0.005, output_interval=1e-4)
     assert result["n_contacts"].min() == 0  # the mesh lifts off
     assert force_error(result, reference, model) <= 1e-7
+
+
+class ModalStep(NamedTuple):
+    """The fields of ExactTables that exponential.keeps_sign reads, for one exact form."""
+
+    fast_count: np.ndarray
+    rates: np.ndarray
+    start_size: np.ndarray
+    start_fast: np.ndarray
+    modal_fast: np.ndarray
+
+
+def random_function(rng):
+    """A function of the kind keeps_sign bounds: a cubic slow part plus three to seven
+    damped modes from 1e2 to 1e5 1/s (ζ from 1e-4 to 0.3), some swinging more than the slow
+    part, over a step of 1e-6 to 1e-3 s. Returns (its value at times t, the ModalStep of the
+    step, the modes' rows and their magnitudes, the SlowBound, h)."""
+    count = int(rng.integers(3, 8))
+    speed = np.exp(rng.uniform(np.log(1e2), np.log(1e5), count))
+    damping = np.exp(rng.uniform(np.log(1e-4), np.log(0.3), count))
+    rates = speed * (-damping + 1j * np.sqrt(1.0 - damping ** 2))
+    rows = rng.normal(size=count) + 1j * rng.normal(size=count)
+    start = (rng.normal(size=count) + 1j * rng.normal(size=count)) * np.exp(
+        rng.uniform(-3.0, 0.0, count)) / np.abs(rows)
+    h = float(np.exp(rng.uniform(np.log(1e-6), np.log(1e-3))))
+    terms = np.array([rng.uniform(0.5, 4.0)] + list(rng.normal(size=3) / h ** np.arange(1, 4)
+                                                     * np.exp(rng.uniform(-4.0, 0.0, 3))))
+
+    def value(t):
+        t = np.asarray(t)[..., None]
+        slow = (terms * t ** np.arange(4)).sum(axis=-1)
+        return slow + (rows * start * np.exp(rates * t)).real.sum(axis=-1)
+
+    powers = np.abs(terms[1:]) * h ** np.arange(1, 4)
+    step = ModalStep(np.array([count]), rates[None, :], np.abs(start), start.copy(),
+                     start * np.exp(rates * h))
+    slow = exponential.SlowBound(terms[0], powers.sum(), powers[1:].sum())
+    return value, step, rows[None, :], np.abs(rows)[None, :], slow, h
+
+
+def test_a_step_certified_to_keep_its_sign_keeps_it():
+    """exponential.keeps_sign on 3000 random functions (random_function): wherever it
+    certifies that f > 0 (or f < 0) over the step, f sampled at 4001 times of the step keeps
+    that sign (the sign of the ends alone is wrong on 59 of the 2 835 it would certify). The
+    chord bound certifies what the first bound (slow part less all that can move) cannot: at
+    least a fifth of those certified (measured 1 112 of 2 433)."""
+    rng = np.random.default_rng(24)
+    certified = by_chord = 0
+    for _ in range(3000):
+        value, step, rows, sizes, slow, h = random_function(rng)
+        values = value(np.linspace(0.0, h, 4001))
+        swing = float((sizes[0] * step.start_size).sum())
+        for sign in (1.0, -1.0):
+            if exponential.keeps_sign(step, 0, h, sizes, rows, slow, swing, sign,
+                                      values[0], values[-1]):
+                certified += 1
+                by_chord += not sign * slow.start > slow.drift + swing
+                assert (sign * values).min() > 0.0
+    assert by_chord >= 0.2 * certified > 0

@@ -30,8 +30,10 @@ which all start there, pay only for e^{Λt} and R.
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, the pinion speed keeps
 its sign (each phase event function is monotone, so the step's ends show whether it crossed)
-and, where contact can be lost, every point's approach keeps its sign: bounds from the modal
-coefficients (the fast modes' sum of magnitudes, the slow polynomial's terms). An uncertified
+and, where contact can be lost, every point's approach keeps its sign (`keeps_sign`): bounds
+from the modal coefficients, either the fast modes' sum of magnitudes and the slow polynomial's
+terms, or the values at the step's ends less how far the function can bow below their chord
+(the modes' curvature; a mode that turns through much of a period, its magnitude). An uncertified
 step longer than DOP853's step bound is rejected (walk.py shortens it); at that bound the loop's
 own checks for a step's ends and for grazing (a cubic through values and slopes) hold, as for
 DOP853.
@@ -98,6 +100,8 @@ class ExactTables(NamedTuple):
     approach_slow: np.ndarray  # (P, S): (g_base + η·g_base on ẏ)·R, a point's approach
     speed_size: np.ndarray  # (P, F): |the pinion speed's row of fast_right|
     approach_size: np.ndarray  # (P, F): |the approach's row of fast_right|
+    speed_fast: np.ndarray  # (P, F) complex: the pinion speed's row of fast_right
+    approach_fast: np.ndarray  # (P, F) complex: the approach's row of fast_right
     tilt_bound: float  # how far from zero the tilt rows' products may be at a segment's start
     inertia: float  # Σ m·r² along the rigid rotation r
     # Scratch. `start`: the augmented X = [state; u] of the last step's start, then the
@@ -326,7 +330,9 @@ def _empty_arrays(places: int, size: int, width: int, slow_width: int, fast_widt
         "speed_slow": np.zeros(shape + (slow_width,)),
         "approach_slow": np.zeros(shape + (slow_width,)),
         "speed_size": np.zeros(shape + (fast_width,)),
-        "approach_size": np.zeros(shape + (fast_width,))}
+        "approach_size": np.zeros(shape + (fast_width,)),
+        "speed_fast": np.zeros(shape + (fast_width,), dtype=complex),
+        "approach_fast": np.zeros(shape + (fast_width,), dtype=complex)}
 
 
 def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarray,
@@ -347,6 +353,8 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
     arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
     arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
+    arrays["speed_fast"][place][:fast] = fast_right[n + system.pinion]
+    arrays["approach_fast"][place][:fast] = base @ fast_right
     arrays["speed_size"][place][:fast] = np.abs(fast_right[n + system.pinion])
     arrays["approach_size"][place][:fast] = np.abs(base @ fast_right)
     # measured in the state's scales: a row's product is then a relative tilt
@@ -357,7 +365,8 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
 
 
 # pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
-COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "start_fast", "modal_fast")
+COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "speed_fast", "approach_fast",
+                  "start_fast", "modal_fast")
 FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "tilt_rows", "speed_slow", "approach_slow",
                 "speed_size", "approach_size", "start", "start_slow", "start_size",
                 "modal_slow", "series")
@@ -395,6 +404,8 @@ def unpack_tables(complexes, floats, ints):
     at += places * size * fast
     rates = complexes[at:at + places * fast].reshape((places, fast))
     at += places * fast
+    rows_of_fast_complex = complexes[at:at + 2 * places * fast].reshape((2, places, fast))
+    at += 2 * places * fast
     start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
     at = 0
     slow_left = floats[at:at + places * slow * width].reshape((places, slow, width))
@@ -421,7 +432,8 @@ def unpack_tables(complexes, floats, ints):
         ints[header + 2 * places:header + 3 * places],
         ints[header + 3 * places:header + 4 * places], slow_left, slow_right, slow_block,
         fast_left, fast_right, rates, rows, rows_of_slow[0], rows_of_slow[1], rows_of_fast[0],
-        rows_of_fast[1], floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
+        rows_of_fast[1], rows_of_fast_complex[0], rows_of_fast_complex[1],
+        floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
         start_slow, start_fast, start_size, modal_slow, modal_fast, series)
 
 
@@ -532,7 +544,67 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     unloaded) over it."""
     if not _prepared(tables, exact, state, motor_torque, load_torque):
         _prepare(system, tables, exact, state, motor_torque, load_torque)
-    # bounds: each function is its slow polynomial plus the fast modes' sum
+    speed_swing, approach_swing = _fast_modes(tables, exact, h)
+    speed_slow, approach_slow = _slow_series(tables, exact, h)
+    _from_modal(tables, exact, out)
+    _keep_momentum(system, tables, state, motor_torque, load_torque, h, out)
+    speed = system.mass.shape[0] + system.pinion
+    certified = keeps_sign(tables, exact, h, tables.speed_size, tables.speed_fast, speed_slow,
+                           speed_swing, 1.0 if state[speed] >= 0.0 else -1.0, state[speed],
+                           out[speed])
+    if contact_loss and certified:
+        certified = keeps_sign(tables, exact, h, tables.approach_size, tables.approach_fast,
+                               approach_slow, approach_swing, loaded_variant_sign,
+                               _approach(system, state), _approach(system, out))
+    return certified
+
+
+class SlowBound(NamedTuple):
+    """Of a function of the state (the pinion speed, a point's approach) over an exact step
+    [0, h]: what bounds its slow part, a polynomial in t. Units: the function's."""
+
+    start: float  # its value at the step's start
+    drift: float  # how far it can move over the step: its terms' magnitudes
+    curve: float  # how far it can bow from its chord: its terms of order ≥ 2, as
+    #               |t^n − t·h^(n−1)| ≤ h^n on [0, h]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_end):
+    """Whether sign·f > 0 over the whole step just taken (the tables' start_fast, modal_fast)
+    for a function f of the state: its row of fast_right `rows` and their magnitudes `sizes`
+    (ExactTables' speed_fast and speed_size, or approach_fast and approach_size), its slow
+    part's SlowBound, its fast modes' Σ|a_k| `swing`, and its values at the step's ends.
+
+    Either of two lower bounds of sign·f will do. The first: its slow part at the start less
+    all that can move, for a step over which the modes ring through whole periods. The
+    second, for a step short against the modes that swing most: the fast modes' sum
+    Σ Re(a_k·e^{λ_k·t}) is split into the modes that turn through much of a period within
+    the step (|λ|·h ≥ √8), each at least −|a|, and the others, which bow below their chord
+    by at most their curvature |a|·|λ|² times h²/8; the smaller end of f less the first kind
+    bounds the chord of the rest."""
+    if sign * slow.start > slow.drift + swing:
+        return True
+    bend = short_swing = short_start = short_end = 0.0
+    for k in range(tables.fast_count[exact]):
+        rate = tables.rates[exact, k]
+        curvature = (rate.real * rate.real + rate.imag * rate.imag) * h * h * 0.125
+        size = sizes[exact, k] * tables.start_size[k]
+        if curvature >= 1.0:
+            row = rows[exact, k]
+            short_swing += size
+            short_start += (row * tables.start_fast[k]).real
+            short_end += (row * tables.modal_fast[k]).real
+        else:
+            bend += size * curvature
+    chord = min(sign * (at_start - short_start), sign * (at_end - short_end))
+    return chord > slow.curve + bend + short_swing
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _fast_modes(tables, exact, h):
+    """Propagate the fast coordinates of the step's start over h into tables.modal_fast.
+    Returns the Σ|a_k| of the pinion speed's fast modes and of a point's approach's."""
     speed_swing = approach_swing = 0.0
     rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
     for k in range(tables.fast_count[exact]):
@@ -547,12 +619,16 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
             decay, angle = math.exp(exponent), rate.imag * h
             modal_fast[k] = start_fast[k] * complex(decay * math.cos(angle),
                                                     decay * math.sin(angle))
-    speed0, approach0, speed_drift, approach_drift = _slow_series(tables, exact, h)
-    _from_modal(tables, exact, out)
-    # The rounding of the modal round trip, about 1e-13 of Â, leaves the rigid rotation a bias
-    # where the torques' large accelerations cancel (9e-9 rad/s² on the reference scene: the
-    # switches drift, 2e-8 of the force scale after 0.3 s). The momentum along r changes by
-    # the net torque alone, exactly: the step's end is put back on it, and on its integral.
+    return speed_swing, approach_swing
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _keep_momentum(system, tables, state, motor_torque, load_torque, h, out):
+    """Put the step's end `out` back on the train's momentum along the rigid rotation and on
+    its integral, which the net torque alone changes, exactly. The rounding of the modal
+    round trip, about 1e-13 of Â, leaves the rigid rotation a bias where the torques' large
+    accelerations cancel (9e-9 rad/s² on the reference scene: the switches drift, 2e-8 of
+    the force scale after 0.3 s)."""
     width = state.shape[0] + INPUTS
     momentum, moment = tables.start[width + 1], tables.start[width + 2]
     net = motor_torque - load_torque * system.rigid_rotation[system.wheel]
@@ -561,20 +637,27 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     out[n + system.pinion] += (momentum + net * h - momentum_after) / tables.inertia
     out[system.pinion] += (moment + momentum * h + 0.5 * net * h * h
                            - moment_after) / tables.inertia
-    certified = abs(speed0) > speed_drift + speed_swing
-    if contact_loss:
-        certified = certified and (loaded_variant_sign * approach0
-                                   > approach_drift + approach_swing)
-    return certified
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _approach(system, state):
+    """A point's approach δ + η·δ̇ (m) at `state` in an exact segment: the tilt is zero there,
+    so the lever arm drops out, and the set has no lead error (it is dβ·z, and its slope
+    dβ makes a set not exact)."""
+    n = system.mass.shape[0]
+    base = base_rate = 0.0
+    for j in range(n):
+        base += system.contact_row_base_relative[j] * state[j]
+        base_rate += system.contact_row_base_relative[j] * state[n + j]
+    return base + system.mesh_damping_factor * base_rate
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _slow_series(tables, exact, h):
     """Propagate the slow coordinates of the step's start over h by their series into
     tables.modal_slow (exp(T_slow·h) applied term by term; the block is nilpotent but for
-    rounding, so the series ends after a few terms). Returns the slow parts of the pinion
-    speed and of the approach at the step's start, and bounds of how far each moves over the
-    step (the sum of its terms' magnitudes)."""
+    rounding, so the series ends after a few terms). Returns the SlowBound of the pinion speed
+    and of a point's approach."""
     slow_count = tables.slow_count[exact]
     block, series, modal = tables.slow, tables.series, tables.modal_slow
     speed_row, approach_row = tables.speed_slow, tables.approach_slow
@@ -587,7 +670,7 @@ def _slow_series(tables, exact, h):
         series[0, k] = coordinate
         modal[k] = coordinate
         largest = max(largest, abs(coordinate))
-    speed_drift = approach_drift = 0.0
+    speed_drift = approach_drift = speed_curve = approach_curve = 0.0
     for order in range(1, MAX_SERIES_TERMS):  # series[0]: the term, series[1]: the next
         size = 0.0
         for i in range(slow_count):
@@ -605,9 +688,13 @@ def _slow_series(tables, exact, h):
             size = max(size, abs(following))
         speed_drift += abs(speed_change)
         approach_drift += abs(approach_change)
+        if order >= 2:
+            speed_curve += abs(speed_change)
+            approach_curve += abs(approach_change)
         if size <= SERIES_FLOOR * largest:
             break
-    return speed0, approach0, speed_drift, approach_drift
+    return (SlowBound(speed0, speed_drift, speed_curve),
+            SlowBound(approach0, approach_drift, approach_curve))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
