@@ -77,6 +77,18 @@ def test_repeated_runs_exit_cleanly_with_fmpys_outputs_bit_for_bit(c_host, unzip
     assert failures == [], f"{len(failures)} of {RUNS} runs failed: {failures[:2]}"
 
 
+def without_active_environment():
+    """This process's environment variables less an activated virtual environment: an
+    embedded interpreter that is given no program path looks for `python3` on PATH, and from
+    an activated environment's bin folder it takes that environment's packages."""
+    env = {name: value for name, value in os.environ.items() if name != "VIRTUAL_ENV"}
+    own = Path(sys.prefix).resolve()
+    env["PATH"] = os.pathsep.join(
+        folder for folder in env.get("PATH", "").split(os.pathsep)
+        if folder and own not in Path(folder).resolve().parents)
+    return env
+
+
 def test_a_missing_dependency_is_named_and_the_host_lives(c_host, unzipped, tmp_path):
     # README's recipe on an environment without numba: a bare venv of the same interpreter
     # (the embedded interpreter still sees the base installation's own site-packages)
@@ -89,7 +101,8 @@ def test_a_missing_dependency_is_named_and_the_host_lives(c_host, unzipped, tmp_
     command = [str(HOST_FOLDER / "run.sh"), str(bare / "bin" / "python"), str(c_host),
                str(folder), description.coSimulation.modelIdentifier, description.guid,
                str(STOP), str(STEP), *map(str, references)]
-    run = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120,
+                         env=without_active_environment())
     assert run.returncode == NO_INSTANCE, run.stderr[-2000:]  # not a crash
     assert re.search(r"herringbone FMU: [a-z, ]*numba cannot be imported by the Python", run.stderr)
     assert "set PYTHONPATH to the site-packages folder" in run.stderr
