@@ -263,3 +263,39 @@ def test_a_step_certified_to_keep_its_sign_keeps_it():
                 by_chord += not sign * slow.start > slow.drift + swing
                 assert (sign * values).min() > 0.0
     assert by_chord >= 0.2 * certified > 0
+
+
+def test_a_step_ends_with_the_approach_slopes_of_its_end():
+    """The grazing check of a step starts from the approach slopes at its start, which the
+    step before it handed on: after every step of separation's run, those slopes are the
+    approach rates at the run's state (equations.approach_rates), to rounding, or marked not
+    taken (NaN: after a certified exact step, which skips the check; the next check takes
+    them), never an older step's."""
+    from herringbone.integrate.compiled import equations, walk
+    from herringbone.integrate.compiled_stepper import StepBudgetExceeded
+
+    scene = herringbone.load_scene(MODELS / "separation.toml")
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, 1e-7, "exponential")
+    run_ = stepper.start(start_position(model, 500.0))
+    stepper.run_to(run_, 0.0045, (500.0, 0.0))
+    rate, expected = np.empty(len(run_.state)), np.empty(stepper.tables.shape[2])
+    taken = not_taken = 0
+    for _ in range(200):
+        try:
+            stepper.run_to(run_, 0.01, (500.0, 0.0), max_steps=1)
+        except StepBudgetExceeded:
+            pass
+        interval, count = int(run_.place[0]), int(stepper.counts[int(run_.place[0])])
+        points = stepper.tables[interval]
+        equations.derivative(model.system, points, count, run_.loaded, 500.0, 0.0, run_.state,
+                             rate)
+        equations.approach_rates(model.system, points, count, run_.state, rate, expected)
+        slopes = run_.workspace[1][walk.Values.SLOPES_BEFORE, :count]  # (its values)
+        if np.isnan(slopes[0]):
+            not_taken += 1
+            continue
+        taken += 1
+        assert np.allclose(slopes, expected[:count], rtol=1e-9,
+                           atol=1e-9 * np.abs(expected[:count]).max())
+    assert taken >= 5 and not_taken >= 20, (taken, not_taken)

@@ -137,7 +137,7 @@ class Values(IntEnum):
     LOW = 3  # at the location bracket's low end
     HIGH = 4  # at its high end
     APPROACH = 5  # per point: δ + η·δ̇, m (scratch)
-    SLOPES_BEFORE = 6  # per point: its rate at the step's start, m/s
+    SLOPES_BEFORE = 6  # per point: its rate at the step's start, m/s (NaN: not taken)
     SLOPES_AFTER = 7  # at its end
 
 
@@ -814,16 +814,21 @@ def crossed_event(system, segment, new_state, values):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def grazing_check(system, segment, new_state, rate_after, values, h):
-    """The grazing check of a step of h (s), where contact can be lost: the approach slopes
-    at its end (from `new_state` and its rate; into the SLOPES_AFTER row of `values`), and
+def grazing_check(system, segment, state, rate, new_state, rate_after, values, h):
+    """The grazing check of a step of h (s) from `state` (its rate `rate`), where contact can
+    be lost: the approach slopes at its end (from `new_state` and its rate; into the
+    SLOPES_AFTER row of `values`), and
     where inside the step, as a fraction of it, a point may lift off and land again (or touch
     and leave) unseen by its ends, also before an event the step's end shows (a dip inside a
-    short contact interval): grazing_suspect's turning point, −1 for none."""
-    slopes_after = values[Values.SLOPES_AFTER]
+    short contact interval): grazing_suspect's turning point, −1 for none. The slopes at its
+    start are taken from `state` and its `rate` where the step before did not take them (a
+    certified exact step: NaN)."""
+    slopes_before, slopes_after = values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER]
+    if math.isnan(slopes_before[0]):
+        approach_rates(system, segment.points, segment.point_count, state, rate, slopes_before)
     approach_rates(system, segment.points, segment.point_count, new_state, rate_after, slopes_after)
     return grazing_suspect(values[Values.BEFORE], values[Values.AFTER],
-                           values[Values.SLOPES_BEFORE], slopes_after, h, segment.point_count,
+                           slopes_before, slopes_after, h, segment.point_count,
                            segment.loaded)
 
 
@@ -1130,9 +1135,9 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         counters[Counter.OPENING] = -1
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
         rate_after_step(system, segment, explicit, rows)
-        if system.contact_loss and not certified:  # (a certified step has no grazing inside)
+        if system.contact_loss:
             event, high = grazing_probe(system, segment, settings, state, workspace,
-                                        plan.h_step, event)
+                                        plan.h_step, event, certified)
         if event >= 0:
             status, k = cross_event(system, mesh, settings, run, workspace, segment, plan,
                                     target, event, high, samples, k)
@@ -1185,13 +1190,18 @@ def rate_after_step(system, segment, explicit, rows):
 
 
 @njit(cache=True, error_model="numpy")
-def grazing_probe(system, segment, settings, state, workspace, h_step, event):
+def grazing_probe(system, segment, settings, state, workspace, h_step, event, certified):
     """The grazing check of an accepted step of h_step (s) (grazing_check; the rate at its
-    end in RATE_AFTER), and where it finds a suspect, the probe (probe_inside). Returns (the
-    event crossed first, −1 for none; the bracket's high end, s)."""
+    end in RATE_AFTER), and where it finds a suspect, the probe (probe_inside). A `certified`
+    exact step has no grazing inside: it marks the approach slopes at its end not taken, for
+    the next step's check to take them if it needs them. Returns (the event crossed first, −1
+    for none; the bracket's high end, s)."""
     vectors, values = workspace.vectors, workspace.values
-    suspect = grazing_check(system, segment, vectors[Vector.NEW_STATE],
-                            vectors[Vector.RATE_AFTER], values, h_step)
+    if certified:
+        values[Values.SLOPES_AFTER, 0] = math.nan
+        return event, h_step
+    suspect = grazing_check(system, segment, state, vectors[Vector.RATE],
+                            vectors[Vector.NEW_STATE], vectors[Vector.RATE_AFTER], values, h_step)
     if suspect > 0.0:
         return probe_inside(system, segment, settings, state, workspace, suspect, h_step, event)
     return event, h_step
