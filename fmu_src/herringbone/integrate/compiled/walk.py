@@ -817,12 +817,11 @@ def crossed_event(system, segment, new_state, values):
 def grazing_check(system, segment, state, rate, new_state, rate_after, values, h):
     """The grazing check of a step of h (s) from `state` (its rate `rate`), where contact can
     be lost: the approach slopes at its end (from `new_state` and its rate; into the
-    SLOPES_AFTER row of `values`), and
-    where inside the step, as a fraction of it, a point may lift off and land again (or touch
-    and leave) unseen by its ends, also before an event the step's end shows (a dip inside a
-    short contact interval): grazing_suspect's turning point, −1 for none. The slopes at its
-    start are taken from `state` and its `rate` where the step before did not take them (a
-    certified exact step: NaN)."""
+    SLOPES_AFTER row of `values`), and where inside the step, as a fraction of it, a point
+    may lift off and land again (or touch and leave) unseen by its ends, also before an event
+    the step's end shows (a dip inside a short contact interval): grazing_suspect's turning
+    point, −1 for none. The slopes at its start are taken from `state` and `rate` where the
+    step before did not take them (a certified exact step leaves them NaN)."""
     slopes_before, slopes_after = values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER]
     if math.isnan(slopes_before[0]):
         approach_rates(system, segment.points, segment.point_count, state, rate, slopes_before)
