@@ -58,6 +58,8 @@ from .equations import (
     STIFFNESS0,
     STIFFNESS_SLOPE,
     System,
+    contact_motion,
+    point_approach,
 )
 
 INPUTS = 3  # u = (motor torque, load torque, 1)
@@ -353,10 +355,12 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
     arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
     arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
-    arrays["speed_fast"][place][:fast] = fast_right[n + system.pinion]
-    arrays["approach_fast"][place][:fast] = base @ fast_right
-    arrays["speed_size"][place][:fast] = np.abs(fast_right[n + system.pinion])
-    arrays["approach_size"][place][:fast] = np.abs(base @ fast_right)
+    speed_fast, approach_fast = fast_right[n + system.pinion], base @ fast_right
+    arrays["speed_fast"][place][:fast], arrays["approach_fast"][place][:fast] = (speed_fast,
+                                                                              approach_fast)
+    # their magnitudes kept beside them: the certificate of every exact step sums them
+    arrays["speed_size"][place][:fast] = np.abs(speed_fast)
+    arrays["approach_size"][place][:fast] = np.abs(approach_fast)
     # measured in the state's scales: a row's product is then a relative tilt
     scaled = rows * state_scales[None, :]
     norms = np.maximum(np.linalg.norm(scaled, axis=1), 1e-300)
@@ -641,15 +645,10 @@ def _keep_momentum(system, tables, state, motor_torque, load_torque, h, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _approach(system, state):
-    """A point's approach δ + η·δ̇ (m) at `state` in an exact segment: the tilt is zero there,
-    so the lever arm drops out, and the set has no lead error (it is dβ·z, and its slope
-    dβ makes a set not exact)."""
-    n = system.mass.shape[0]
-    base = base_rate = 0.0
-    for j in range(n):
-        base += system.contact_row_base_relative[j] * state[j]
-        base_rate += system.contact_row_base_relative[j] * state[n + j]
-    return base + system.mesh_damping_factor * base_rate
+    """A point's approach δ + η·δ̇ (m) at `state` in an exact segment (equations.point_approach
+    with no lever arm and no lead error): the tilt is zero there, so the lever arm drops out,
+    and the set has no lead error (it is dβ·z, and its slope dβ makes a set not exact)."""
+    return point_approach(system, contact_motion(system, state), 0.0, 0.0)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
