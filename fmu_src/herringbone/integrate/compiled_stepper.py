@@ -210,6 +210,21 @@ class Run:
         """The run's time, s."""
         return float(self.clock[0])
 
+    @property
+    def trial_steps(self) -> int:
+        """Trial steps the run has taken (to locate events, probe for grazing, check contact),
+        beside its accepted steps: for benchmarks."""
+        return int(self._counters[walk.Counter.TRIAL_STEPS])
+
+    @property
+    def events(self) -> int:
+        """Events (contact switches, lift-offs, landings) the run has located: for benchmarks."""
+        return int(self._counters[walk.Counter.EVENTS])
+
+    @property
+    def _counters(self):
+        return self.workspace[walk.Workspace._fields.index("counters")]
+
 
 class CompiledStepper:
     """The FMU's integrator (the Stepper contract of integrate/contract.py): the compiled loop

@@ -156,7 +156,8 @@ class CompiledSegment(NamedTuple):
 
 
 class Counter(IntEnum):
-    """Entries of the workspace's `counters`: the loop's memory within one call of `advance`."""
+    """Entries of the workspace's `counters`: the loop's memory within one call of `advance`,
+    then the run's tallies, kept over its life (Run.trial_steps, Run.events)."""
 
     OPENING = 0  # the contact interval whose first step is being taken (forward entry); −1: none
     SEGMENT = 1  # segments begun in this call (what Radau IIA's Jacobian is dated by)
@@ -165,6 +166,8 @@ class Counter(IntEnum):
     STALLED = 4  # events in a row without progress
     REVERSALS = 5  # phase events in a row that reversed the last one
     LAST_PHASE_EVENT = 6  # Event.PHASE_END or PHASE_START; −1: none yet
+    TRIAL_STEPS = 7  # trial steps taken (trial_step: event location, grazing probes, checks)
+    EVENTS = 8  # events located (cross_event)
 
 
 class Memory(IntEnum):
@@ -524,6 +527,7 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     only to look where an event lies: its error is not checked (it is shorter than a step
     already accepted). Radau IIA factorizes for h (and says so in the workspace's memory)."""
     vectors = workspace.vectors
+    workspace.counters[Counter.TRIAL_STEPS] += 1
     if segment.exact >= 0:
         exact_step(system, segment, state, workspace, h, out)
     elif is_explicit(workspace):
@@ -912,6 +916,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             if crossings(low_values, high_values, segment.events, segment.loaded) == 1:
                 break
             trial_h = high - 2.0 * tolerance
+            if trial_h <= low:
+                break  # that trial was taken: they crossed together, to the tolerance
         else:
             # aim just past the estimate, so that a good estimate ends the search at once
             trial_h = estimate + tolerance
@@ -1220,6 +1226,7 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     handed cost a fifth of the exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
+    workspace.counters[Counter.EVENTS] += 1
     if violated_before(system, segment, settings, state, workspace, high, h_step):
         return Status.CONTACT_VIOLATED, k
     if segment.exact >= 0:
@@ -1243,7 +1250,7 @@ def step_rows(workspace, settings):
 def begin_walk(workspace):
     """The loop's memory at the start of a call of `advance`."""
     counters = workspace.counters
-    counters[:] = 0
+    counters[:Counter.TRIAL_STEPS] = 0
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
     workspace.memory[Memory.FACTORED_H] = 0.0
