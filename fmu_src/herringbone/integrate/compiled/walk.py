@@ -877,14 +877,36 @@ def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope
     return -1.0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def first_estimate(system, state, new_state, values, event, high, h_step):
+    """Where (s from the step's start) `event` crosses zero inside a whole step of h_step (s)
+    that crossed it (`high` == h_step: NEW_STATE and the AFTER values at its end), from its
+    values and slopes at both ends: the zero of the cubic through them (hermite_root), fifty
+    times closer than the chord's. A phase event's slope is φp's rate, in the state; a
+    point's, its approach rate, which the grazing check took at both ends (the SLOPES rows,
+    marked not taken by a NaN first entry). −1 where there is none."""
+    if high != h_step:
+        return -1.0
+    if event < Event.CONTACT:
+        pinion_rate = state.shape[0] // 2 + system.pinion
+        slope_before, slope_after = state[pinion_rate], new_state[pinion_rate]
+    else:
+        before, after = values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER]
+        if math.isnan(before[0]) or math.isnan(after[0]):
+            return -1.0
+        slope_before, slope_after = before[event - Event.CONTACT], after[event - Event.CONTACT]
+    return high * hermite_root(values[Values.BEFORE, event], values[Values.AFTER, event],
+                               high * slope_before, high * slope_after)
+
+
 @njit(**NUMBERS_ONLY)
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
-    by trial steps of the method, to the event time tolerance. A phase event's first estimate
-    is the zero of the cubic through its values and slopes (φp's rate, in the state) at the
-    step's ends, fifty times closer than the chord's; the next ones are Newton's from the
-    latest trial. A contact event is found by secant steps. Trials are judged against the
+    by trial steps of the method, to the event time tolerance. The first estimate is the zero
+    of the cubic through the event's values and slopes at the step's ends (first_estimate);
+    a phase event's next ones are Newton's from the latest trial (its slope, φp's rate, is in
+    the state), a contact's the secant's. Trials are judged against the
     bracket's low end, so that of several events crossed the earliest is taken. Returns
     (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
@@ -899,9 +921,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     pinion_rate = state.shape[0] // 2 + system.pinion
     newer_slope = new_state[pinion_rate]
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
-    estimate = (high * hermite_root(low_values[event], high_values[event],
-                                    high * state[pinion_rate], high * newer_slope)
-                if event < Event.CONTACT and high == h_step else -1.0)
+    estimate = first_estimate(system, state, new_state, values, event, high, h_step)
     for _ in range(MAX_LOCATION_TRIALS):
         if high - low <= 2.0 * tolerance:
             break  # whatever crossed in between crossed together, to the tolerance
