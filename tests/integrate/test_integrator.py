@@ -289,8 +289,8 @@ def test_landings_of_every_point_at_once_are_located_in_few_trials(method):
     set at once, so a landing brackets several crossings within the event time tolerance.
     The location ends there with a trial just before the bracket's end; it used to take that
     same trial again and again, up to MAX_LOCATION_TRIALS: 10.7 trial steps an event with
-    the exponential method, 4.5 with DOP853, 14.9 with Radau IIA (measured now: 3.4, 3.1,
-    2.7)."""
+    the exponential method, 4.5 with DOP853, 14.9 with Radau IIA (measured now: 3.4, 2.1,
+    1.7)."""
     scene = herringbone.load_scene(MODELS / "jump_resonance.toml")
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, DEFAULT_TOLERANCE, method)
@@ -301,10 +301,11 @@ def test_landings_of_every_point_at_once_are_located_in_few_trials(method):
 
 
 def test_a_contact_event_starts_from_the_cubic_through_its_ends():
-    """models/contact_loss.toml loses and regains points 6 000 times a simulated second. A
-    contact event's first estimate is the zero of the cubic through the point's approach and
-    approach rate at the step's ends (walk.first_estimate), as a phase event's is: DOP853
-    locates them in 3.32 trial steps an event over 20 ms, where the chord's zero took 4.30."""
+    """models/contact_loss.toml has 6 000 events a simulated second, nearly all of them points
+    lost or regained. A contact event's first estimate is the zero of the cubic through the
+    point's approach and approach rate at the step's ends (walk.first_estimate), as a phase
+    event's is: DOP853 locates them in 3.32 trial steps an event over 20 ms, where the chord's
+    zero took 4.30."""
     scene = herringbone.load_scene(MODELS / "contact_loss.toml")
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, DEFAULT_TOLERANCE, "dop853")

@@ -906,9 +906,9 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     by trial steps of the method, to the event time tolerance. The first estimate is the zero
     of the cubic through the event's values and slopes at the step's ends (first_estimate);
     a phase event's next ones are Newton's from the latest trial (its slope, φp's rate, is in
-    the state), a contact's the secant's. Trials are judged against the
-    bracket's low end, so that of several events crossed the earliest is taken. Returns
-    (the event; the bracket's high end, s, its state in NEW_STATE)."""
+    the state), a contact's the secant's. Trials are judged against the bracket's low end,
+    so that of several events crossed the earliest is taken. Returns (the event; the
+    bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
