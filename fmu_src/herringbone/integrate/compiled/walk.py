@@ -923,8 +923,10 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
     for _ in range(MAX_LOCATION_TRIALS):
-        if high - low <= 2.0 * tolerance:
-            break  # whatever crossed in between crossed together, to the tolerance
+        # whatever crossed in between crossed together, to the tolerance (written as the
+        # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
+        if low >= high - 2.0 * tolerance:
+            break
         if estimate < 0.0:
             estimate = next_estimate(event, older_h, older_value, newer_h, newer_value,
                                      newer_slope)
@@ -936,8 +938,6 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             if crossings(low_values, high_values, segment.events, segment.loaded) == 1:
                 break
             trial_h = high - 2.0 * tolerance
-            if trial_h <= low:
-                break  # that trial was taken: they crossed together, to the tolerance
         else:
             # aim just past the estimate, so that a good estimate ends the search at once
             trial_h = estimate + tolerance
