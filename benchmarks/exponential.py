@@ -60,8 +60,8 @@ DRIVES = {"step": per_step, "run": per_run}
 def kernel_run(scene, method, span, output_interval, tolerance, repeats):
     """The compiled kernel alone, driven as DRIVES says: (seconds to set the stepper up,
     {drive: best CPU s per simulated s of the stepping}, {drive: accepted steps per simulated
-    s}, {drive: trial steps per located event}, {drive: the outputs at the output times after
-    0})."""
+    s}, {drive: (trial steps, rejected steps) per located event}, {drive: the outputs at the
+    output times after 0})."""
     import numpy as np
 
     from herringbone.integrate.compiled_stepper import CompiledStepper
@@ -74,7 +74,7 @@ def kernel_run(scene, method, span, output_interval, tolerance, repeats):
     setup = time.perf_counter() - started
     start = start_position(model, scene.inputs.at(0.0)[0])
     count = int(round(span / output_interval))
-    best, samples, steps, trials = {}, {}, {}, {}
+    best, samples, steps, per_event = {}, {}, {}, {}
     for drive, function in DRIVES.items():
         function(stepper, scene, stepper.start(start), np.empty((1, model.output_layout_size)),
                  output_interval)  # load the compiled code
@@ -87,10 +87,11 @@ def kernel_run(scene, method, span, output_interval, tolerance, repeats):
             function(stepper, scene, run, samples[drive], output_interval)
             best[drive] = min(best[drive], (time.process_time() - started) / span)
             steps[drive] = (stepper.accepted_steps - before) / span
-            trials[drive] = run.trial_steps / max(run.events, 1)
+            events = max(run.events, 1)
+            per_event[drive] = (run.trial_steps / events, run.rejected_steps / events)
     outputs = {drive: {name: rows[:, i] for name, i in model.output_layout}
                for drive, rows in samples.items()}
-    return setup, best, steps, trials, outputs
+    return setup, best, steps, per_event, outputs
 
 
 def force_error(outputs, reference, names, scale):
@@ -128,12 +129,13 @@ def main(argv=None) -> int:
           f"over the force scale; s/s: CPU s of the compiled kernel's stepping per simulated "
           f"s, best of {args.repeats}, driven by a call per output step (step) or per run "
           f"(run); setup: constructing the stepper; trials/event: trial steps (event "
-          f"location, grazing probes) per located event, run drive; speed-up: DOP853's s/s "
-          f"over the exponential method's, each drive")
+          f"location, grazing probes) per located event, run drive; rejected/event: steps "
+          f"rejected (error control; exact steps not certified) per located event, run drive; "
+          f"speed-up: DOP853's s/s over the exponential method's, each drive")
     header = ["scene", "exact sets"] + [f"{m} {what} {drive}" for m in METHODS
                                         for what in ("s/s", "steps/s", "error")
                                         for drive in DRIVES] + [f"{m} setup s" for m in METHODS]
-    header += [f"{m} trials/event" for m in METHODS]
+    header += [f"{m} {what}/event" for what in ("trials", "rejected") for m in METHODS]
     print(" | ".join(header + ["speed-up step", "speed-up run"]))
     for path in common.scene_paths(args.scenes):
         scene = herringbone.load_scene(path)
@@ -141,9 +143,9 @@ def main(argv=None) -> int:
                                             args.reference_tolerance, log=lambda text: None)
         scale = common.force_scale(scene)
         names = common.force_outputs(scene)
-        row, setups, locating, cpu = [path.stem, exact_sets(scene)], [], [], {}
+        row, setups, trials, rejected, cpu = [path.stem, exact_sets(scene)], [], [], [], {}
         for method in METHODS:
-            setup, seconds, steps, trials, outputs = kernel_run(
+            setup, seconds, steps, per_event, outputs = kernel_run(
                 scene, method, args.span, args.output_interval, args.tolerance, args.repeats)
             cpu[method] = seconds
             row += [f"{seconds[drive]:.4f}" for drive in DRIVES]
@@ -151,8 +153,9 @@ def main(argv=None) -> int:
             row += [f"{force_error(outputs[drive], reference, names, scale):.1e}"
                     for drive in DRIVES]
             setups.append(f"{setup:.3f}")
-            locating.append(f"{trials['run']:.2f}")
-        row += setups + locating
+            trials.append(f"{per_event['run'][0]:.2f}")
+            rejected.append(f"{per_event['run'][1]:.2f}")
+        row += setups + trials + rejected
         row += [f"{cpu['dop853'][drive] / cpu['exponential'][drive]:.1f}x" for drive in DRIVES]
         print(" | ".join(row), flush=True)
     return 0

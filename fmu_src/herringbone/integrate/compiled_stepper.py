@@ -222,6 +222,12 @@ class Run:
         return int(self._counters[walk.Counter.EVENTS])
 
     @property
+    def rejected_steps(self) -> int:
+        """Steps the run has rejected (by error control; exact steps it could not certify),
+        beside its accepted steps: for benchmarks."""
+        return int(self._counters[walk.Counter.REJECTED_STEPS])
+
+    @property
     def _counters(self):
         return self.workspace[walk.Workspace._fields.index("counters")]
 

@@ -157,7 +157,8 @@ class CompiledSegment(NamedTuple):
 
 class Counter(IntEnum):
     """Entries of the workspace's `counters`: the loop's memory within one call of `advance`,
-    then the run's tallies, kept over its life (Run.trial_steps, Run.events)."""
+    then the run's tallies, kept over its life (Run.trial_steps, Run.events,
+    Run.rejected_steps)."""
 
     OPENING = 0  # the contact interval whose first step is being taken (forward entry); −1: none
     SEGMENT = 1  # segments begun in this call (what Radau IIA's Jacobian is dated by)
@@ -168,6 +169,7 @@ class Counter(IntEnum):
     LAST_PHASE_EVENT = 6  # Event.PHASE_END or PHASE_START; −1: none yet
     TRIAL_STEPS = 7  # trial steps taken (trial_step: event location, grazing probes, checks)
     EVENTS = 8  # events located (cross_event)
+    REJECTED_STEPS = 9  # steps rejected (error control; an exact step not certified)
 
 
 class Memory(IntEnum):
@@ -1143,8 +1145,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             break
         certified = False
         if segment.exact >= 0:
-            certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
-            accepted, clock[1] = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
+            certified, accepted, clock[1] = take_exact_step(system, segment, settings, state,
+                                                            workspace, rows, plan)
         else:
             retry, accepted, h_next, controller = runge_kutta_step(
                 system, segment, settings, state, workspace, rows, plan, controller)
@@ -1200,7 +1202,19 @@ def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, co
         if retry:
             return True, False, plan.h_step, controller
     accepted, h_next, controller = control_step(explicit, error, iterations, plan, controller)
+    workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
     return False, accepted, h_next, controller
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def take_exact_step(system, segment, settings, state, workspace, rows, plan):
+    """The step of `plan` (a StepPlan) from `state` by the segment's exact solution into
+    NEW_STATE, judged by control_exact_step. Returns (certified; accepted; the step size to
+    try next, s)."""
+    certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
+    accepted, h_next = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
+    workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
+    return certified, accepted, h_next
 
 
 @njit(cache=True, error_model="numpy", inline="always")
