@@ -58,3 +58,23 @@ def communication_run(stepper, stop_time, communication_step, torques=(500.0, 18
         samples.append(model.outputs(position.state, position.segment.contact_set,
                                      position.segment.loaded))
     return {name: np.array([s[name] for s in samples]) for name in samples[0]}
+
+
+def shipped_run(name, method, stop_time, communication_step=None):
+    """The compiled Run of the shipped scene `name` by `method` at the default tolerance to
+    stop_time (s), for its tallies (Run.trial_steps, Run.events, Run.rejected_steps): in one
+    call with the starting torques held, or with a `communication_step` (s) as the FMU
+    drives it, run_to every step with the scene's torques at the step's start."""
+    import herringbone
+    from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+    from herringbone.integrate.contract import start_position
+    from herringbone.model.assembly import GearTrainModel
+
+    scene = herringbone.load_scene(MODELS / f"{name}.toml")
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, DEFAULT_TOLERANCE, method)
+    position = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+    step = communication_step or stop_time
+    for k in range(round(stop_time / step)):
+        stepper.run_to(position, (k + 1) * step, scene.inputs.at(k * step))
+    return position

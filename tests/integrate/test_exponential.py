@@ -7,7 +7,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import MODELS, REGRESSION, force_error
+from helpers import MODELS, REGRESSION, force_error, shipped_run
 from helpers import communication_run as run
 
 import herringbone
@@ -188,18 +188,6 @@ def test_overdamped_stiff_modes_cost_it_nothing(reference_model):
     assert stepper.accepted_steps < implicit.accepted_steps
 
 
-def scheduled_run(name, stop_time):
-    """The exponential method's Run over the shipped scene `name` to stop_time (s), driven
-    as the FMU drives it: run_to every 1 ms with the scene's torques at the step's start."""
-    scene = herringbone.load_scene(MODELS / f"{name}.toml")
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
-    position = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    for k in range(round(stop_time / 1e-3)):
-        stepper.run_to(position, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
-    return position
-
-
 def test_exact_steps_are_rejected_only_where_the_modes_swing_the_pinion_speed():
     """An exact step is accepted only where it is certified to keep the pinion speed's sign
     (keeps_sign), and the loop grows the step until one is not. On the reference scene the
@@ -207,8 +195,9 @@ def test_exact_steps_are_rejected_only_where_the_modes_swing_the_pinion_speed():
     rejected. After torque_step's tenfold torque step (5 ms) the torsional mode swings it by
     40 to 160 %: long steps fail the certificate (measured: 43 rejected in 50 ms, 0.7 a
     located event), and Run.rejected_steps counts them."""
-    assert scheduled_run("reference", 0.02).rejected_steps == 0
-    before_step, swinging = scheduled_run("torque_step", 0.005), scheduled_run("torque_step", 0.05)
+    assert shipped_run("reference", "exponential", 0.02, 1e-3).rejected_steps == 0
+    before_step = shipped_run("torque_step", "exponential", 0.005, 1e-3)
+    swinging = shipped_run("torque_step", "exponential", 0.05, 1e-3)
     assert before_step.rejected_steps == 0
     assert swinging.rejected_steps >= 10
 

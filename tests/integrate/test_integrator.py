@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import MODELS, REGRESSION, force_error
+from helpers import MODELS, REGRESSION, force_error, shipped_run
 from helpers import communication_run as run
 
 import herringbone
@@ -283,17 +283,6 @@ def test_every_point_regains_load_after_a_complete_separation():
     assert fast["F_mesh"].min() == 0.0 and fast["F_mesh"][separated[-1]:].max() > 0.0
 
 
-def run_held(name, method, stop_time):
-    """A compiled run of the shipped scene `name` by `method` to stop_time (s) with its
-    starting torques held, in one call (its Run: steps, trial steps, events)."""
-    scene = herringbone.load_scene(MODELS / f"{name}.toml")
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, DEFAULT_TOLERANCE, method)
-    position = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    stepper.run_to(position, stop_time, scene.inputs.at(0.0))
-    return position
-
-
 @pytest.mark.parametrize("method", ["exponential", "dop853", "radau"])
 def test_landings_of_every_point_at_once_are_located_in_few_trials(method):
     """models/jump_resonance.toml lifts off and lands 34 times in 10 ms, every point of the
@@ -302,7 +291,7 @@ def test_landings_of_every_point_at_once_are_located_in_few_trials(method):
     same trial again and again, up to MAX_LOCATION_TRIALS: 10.7 trial steps an event with
     the exponential method, 4.5 with DOP853, 14.9 with Radau IIA (measured now: 3.4, 2.1,
     1.7)."""
-    position = run_held("jump_resonance", method, 0.01)
+    position = shipped_run("jump_resonance", method, 0.01)
     assert position.events > 200
     assert position.trial_steps <= 4.5 * position.events
 
@@ -313,7 +302,7 @@ def test_a_contact_event_starts_from_the_cubic_through_its_ends():
     point's approach and approach rate at the step's ends (walk.first_estimate), as a phase
     event's is: DOP853 locates them in 3.32 trial steps an event over 20 ms, where the chord's
     zero took 4.30."""
-    position = run_held("contact_loss", "dop853", 0.02)
+    position = shipped_run("contact_loss", "dop853", 0.02)
     assert position.events > 100
     assert position.trial_steps <= 3.7 * position.events
 
