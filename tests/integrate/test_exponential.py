@@ -65,6 +65,38 @@ def test_modal_form_is_the_matrix_exponential(reference_model, variant):
         assert error <= 1e-9
 
 
+def test_the_modes_the_tilt_sees_are_left_out(reference_model):
+    """An exact segment starts where the tilt stays zero (variant_of), so the modes that the
+    tilt's rows see have no part in it (unseen_by_tilt leaves them out of the tables). Of every
+    contact set of the reference scene in both variants: as many modes are left out as there
+    are tilt rows (a pair counts twice), the tables keep the others, and a random state moved
+    where the rows' products vanish has coordinates on those left out below 1e-10 of those on
+    the modes kept, the relative tilt a segment may start with at a tolerance of 1e-7
+    (measured 2e-12, the modal form's rounding)."""
+    model = reference_model
+    lengths, counts, tables = model.mesh.period_table()
+    scales = scales_of(model)
+    exact_tables = CompiledStepper(model, 1e-7, "exponential").exact_tables
+    rng = np.random.default_rng(7)
+    for interval in range(len(lengths)):
+        for variant in (exponential.ALL_LOADED, exponential.NONE_LOADED):
+            loaded = np.full(counts[interval], 1.0 if variant == exponential.ALL_LOADED else 0.0)
+            a, b = exponential.linear_system(model.system, tables[interval], counts[interval],
+                                             loaded)
+            rows = exponential.tilt_rows(model.system, a)
+            right, left, rates, slow = exponential.modal_form(a, b, scales)
+            kept, weights = exponential.kept_modes(rates[len(slow):])
+            fast = len(slow) + kept
+            free = exponential.unseen_by_tilt(rows, right[:a.shape[0], fast], scales)
+            assert weights[~free].sum() == len(rows) > 0
+            assert exact_tables.fast_count[interval * exponential.VARIANTS + variant] == free.sum()
+            scaled, scaled_rows = rng.normal(size=a.shape[0]), rows * scales[:a.shape[0]]
+            scaled -= np.linalg.pinv(scaled_rows) @ (scaled_rows @ scaled)
+            state = np.concatenate([scaled, [1.0, 1.0, 1.0]]) * scales
+            modal = np.abs(left[fast] @ state)
+            assert modal[~free].max() <= 1e-10 * modal[free].max()
+
+
 @pytest.mark.parametrize("name, exact", [
     ("reference", True), ("stiff_bearings", True), ("torsional", True), ("separation", True),
     # a lever arm that reaches the forces: the halves do not mirror each other (staggered), a

@@ -73,6 +73,8 @@ ALL_LOADED, NONE_LOADED = 0, 1
 VARIANTS = 2
 # The tilt a segment may start with, in units of the state scales times the step tolerance
 TILT_FRACTION = 1e-3
+# A mode's largest cosine with the tilt rows above which the tilt sees it (unseen_by_tilt)
+TILT_SEEN = 1e-6
 # The slow block's series stops where a term falls below this fraction of the sum
 SERIES_FLOOR = 1e-18
 MAX_SERIES_TERMS = 40
@@ -81,7 +83,8 @@ MAX_SERIES_TERMS = 40
 class ExactTables(NamedTuple):
     """Modal forms of every contact set of the mesh period in each loaded variant, indexed by
     the exact form's index interval·VARIANTS + variant (P of them); N the state's size,
-    M = N + INPUTS, S the widest slow block, F the most fast modes kept, C the most tilt rows.
+    M = N + INPUTS, S the widest slow block, F the most fast modes kept (one of each pair,
+    none that the tilt sees: unseen_by_tilt), C the most tilt rows.
     An entry whose `valid` is 0 is not exact (walk.py steps it by DOP853). The system is real,
     so its fast modes come in complex conjugate pairs whose coordinates are conjugates of each
     other: one mode of each pair is kept, its column of R counted twice, and Re(R·z) is the
@@ -253,6 +256,24 @@ def kept_modes(rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return kept, np.where(rates[kept].imag > 0.0, 2.0, 1.0)
 
 
+def unseen_by_tilt(rows: np.ndarray, columns: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """Which of the modes whose state columns of R are `columns` (N×F, complex) the tilt rows
+    `rows` (C×N, tilt_rows) do not see. The space where the rows' products vanish is invariant
+    (the rows span the tilt's observability space, and nothing drives the tilt), and a
+    segment is exact only where the state starts in it (variant_of): there the modes the tilt
+    sees have zero coordinates and keep them, so an exact step need not propagate them (two
+    of the reference scene's seven pairs: a fifth of a step's products and exponentials).
+    Measured in `scales` (the state's first), by the largest cosine of a column with a row:
+    a mode the tilt sees comes out at 0.1 to 0.7, one it does not at 1e-15."""
+    if len(rows) == 0:
+        return np.ones(columns.shape[1], dtype=bool)
+    scaled_rows = rows * scales[None, :rows.shape[1]]
+    scaled_columns = columns / scales[:columns.shape[0], None]
+    cosines = np.abs(scaled_rows @ scaled_columns) / (
+        np.linalg.norm(scaled_rows, axis=1)[:, None] * np.linalg.norm(scaled_columns, axis=0))
+    return cosines.max(axis=0) <= TILT_SEEN
+
+
 def build_tables(system: System, period_table, state_scales: np.ndarray,
                  torque_scales: tuple[float, float], step_tolerance: float,
                  skip_defective: bool = False) -> ExactTables:
@@ -307,6 +328,8 @@ def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defectiv
                 if not skip_defective:
                     raise
                 continue
+            free = unseen_by_tilt(rows, right[:a.shape[0], len(slow) + kept], scales)
+            kept, weights = kept[free], weights[free]
             place = interval * VARIANTS + variant
             forms[place] = (right, left, rates, slow, len(slow) + kept, weights)
             rows_of[place] = rows
