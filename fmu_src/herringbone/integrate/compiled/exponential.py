@@ -36,7 +36,8 @@ terms, or the values at the step's ends less how far the function can bow below 
 (the modes' curvature; a mode that turns through much of a period, its magnitude). An uncertified
 step longer than DOP853's step bound is rejected (walk.py shortens it); at that bound the loop's
 own checks for a step's ends and for grazing (a cubic through values and slopes) hold, as for
-DOP853.
+DOP853. A segment's opening step is aimed where the slow motion carries the pinion angle out
+of its interval (`phase_event_ahead`).
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
@@ -75,6 +76,12 @@ VARIANTS = 2
 TILT_FRACTION = 1e-3
 # A mode's largest cosine with the tilt rows above which the tilt sees it (unseen_by_tilt)
 TILT_SEEN = 1e-6
+# The phase event's time from the slow polynomial (phase_event_ahead): Newton's iterations,
+# the relative change at which they stop, and the largest swing of the angle by the fast
+# modes, as a fraction of the way to go, at which the prediction is made
+PREDICTION_ITERATIONS = 8
+PREDICTION_PRECISION = 1e-9
+PREDICTION_SPREAD = 0.01
 # The slow block's series stops where a term falls below this fraction of the sum
 SERIES_FLOOR = 1e-18
 MAX_SERIES_TERMS = 40
@@ -116,7 +123,8 @@ class ExactTables(NamedTuple):
     start_slow: np.ndarray  # (S,)
     start_fast: np.ndarray  # (F,) complex
     start_size: np.ndarray  # (F,)
-    modal_slow: np.ndarray  # (S,): the coordinates at the step's end
+    modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or phase_event_ahead's
+    #                         polynomial)
     modal_fast: np.ndarray  # (F,) complex
     series: np.ndarray  # (2, S): the slow block's series
 
@@ -584,6 +592,73 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
                                approach_slow, approach_swing, loaded_variant_sign,
                                _approach(system, state), _approach(system, out))
     return certified
+
+
+@njit(**NUMBERS_ONLY)
+def phase_event_ahead(system, tables, exact, state, motor_torque, load_torque, length):
+    """A time (s from `state`) by which the pinion angle has surely left its contact interval
+    of `length` (rad) in the segment of exact form `exact` with the torques (N·m) held: where
+    the slow part of its motion (a polynomial in t, no exponentials) reaches `length` plus the
+    fast modes' swing of the angle (moving forward), or minus it below zero (moving back),
+    by Newton's method; inf where it stands still or turns back first; −1 (no prediction)
+    where that swing is more than PREDICTION_SPREAD of the way, so that a step aimed there
+    would overshoot the event by much (a torsional mode swinging the angle, as in
+    torque_step). The instantaneous speed and acceleration, which walk.phase_event_ahead
+    extrapolates, carry the fast modes' ringing (a switch sets the pinion accelerating at
+    1e6 rad/s² and more), and the slow part does not."""
+    if not _prepared(tables, exact, state, motor_torque, load_torque):
+        _prepare(system, tables, exact, state, motor_torque, load_torque)
+    pinion = system.pinion
+    swing = 0.0
+    for k in range(tables.fast_count[exact]):
+        swing += abs(tables.fast_right[exact, pinion, k]) * tables.start_size[k]
+    degree = _angle_polynomial(tables, exact, pinion)
+    terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
+    if terms[1] == 0.0:
+        return math.inf
+    target = length + swing if terms[1] > 0.0 else -swing
+    if swing > PREDICTION_SPREAD * abs(target - terms[0]):
+        return -1.0
+    ahead = (target - terms[0]) / terms[1]
+    for _ in range(PREDICTION_ITERATIONS):
+        value, slope = terms[degree], 0.0
+        for power in range(degree - 1, -1, -1):
+            slope = slope * ahead + value
+            value = value * ahead + terms[power]
+        if ahead <= 0.0 or slope * terms[1] <= 0.0:  # turns back before it gets there
+            return math.inf
+        change = (value - target) / slope
+        ahead -= change
+        if abs(change) <= PREDICTION_PRECISION * ahead:
+            break
+    return ahead if ahead > 0.0 else math.inf
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _angle_polynomial(tables, exact, pinion):
+    """The pinion angle's slow part from the step's start (tables.start_slow) as a polynomial
+    in t: its coefficients R_slow[φp]·T_slow^n/n!·z_slow into tables.modal_slow (n < S: the
+    block is nilpotent but for rounding). Returns its degree."""
+    slow_count = tables.slow_count[exact]
+    block, series, terms = tables.slow, tables.series, tables.modal_slow
+    for k in range(slow_count):
+        series[0, k] = tables.start_slow[k]
+    degree = 0
+    for power in range(slow_count):
+        total = 0.0
+        for k in range(slow_count):
+            total += tables.slow_right[exact, pinion, k] * series[0, k]
+        terms[power] = total
+        if total != 0.0:
+            degree = power
+        for i in range(slow_count):
+            following = 0.0
+            for j in range(slow_count):
+                following += block[exact, i, j] * series[0, j]
+            series[1, i] = following / (power + 1)
+        for i in range(slow_count):
+            series[0, i] = series[1, i]
+    return max(degree, 1)
 
 
 class SlowBound(NamedTuple):

@@ -176,6 +176,9 @@ class Memory(IntEnum):
     """Entries of the workspace's `memory`: the loop's floats within one call of `advance`."""
 
     FACTORED_H = 0  # s: the step size Radau IIA's LU factors belong to; 0: none
+    # s: when the next phase event lies ahead of an exact segment's opening step, taken as the
+    # segment was entered (opening_ahead); −1: none
+    OPENING_AHEAD = 1
 
 
 class Workspace(NamedTuple):
@@ -381,6 +384,20 @@ def _exact_step(system, segment, state, workspace, h, out):
         == exponential.ALL_LOADED else -1.0, out)
 
 
+def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
+    """exponential.phase_event_ahead on the workspace's tables where it is the exponential
+    method's; −1 (none) in the others'."""
+
+
+@overload(exact_event_ahead, inline="always")
+def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
+    if _lacks(workspace, "exact"):
+        return lambda system, workspace, exact, state, motor_torque, load_torque, length: -1.0
+    return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
+            exponential.phase_event_ahead(system, workspace.exact, exact, state, motor_torque,
+                                          load_torque, length))
+
+
 def stop_at(samples, k, end, exact):
     """Where the loop stops: at `end`, or where the segment is not exact (its exact form
     `exact` < 0), at the sample time `k` of `samples` if that comes first (a sampled run's
@@ -469,6 +486,19 @@ def phase_event_ahead(system, state, rate, length):
         return math.inf
     ahead = linear - 0.5 * acceleration * linear * linear / slope
     return ahead if ahead > 0.0 else math.inf
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def event_ahead(system, segment, state, workspace, rate, explicit):
+    """When (s from now) the next phase event is predicted, for the step to be aimed just
+    past it (plan_step): for an exact segment's opening step, the time opening_ahead took;
+    else from φp's rate and acceleration `rate` (phase_event_ahead) for DOP853 and the
+    exponential method, and never for Radau IIA (plan_step says why)."""
+    if segment.exact >= 0 and workspace.counters[Counter.OPENING] >= 0:
+        ahead = workspace.memory[Memory.OPENING_AHEAD]
+        if ahead >= 0.0:
+            return ahead
+    return phase_event_ahead(system, state, rate, segment.length) if explicit else NEVER
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1004,6 +1034,25 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def opening_ahead(system, mesh, run, workspace, segment):
+    """Where the run has just entered an exact segment forward (end_segment; the torques
+    those of `segment`, the one it left): when the next phase event lies ahead
+    (exponential.phase_event_ahead, from the slow part of the motion), for the opening step
+    to be aimed at; −1 elsewhere. φp's acceleration just after a switch is the fast modes'
+    (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
+    halfway. Taken here, once an event, where it was measured to cost least
+    (docs/exponential-integrator.md, "An opening step aimed by the slow motion")."""
+    if workspace.counters[Counter.OPENING] < 0:
+        return -1.0
+    interval = run.place[0]
+    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
+    if exact < 0:
+        return -1.0
+    return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
+                             segment.load_torque, mesh.lengths[interval])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def end_segment(system, mesh, run, workspace, event):
     """Move the run into the segment that follows `event` at its state: the next contact set
     and its loaded points (next_segment, into the run's place and loaded points), and after a
@@ -1137,7 +1186,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         if clock[0] >= target:
             break
         time, h = clock[0], clock[1]
-        ahead = phase_event_ahead(system, state, rows.rate, segment.length) if explicit else NEVER
+        ahead = event_ahead(system, segment, state, workspace, rows.rate, explicit)
         plan = plan_step(settings[Setting.EXACT_MAX_STEP if segment.exact >= 0
                                   else Setting.MAX_STEP], time, target, h, ahead)
         status = step_allowed(steps, max_steps, time, plan)
@@ -1268,6 +1317,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
+        workspace.memory[Memory.OPENING_AHEAD] = opening_ahead(system, mesh, run, workspace,
+                                                               segment)
     return status, k
 
 
@@ -1288,6 +1339,7 @@ def begin_walk(workspace):
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
     workspace.memory[Memory.FACTORED_H] = 0.0
+    workspace.memory[Memory.OPENING_AHEAD] = -1.0
 
 
 # --- a run sampled in one call ----------------------------------------------------------------
