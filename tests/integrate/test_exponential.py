@@ -249,7 +249,7 @@ def interval_left(stepper, position, torques, by):
 
 
 def test_an_opening_step_is_aimed_just_past_the_phase_event(reference_model):
-    """exponential.phase_event_ahead, from four states inside a contact interval of the
+    """exponential.slow_phase_event_ahead, from four states inside a contact interval of the
     reference scene: the pinion angle has left the interval by the time it gives, and not
     earlier than 3·PREDICTION_SPREAD of that time before it (the fast modes' swing of the
     angle, at most PREDICTION_SPREAD of the way, either side; measured 0.06 to 0.5 %), the
@@ -261,7 +261,7 @@ def test_an_opening_step_is_aimed_just_past_the_phase_event(reference_model):
     for time in (0.0037, 0.0052, 0.0101, 0.0133):
         position = stepper.advance(start_position(model, torques[0]), time, torques)
         interval = position.segment.contact_set.index
-        ahead = exponential.phase_event_ahead(
+        ahead = exponential.slow_phase_event_ahead(
             model.system, stepper.exact_tables,
             interval * exponential.VARIANTS + exponential.ALL_LOADED, position.state, *torques,
             stepper.lengths[interval])

@@ -37,7 +37,7 @@ terms, or the values at the step's ends less how far the function can bow below 
 step longer than DOP853's step bound is rejected (walk.py shortens it); at that bound the loop's
 own checks for a step's ends and for grazing (a cubic through values and slopes) hold, as for
 DOP853. A segment's opening step is aimed where the slow motion carries the pinion angle out
-of its interval (`phase_event_ahead`).
+of its interval (`slow_phase_event_ahead`).
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
@@ -76,9 +76,9 @@ VARIANTS = 2
 TILT_FRACTION = 1e-3
 # A mode's largest cosine with the tilt rows above which the tilt sees it (unseen_by_tilt)
 TILT_SEEN = 1e-6
-# The phase event's time from the slow polynomial (phase_event_ahead): Newton's iterations,
-# the relative change at which they stop, and the largest swing of the angle by the fast
-# modes, as a fraction of the way to go, at which the prediction is made
+# The phase event's time from the slow polynomial (slow_phase_event_ahead): Newton's
+# iterations, the relative change at which they stop, and the largest swing of the angle by
+# the fast modes, as a fraction of the way to go, at which the prediction is made
 PREDICTION_ITERATIONS = 8
 PREDICTION_PRECISION = 1e-9
 PREDICTION_SPREAD = 0.01
@@ -123,8 +123,8 @@ class ExactTables(NamedTuple):
     start_slow: np.ndarray  # (S,)
     start_fast: np.ndarray  # (F,) complex
     start_size: np.ndarray  # (F,)
-    modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or phase_event_ahead's
-    #                         polynomial)
+    modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or the polynomial of
+    #                         slow_phase_event_ahead)
     modal_fast: np.ndarray  # (F,) complex
     series: np.ndarray  # (2, S): the slow block's series
 
@@ -501,6 +501,14 @@ def variant_of(tables, interval, count, loaded, state):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _start_from(system, tables, exact, state, motor_torque, load_torque):
+    """Make `state` the start whose modal coordinates tables.start_* hold (_prepare), unless
+    they hold it already (_prepared)."""
+    if not _prepared(tables, exact, state, motor_torque, load_torque):
+        _prepare(system, tables, exact, state, motor_torque, load_torque)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _prepared(tables, exact, state, motor_torque, load_torque):
     """Whether tables.start holds this step's start already: the event location's trial
     steps all start where the step that crossed started, and its modal coordinates serve
@@ -577,8 +585,7 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
     certified (module docstring): the pinion speed keeps its sign over it, and where
     `contact_loss`, the points' approach keeps the sign `loaded_variant_sign` (+1 loaded, −1
     unloaded) over it."""
-    if not _prepared(tables, exact, state, motor_torque, load_torque):
-        _prepare(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(system, tables, exact, state, motor_torque, load_torque)
     speed_swing, approach_swing = _fast_modes(tables, exact, h)
     speed_slow, approach_slow = _slow_series(tables, exact, h)
     _from_modal(tables, exact, out)
@@ -595,7 +602,7 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
 
 
 @njit(**NUMBERS_ONLY)
-def phase_event_ahead(system, tables, exact, state, motor_torque, load_torque, length):
+def slow_phase_event_ahead(system, tables, exact, state, motor_torque, load_torque, length):
     """A time (s from `state`) by which the pinion angle has surely left its contact interval
     of `length` (rad) in the segment of exact form `exact` with the torques (N·m) held: where
     the slow part of its motion (a polynomial in t, no exponentials) reaches `length` plus the
@@ -606,8 +613,7 @@ def phase_event_ahead(system, tables, exact, state, motor_torque, load_torque, l
     torque_step). The instantaneous speed and acceleration, which walk.phase_event_ahead
     extrapolates, carry the fast modes' ringing (a switch sets the pinion accelerating at
     1e6 rad/s² and more), and the slow part does not."""
-    if not _prepared(tables, exact, state, motor_torque, load_torque):
-        _prepare(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
     swing = 0.0
     for k in range(tables.fast_count[exact]):
@@ -640,7 +646,7 @@ def _angle_polynomial(tables, exact, pinion):
     in t: its coefficients R_slow[φp]·T_slow^n/n!·z_slow into tables.modal_slow (n < S: the
     block is nilpotent but for rounding). Returns its degree."""
     slow_count = tables.slow_count[exact]
-    block, series, terms = tables.slow, tables.series, tables.modal_slow
+    series, terms = tables.series, tables.modal_slow
     for k in range(slow_count):
         series[0, k] = tables.start_slow[k]
     degree = 0
@@ -651,14 +657,22 @@ def _angle_polynomial(tables, exact, pinion):
         terms[power] = total
         if total != 0.0:
             degree = power
-        for i in range(slow_count):
-            following = 0.0
-            for j in range(slow_count):
-                following += block[exact, i, j] * series[0, j]
-            series[1, i] = following / (power + 1)
+        _next_term(tables, exact, slow_count, 1.0 / (power + 1))
         for i in range(slow_count):
             series[0, i] = series[1, i]
     return max(degree, 1)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _next_term(tables, exact, slow_count, factor):
+    """The slow block's series, one term on: tables.series[1] = T_slow·series[0]·factor (h/n
+    for the n-th term of exp(T_slow·h), 1/n for its coefficient of t^n)."""
+    block, series = tables.slow, tables.series
+    for i in range(slow_count):
+        total = 0.0
+        for j in range(slow_count):
+            total += block[exact, i, j] * series[0, j]
+        series[1, i] = total * factor
 
 
 class SlowBound(NamedTuple):
@@ -756,7 +770,7 @@ def _slow_series(tables, exact, h):
     rounding, so the series ends after a few terms). Returns the SlowBound of the pinion speed
     and of a point's approach."""
     slow_count = tables.slow_count[exact]
-    block, series, modal = tables.slow, tables.series, tables.modal_slow
+    series, modal = tables.series, tables.modal_slow
     speed_row, approach_row = tables.speed_slow, tables.approach_slow
     speed0 = approach0 = 0.0
     largest = 0.0
@@ -770,11 +784,7 @@ def _slow_series(tables, exact, h):
     speed_drift = approach_drift = speed_curve = approach_curve = 0.0
     for order in range(1, MAX_SERIES_TERMS):  # series[0]: the term, series[1]: the next
         size = 0.0
-        for i in range(slow_count):
-            total = 0.0
-            for j in range(slow_count):
-                total += block[exact, i, j] * series[0, j]
-            series[1, i] = total * (h / order)
+        _next_term(tables, exact, slow_count, h / order)
         speed_change = approach_change = 0.0
         for i in range(slow_count):
             following = series[1, i]

@@ -385,7 +385,7 @@ def _exact_step(system, segment, state, workspace, h, out):
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
-    """exponential.phase_event_ahead on the workspace's tables where it is the exponential
+    """exponential.slow_phase_event_ahead on the workspace's tables where it is the exponential
     method's; −1 (none) in the others'."""
 
 
@@ -394,8 +394,8 @@ def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torqu
     if _lacks(workspace, "exact"):
         return lambda system, workspace, exact, state, motor_torque, load_torque, length: -1.0
     return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
-            exponential.phase_event_ahead(system, workspace.exact, exact, state, motor_torque,
-                                          load_torque, length))
+            exponential.slow_phase_event_ahead(system, workspace.exact, exact, state,
+                                               motor_torque, load_torque, length))
 
 
 def stop_at(samples, k, end, exact):
@@ -1037,7 +1037,7 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
 def opening_ahead(system, mesh, run, workspace, segment):
     """Where the run has just entered an exact segment forward (end_segment; the torques
     those of `segment`, the one it left): when the next phase event lies ahead
-    (exponential.phase_event_ahead, from the slow part of the motion), for the opening step
+    (exponential.slow_phase_event_ahead, from the slow part of the motion), for the opening step
     to be aimed at; −1 elsewhere. φp's acceleration just after a switch is the fast modes'
     (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
     halfway. Taken here, once an event, where it was measured to cost least
