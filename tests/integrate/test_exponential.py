@@ -262,7 +262,7 @@ def test_an_opening_step_is_aimed_just_past_the_phase_event(reference_model):
         position = stepper.advance(start_position(model, torques[0]), time, torques)
         interval = position.segment.contact_set.index
         ahead = exponential.slow_phase_event_ahead(
-            model.system, stepper.exact_tables,
+            model.system, stepper.exact_buffers,
             interval * exponential.VARIANTS + exponential.ALL_LOADED, position.state, *torques,
             stepper.lengths[interval])
         crossing = interval_left(stepper, position, torques, ahead)

@@ -49,6 +49,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.linalg
 from numba import njit
+from numba.np.arrayobj import reshape_unchecked
 
 from .counting import NUMBERS_ONLY
 from .equations import (
@@ -426,41 +427,59 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 # --- the kernels ---------------------------------------------------------------------------------
 
+# unpack_tables' readers: a C-ordered block of the flat `buffer` from entry `at`, as a view.
+# Not a reshape: numba's checks the layout through a call of its runtime, and each kernel takes
+# the tables apart at every call. reshape_unchecked is the view that numba's as_strided makes,
+# lowered in place; as_strided itself is a compiled function returning an array, which code
+# compiled without reference counts (counting.py) may not call.
 @njit(cache=True, error_model="numpy", inline="always")
-def unpack_tables(complexes, floats, ints):
-    """pack_tables' inverse: ExactTables whose arrays are views of the three buffers. Inlined
-    into walk.advance, once per call: compiled on its own it would count each view's
-    references, a microsecond a call."""
+def _matrix(buffer, at, rows, columns):
+    item = buffer.itemsize
+    return reshape_unchecked(buffer[at:], (rows, columns), (columns * item, item))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _cube(buffer, at, pages, rows, columns):
+    item = buffer.itemsize
+    return reshape_unchecked(buffer[at:], (pages, rows, columns),
+                             (rows * columns * item, columns * item, item))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def unpack_tables(buffers):
+    """pack_tables' inverse: ExactTables whose arrays are views of its three buffers
+    (complex, float, int). Each kernel takes the buffers and this inlined at its start: a
+    call hands its callee every array of its records entry by entry (some ten words each),
+    and three arrays are a tenth of the twenty-six."""
+    complexes, floats, ints = buffers
     places, size, width, slow, fast, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
-    at = 0
-    fast_left = complexes[at:at + places * fast * width].reshape((places, fast, width))
-    at += places * fast * width
-    fast_right = complexes[at:at + places * size * fast].reshape((places, size, fast))
+    fast_left = _cube(complexes, 0, places, fast, width)
+    at = places * fast * width
+    fast_right = _cube(complexes, at, places, size, fast)
     at += places * size * fast
-    rates = complexes[at:at + places * fast].reshape((places, fast))
+    rates = _matrix(complexes, at, places, fast)
     at += places * fast
-    rows_of_fast_complex = complexes[at:at + 2 * places * fast].reshape((2, places, fast))
+    rows_of_fast_complex = _cube(complexes, at, 2, places, fast)
     at += 2 * places * fast
     start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
-    at = 0
-    slow_left = floats[at:at + places * slow * width].reshape((places, slow, width))
-    at += places * slow * width
-    slow_right = floats[at:at + places * size * slow].reshape((places, size, slow))
+    slow_left = _cube(floats, 0, places, slow, width)
+    at = places * slow * width
+    slow_right = _cube(floats, at, places, size, slow)
     at += places * size * slow
-    slow_block = floats[at:at + places * slow * slow].reshape((places, slow, slow))
+    slow_block = _cube(floats, at, places, slow, slow)
     at += places * slow * slow
-    rows = floats[at:at + places * tilt * size].reshape((places, tilt, size))
+    rows = _cube(floats, at, places, tilt, size)
     at += places * tilt * size
-    rows_of_slow = floats[at:at + 2 * places * slow].reshape((2, places, slow))
+    rows_of_slow = _cube(floats, at, 2, places, slow)
     at += 2 * places * slow
-    rows_of_fast = floats[at:at + 2 * places * fast].reshape((2, places, fast))
+    rows_of_fast = _cube(floats, at, 2, places, fast)
     at += 2 * places * fast
     start = floats[at:at + width + 3]
     at += width + 3
     start_slow, start_size = floats[at:at + slow], floats[at + slow:at + slow + fast]
     at += slow + fast
     modal_slow = floats[at:at + slow]
-    series = floats[at + slow:at + 3 * slow].reshape((2, slow))
+    series = _matrix(floats, at + slow, 2, slow)
     header = 6
     return ExactTables(
         ints[header:header + places], ints[header + places:header + 2 * places],
@@ -473,8 +492,8 @@ def unpack_tables(complexes, floats, ints):
 
 
 @njit(cache=True, error_model="numpy")
-def variant_of(tables, interval, count, loaded, state):
-    """The index interval·VARIANTS + variant of the segment's exact form, or −1 where it has
+def variant_of(buffers, interval, count, loaded, state):
+    """Of the tables packed in `buffers` (pack_tables), the index interval·VARIANTS + variant of the segment's exact form, or −1 where it has
     none: its loaded points are neither all nor none, the set's variant is not exact, or the
     state does not start where the tilt stays zero."""
     loaded_points = 0
@@ -488,6 +507,7 @@ def variant_of(tables, interval, count, loaded, state):
     else:
         return -1
     exact = interval * VARIANTS + variant
+    tables = unpack_tables(buffers)
     if tables.valid[exact] == 0:
         return -1
     rows = tables.tilt_rows
@@ -577,14 +597,15 @@ UNDERFLOW_EXPONENT = -700.0
 
 
 @njit(**NUMBERS_ONLY)
-def step(system, tables, exact, state, motor_torque, load_torque, h, contact_loss,
+def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_loss,
          loaded_variant_sign, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
     (variant_of's index) of the train `system` with the torques (N·m) held, into `out`, its
     momentum along the rigid rotation kept exact; returns whether the step is
     certified (module docstring): the pinion speed keeps its sign over it, and where
     `contact_loss`, the points' approach keeps the sign `loaded_variant_sign` (+1 loaded, −1
-    unloaded) over it."""
+    unloaded) over it. `buffers`: the tables as pack_tables packs them."""
+    tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     speed_swing, approach_swing = _fast_modes(tables, exact, h)
     speed_slow, approach_slow = _slow_series(tables, exact, h)
@@ -602,7 +623,7 @@ def step(system, tables, exact, state, motor_torque, load_torque, h, contact_los
 
 
 @njit(**NUMBERS_ONLY)
-def slow_phase_event_ahead(system, tables, exact, state, motor_torque, load_torque, length):
+def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_torque, length):
     """A time (s from `state`) by which the pinion angle has surely left its contact interval
     of `length` (rad) in the segment of exact form `exact` with the torques (N·m) held: where
     the slow part of its motion (a polynomial in t, no exponentials) reaches `length` plus the
@@ -612,7 +633,9 @@ def slow_phase_event_ahead(system, tables, exact, state, motor_torque, load_torq
     would overshoot the event by much (a torsional mode swinging the angle, as in
     torque_step). The instantaneous speed and acceleration, which walk.phase_event_ahead
     extrapolates, carry the fast modes' ringing (a switch sets the pinion accelerating at
-    1e6 rad/s² and more), and the slow part does not."""
+    1e6 rad/s² and more), and the slow part does not. `buffers`: the tables as pack_tables
+    packs them."""
+    tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
     swing = 0.0
