@@ -40,6 +40,43 @@ def scales_of(model):
                                                   force * model.geometry.radius_wheel, 1.0]])
 
 
+def numbered(tables):
+    """ExactTables of the same shapes and dtypes as `tables`, every entry a different number
+    (the integer fields' counts kept: they size nothing in the buffers)."""
+    count, fields = 0, []
+    for name, value in zip(exponential.ExactTables._fields, tables, strict=True):
+        if name in exponential.INT_FIELDS or np.ndim(value) == 0:
+            fields.append(value)
+            continue
+        numbers = np.arange(count, count + np.size(value), dtype=float).reshape(np.shape(value))
+        count += np.size(value)
+        fields.append(numbers * (1 + 1j) if np.iscomplexobj(value) else numbers)
+    return exponential.ExactTables(*fields)
+
+
+@pytest.mark.parametrize("scene_name", ["reference", "staggered", "jump_resonance"])
+def test_packed_tables_unpack_to_views_of_the_same_arrays(scene_name):
+    """The kernels take the tables as pack_tables' three buffers and unpack them at every
+    call (unpack_tables, by offsets into the buffers). Unpacked, tables whose every entry
+    differs must be those tables again, field by field, and their scratch fields views into
+    the buffers, which the kernels write and later calls read: a field laid out at the wrong
+    offset or shape fails here, not as a wrong trajectory. Scenes: every set exact; some
+    (staggered: tilt rows, sets not exact); a set with no modal form (jump_resonance's
+    flights)."""
+    tables = numbered(CompiledStepper(model_of(scene_name), 1e-7, "exponential").exact_tables)
+    buffers = exponential.pack_tables(tables)
+    unpacked = exponential.unpack_tables(buffers)
+    assert type(unpacked) is exponential.ExactTables
+    for name, original, copy in zip(exponential.ExactTables._fields, tables, unpacked,
+                                    strict=True):
+        assert np.shape(copy) == np.shape(original), name
+        assert np.array_equal(copy, original), name
+    for name in ("start", "start_slow", "start_fast", "start_size", "modal_slow",
+                 "modal_fast", "series"):
+        view = getattr(unpacked, name)
+        assert any(np.shares_memory(view, buffer) for buffer in buffers), name
+
+
 @pytest.mark.parametrize("variant", [exponential.ALL_LOADED, exponential.NONE_LOADED])
 def test_modal_form_is_the_matrix_exponential(reference_model, variant):
     """R·diag(exp(T_slow·h), e^{Λh})·L·X against scipy's expm of the augmented matrix, at

@@ -493,9 +493,10 @@ def unpack_tables(buffers):
 
 @njit(cache=True, error_model="numpy")
 def variant_of(buffers, interval, count, loaded, state):
-    """Of the tables packed in `buffers` (pack_tables), the index interval·VARIANTS + variant of the segment's exact form, or −1 where it has
-    none: its loaded points are neither all nor none, the set's variant is not exact, or the
-    state does not start where the tilt stays zero."""
+    """Of the tables packed in `buffers` (pack_tables), the index interval·VARIANTS + variant
+    of the segment's exact form, or −1 where it has none: its loaded points are neither all
+    nor none, the set's variant is not exact, or the state does not start where the tilt
+    stays zero."""
     loaded_points = 0
     for i in range(count):
         if loaded[i] != 0.0:
