@@ -448,9 +448,9 @@ def _cube(buffer, at, pages, rows, columns):
 @njit(cache=True, error_model="numpy", inline="always")
 def unpack_tables(buffers):
     """pack_tables' inverse: ExactTables whose arrays are views of its three buffers
-    (complex, float, int). Each kernel takes the buffers and this inlined at its start: a
-    call hands its callee every array of its records entry by entry (some ten words each),
-    and three arrays are a tenth of the twenty-six."""
+    (complex, float, int). Each kernel is handed the buffers and unpacks them at its start,
+    inlined: a call copies every array of its records onto the stack entry by entry (seven
+    to eleven words an array), and three arrays are a tenth of the twenty-six."""
     complexes, floats, ints = buffers
     places, size, width, slow, fast, tilt = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
     fast_left = _cube(complexes, 0, places, fast, width)
