@@ -42,15 +42,13 @@ def scales_of(model):
 
 def numbered(tables):
     """ExactTables of the same shapes and dtypes as `tables`, every entry a different number
-    (the integer fields' counts kept: they size nothing in the buffers)."""
+    (the buffers are laid out by the header of sizes, not by the counts in the tables)."""
     count, fields = 0, []
-    for name, value in zip(exponential.ExactTables._fields, tables, strict=True):
-        if name in exponential.INT_FIELDS or np.ndim(value) == 0:
-            fields.append(value)
-            continue
-        numbers = np.arange(count, count + np.size(value), dtype=float).reshape(np.shape(value))
+    for value in tables:
+        numbers = np.arange(count, count + np.size(value)).reshape(np.shape(value))
         count += np.size(value)
-        fields.append(numbers * (1 + 1j) if np.iscomplexobj(value) else numbers)
+        fields.append(numbers.astype(np.asarray(value).dtype)
+                      * (1 + 1j if np.iscomplexobj(value) else 1))
     return exponential.ExactTables(*fields)
 
 
