@@ -282,12 +282,12 @@ NEVER = math.inf  # s: the time to an event that is not ahead
 # into `advance` and `advance_sampled`, which are compiled without numba's reference counts
 # (counting.py): a compiled call would cost its call and, compiled with counts, an atomic
 # count of every array of every record it is handed, on the way in and out (the System alone
-# has 15 arrays, the exact tables 26). What runs once per event or less (cross_event,
-# locate_event, probe_inside, contact_violated_inside, trial_step, exact_samples) stays a
-# call, and returns numbers only, so that it too is compiled without counts. Even so a call
-# copies every array it is handed onto the stack, some ten words each: the exact tables travel
-# as exponential.pack_tables' three buffers, which each of its kernels takes apart (handing
-# over the twenty-six arrays cost the exponential method a quarter of its time).
+# has 15 arrays). What runs once per event or less (cross_event, locate_event, probe_inside,
+# contact_violated_inside, trial_step, exact_samples) stays a call, and returns numbers only,
+# so that it too is compiled without counts. Even without counts a call copies every array it
+# is handed onto the stack, some ten words each: the exact tables travel as
+# exponential.pack_tables' three buffers rather than ExactTables' twenty-six arrays, and each
+# of its kernels takes them apart (the twenty-six cost the method a quarter of its time).
 
 
 # --- the records ------------------------------------------------------------------------------
