@@ -14,8 +14,9 @@ a segment ends where an event function crosses zero (as segments.py defines them
     Event.CONTACT + i: point i's approach δ + η·δ̇ crosses zero (falling while it is loaded,
        rising while it is not), only where contact can be lost.
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
-by steps of the method itself taken from the step's start (aimed by Newton's method for a phase
-event, whose slope φp's rate is in the state, by secants for a contact), and the segment ends
+by steps of the method itself taken from the step's start (aimed by Newton's method: a phase
+event's slope, φp's rate, is in the state, a contact's is the point's approach rate), and the
+segment ends
 on the far side of the crossing, past it by at most the event time tolerance: a switch
 misplaced by δt leaves a force error of about ω_max·δt times the force that switched, and the
 caller keeps that to a hundredth of the relative tolerance. Every segment therefore ends with a
@@ -888,9 +889,10 @@ def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
 @njit(cache=True, error_model="numpy", inline="always")
 def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope):
     """Where (s from the step's start) event function `event` crosses zero, from its two
-    latest values: Newton's step for a phase event (its slope, φp's rate, is known), the
-    secant's zero for a contact; −1 where neither gives one."""
-    if event < Event.CONTACT and newer_slope != 0.0:
+    latest values: Newton's step from the newer where its slope there is known (event_slope),
+    else the secant's zero (a contact's slope at a step's end that the grazing check did not
+    take is NaN); −1 where neither gives one."""
+    if newer_slope != 0.0 and math.isfinite(newer_slope):
         return newer_h - newer_value / newer_slope
     if newer_value != older_value:
         return newer_h - newer_value * (newer_h - older_h) / (newer_value - older_value)
@@ -925,10 +927,9 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
     by trial steps of the method, to the event time tolerance. The first estimate is the zero
     of the cubic through the event's values and slopes at the step's ends (first_estimate);
-    a phase event's next ones are Newton's from the latest trial (its slope, φp's rate, is in
-    the state), a contact's the secant's. Trials are judged against the bracket's low end,
-    so that of several events crossed the earliest is taken. Returns (the event; the
-    bracket's high end, s, its state in NEW_STATE)."""
+    the next ones Newton's from the latest trial (its slope: event_slope). Trials are judged
+    against the bracket's low end, so that of several events crossed the earliest is taken.
+    Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
@@ -939,7 +940,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     older_h, older_value = low, low_values[event]  # the two latest points, for the secant
     newer_h, newer_value = high, high_values[event]
     pinion_rate = state.shape[0] // 2 + system.pinion
-    newer_slope = new_state[pinion_rate]
+    newer_slope = (new_state[pinion_rate] if event < Event.CONTACT
+                   else values[Values.SLOPES_AFTER, event - Event.CONTACT])
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
     for _ in range(MAX_LOCATION_TRIALS):
@@ -974,8 +976,23 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             event, high = crossed, trial_h  # (another event that crosses first is located)
             copy_into(new_state, trial)
             copy_into(high_values, trial_values)
-        newer_h, newer_value, newer_slope = trial_h, trial_values[event], trial[pinion_rate]
+        newer_h, newer_value = trial_h, trial_values[event]
+        newer_slope = event_slope(system, segment, trial, workspace, event)
     return event, high
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def event_slope(system, segment, state, workspace, event):
+    """The rate of event function `event` at `state`: φp's (in the state) for a phase event,
+    the point's approach rate (equations.approach_rates; m/s) for a contact. The workspace's
+    RATE_AFTER and APPROACH rows serve as scratch: the location needs neither."""
+    if event < Event.CONTACT:
+        return state[state.shape[0] // 2 + system.pinion]
+    rate, slopes = workspace.vectors[Vector.RATE_AFTER], workspace.values[Values.APPROACH]
+    derivative(system, segment.points, segment.point_count, segment.loaded,
+               segment.motor_torque, segment.load_torque, state, rate)
+    approach_rates(system, segment.points, segment.point_count, state, rate, slopes)
+    return slopes[event - Event.CONTACT]
 
 
 @njit(**NUMBERS_ONLY)
