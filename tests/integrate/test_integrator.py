@@ -311,8 +311,8 @@ def test_a_contact_event_is_located_by_newton_on_the_approach():
 def test_a_contact_events_slope_is_its_approach_rate():
     """Newton's method steps by walk.event_slope, which for a contact must be the time
     derivative of the point's approach: along DOP853's motion of contact_loss at 5 ms, the
-    central difference of every point's approach over ±1 µs agrees with it within 0.5 % of
-    the largest slope (the 13 kHz ringing bends the difference by about 0.1 %)."""
+    central difference of every point's approach over ±1 µs agrees with it within 0.1 % of
+    the largest slope (measured: 1.7e-5 of it)."""
     from herringbone.integrate.compiled import equations, walk
 
     scene = herringbone.load_scene(MODELS / "contact_loss.toml")
@@ -338,7 +338,7 @@ def test_a_contact_events_slope_is_its_approach_rate():
     assert sets[0] == sets[1] == sets[2]  # (no event in between: one segment throughout)
     difference = (approaches[2] - approaches[0]) / (2.0 * delta)
     assert np.abs(slopes).max() > 0.0
-    assert np.allclose(slopes, difference, rtol=0.0, atol=5e-3 * np.abs(slopes).max())
+    assert np.allclose(slopes, difference, rtol=0.0, atol=1e-3 * np.abs(slopes).max())
 
 
 @pytest.mark.parametrize("damping_ratio", [0.0, 0.0016, 0.05, 0.3])

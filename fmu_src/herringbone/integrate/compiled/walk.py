@@ -16,8 +16,7 @@ a segment ends where an event function crosses zero (as segments.py defines them
 The loop steps onto every crossing: when an accepted step ends past one, the crossing is located
 by steps of the method itself taken from the step's start (aimed by Newton's method: a phase
 event's slope, φp's rate, is in the state, a contact's is the point's approach rate), and the
-segment ends
-on the far side of the crossing, past it by at most the event time tolerance: a switch
+segment ends on the far side of the crossing, past it by at most the event time tolerance: a switch
 misplaced by δt leaves a force error of about ω_max·δt times the force that switched, and the
 caller keeps that to a hundredth of the relative tolerance. Every segment therefore ends with a
 true step of the method, which keeps its order (a step across a switch would drop it to first
