@@ -242,6 +242,18 @@ def _scene_section(rows):
     return lines
 
 
+# The FMU's series: colour by communication step, marker and line by solver_method (the
+# first method swept, solid circles; then dash-dotted squares, dotted diamonds)
+FMU_MARKS = (("o", "-"), ("s", "-."), ("D", ":"))
+
+
+def fmu_style(method_index, color) -> dict:
+    """The plot style of the FMU's series for the `method_index`-th solver_method swept."""
+    marker, linestyle = FMU_MARKS[method_index % len(FMU_MARKS)]
+    return dict(color=color, marker=marker, linestyle=linestyle, linewidth=2.2, markersize=7,
+                zorder=3)
+
+
 def plot(rows, path) -> None:
     """Error against wall time per simulated second, one panel per scene."""
     import matplotlib
@@ -252,7 +264,7 @@ def plot(rows, path) -> None:
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     columns = min(2, len(scenes))
     figure, axes = plt.subplots((len(scenes) + columns - 1) // columns, columns,
-                                figsize=(7 * columns, 5.5 * ((len(scenes) + columns - 1)
+                                figsize=(9.5 * columns, 5.5 * ((len(scenes) + columns - 1)
                                                              // columns)), squeeze=False)
     scipy_style = dict(zip(SCIPY_METHODS, zip(("tab:blue", "tab:green", "tab:purple",
                                                "tab:brown", "tab:gray"), "s^vDP")))
@@ -263,6 +275,7 @@ def plot(rows, path) -> None:
             key = (r["integrator"], r["method"], r["comm_step"])
             groups.setdefault(key, []).append(r)
         fmu_steps = sorted({key[2] for key in groups if key[0] == "FMU"})
+        fmu_methods = list(dict.fromkeys(key[1] for key in groups if key[0] == "FMU"))
         shades = plt.cm.autumn([i / max(len(fmu_steps), 1) for i in range(len(fmu_steps))])
         for (integrator, method, step), group in groups.items():
             group.sort(key=lambda r: r["tolerance"], reverse=True)
@@ -271,7 +284,7 @@ def plot(rows, path) -> None:
             if integrator == "FMU":
                 color = shades[fmu_steps.index(step)]
                 label = f"FMU{'' if method == 'default' else ' ' + method}, step {step:g} s"
-                style = dict(color=color, marker="o", linewidth=2.2, markersize=7, zorder=3)
+                style = fmu_style(fmu_methods.index(method), color)
             else:
                 color, marker = scipy_style.get(method, ("black", "x"))
                 label = f"solve_ivp {method}, output every {step:g} s"
@@ -299,7 +312,7 @@ def plot(rows, path) -> None:
         axis.set_title(f"{scene}: {span:g} s simulated (★ FMU defaults, ○ stopped at budget)",
                        fontsize=10)
         axis.grid(True, which="major", alpha=0.3)
-        axis.legend(fontsize=7, loc="best")
+        axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     for axis in list(axes.flat)[len(scenes):]:
         axis.set_visible(False)
     figure.tight_layout()
