@@ -938,9 +938,9 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     copy_into(high_values, values[Values.AFTER])
     older_h, older_value = low, low_values[event]  # the two latest points, for the secant
     newer_h, newer_value = high, high_values[event]
-    pinion_rate = state.shape[0] // 2 + system.pinion
-    newer_slope = (new_state[pinion_rate] if event < Event.CONTACT
-                   else values[Values.SLOPES_AFTER, event - Event.CONTACT])
+    # (a contact's slope at `high` is the grazing check's, where it took one)
+    newer_slope = (values[Values.SLOPES_AFTER, event - Event.CONTACT] if event >= Event.CONTACT
+                   else event_slope(system, segment, new_state, workspace, event))
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
     for _ in range(MAX_LOCATION_TRIALS):
