@@ -246,9 +246,10 @@ class StepRows(NamedTuple):
 
 
 class Controller(NamedTuple):
-    """The explicit method's step-size controller's memory (`control_step`)."""
+    """The step-size controller's memory: the Runge-Kutta methods' (`control_step`), and of
+    an exact step only whether it was rejected (`control_exact_step`)."""
 
-    previous_error: float  # the last accepted step's error norm
+    previous_error: float  # the last accepted step's error norm (a Runge-Kutta step's)
     rejected: bool  # whether the last step was rejected
 
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
@@ -272,8 +273,9 @@ MAX_PHASE_REVERSALS = 1000
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
 # An exact step (exponential method) makes no error, so the step size serves the events only:
-# after a certified step the next may be this many times longer, after a rejected one this
-# fraction as long
+# after a certified step the next may be this many times longer (but a step certified right
+# after a rejection keeps its size: control_exact_step), after a rejected one this fraction as
+# long
 EXACT_GROWTH = 4.0
 EXACT_SHRINK = 0.25
 NEVER = math.inf  # s: the time to an event that is not ahead
@@ -811,16 +813,19 @@ def control_step(explicit, error, iterations, plan, controller):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def control_exact_step(certified, plan, floor):
+def control_exact_step(certified, plan, floor, rejected):
     """Accept or reject an exact step of `plan` (a StepPlan): a certified one is accepted and
-    the next may be EXACT_GROWTH times longer; an uncertified one only at DOP853's step bound
-    `floor` (s) or below, where the loop's checks of a step's ends and of grazing hold, and
-    the next may grow up to `floor`; a longer one is rejected and tried EXACT_SHRINK times as
-    long (not below `floor`). A step cut short (landing on the end, aimed at a phase event)
-    says nothing of the next: it grows from the size the loop wanted. Returns (accepted; the
-    step size to try next, s)."""
+    the next may be EXACT_GROWTH times longer, or as long where the step before it was
+    `rejected` (its growth would try again what was just refused: near a landing the
+    certifiable step shrinks as the approach closes); an uncertified one only at DOP853's
+    step bound `floor` (s) or below, where the loop's checks of a step's ends and of grazing
+    hold, and the next may grow up to `floor`; a longer one is rejected and tried
+    EXACT_SHRINK times as long (not below `floor`). A step cut short (landing on the end,
+    aimed at a phase event) says nothing of the next: it grows from the size the loop
+    wanted. Returns (accepted; the step size to try next, s)."""
     h_step = plan.h_step
-    grown = (plan.h_wanted if plan.landing or plan.aimed else h_step) * EXACT_GROWTH
+    grown = (plan.h_wanted if plan.landing or plan.aimed else h_step) * (
+        1.0 if rejected else EXACT_GROWTH)
     if certified:
         return True, grown
     if h_step <= floor:
@@ -1198,8 +1203,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             break
         certified = False
         if segment.exact >= 0:
-            certified, accepted, clock[1] = take_exact_step(system, segment, settings, state,
-                                                            workspace, rows, plan)
+            certified, accepted, clock[1], controller = take_exact_step(
+                system, segment, settings, state, workspace, rows, plan, controller)
         else:
             retry, accepted, h_next, controller = runge_kutta_step(
                 system, segment, settings, state, workspace, rows, plan, controller)
@@ -1260,14 +1265,16 @@ def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, co
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def take_exact_step(system, segment, settings, state, workspace, rows, plan):
+def take_exact_step(system, segment, settings, state, workspace, rows, plan, controller):
     """The step of `plan` (a StepPlan) from `state` by the segment's exact solution into
-    NEW_STATE, judged by control_exact_step. Returns (certified; accepted; the step size to
-    try next, s)."""
+    NEW_STATE, judged by control_exact_step with the Controller's memory of whether the step
+    before was rejected. Returns (certified; accepted; the step size to try next, s; the
+    Controller)."""
     certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
-    accepted, h_next = control_exact_step(certified, plan, settings[Setting.MAX_STEP])
+    accepted, h_next = control_exact_step(certified, plan, settings[Setting.MAX_STEP],
+                                          controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
-    return certified, accepted, h_next
+    return certified, accepted, h_next, Controller(controller.previous_error, not accepted)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
