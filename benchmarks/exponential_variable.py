@@ -26,6 +26,7 @@ scene.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -175,7 +176,8 @@ def _cost_kernels():
         total = 0.0
         for _ in range(count):
             state[0] += 1e-15  # a new start: the product by L and the exponentials again
-            exponential.step(system, buffers, exact, state, motor, load, h, False, 1.0, out)
+            exponential.step(system, buffers, exact, state, motor, load, h, False, 1.0,
+                             math.inf, out)
             total += out[0]
         return total
 

@@ -269,24 +269,31 @@ def test_exact_steps_are_rejected_only_where_the_modes_swing_the_pinion_speed():
     assert swinging.rejected_steps >= 10
 
 
-def test_an_exact_step_certified_right_after_a_rejection_keeps_its_size():
+def test_an_exact_step_is_judged_by_what_its_certificate_says():
     """walk.control_exact_step: a certified step lets the next grow fourfold, unless the step
-    before it was rejected; an uncertified one is rejected and tried at a quarter, but not
-    below DOP853's step bound (the floor), at which it is accepted as DOP853's would be."""
-    from herringbone.integrate.compiled.walk import StepPlan, control_exact_step
+    before it was rejected. One whose phase events are sure but not a point's approach is
+    rejected and tried at a quarter, not below DOP853's step bound (the floor), at which it
+    is accepted as DOP853's would be; one whose phase events are unsure goes on shrinking to
+    TURN_BACK_FLOOR of the floor."""
+    from herringbone.integrate.compiled.walk import TURN_BACK_FLOOR, StepPlan, control_exact_step
 
+    certified, sure, unsure = exponential.CERTIFIED, exponential.PHASE_SURE, exponential.UNSURE
     floor = 1e-5
     plan = StepPlan(4e-4, 4e-4, False, False)
-    assert control_exact_step(True, plan, floor, False) == (True, 1.6e-3)
-    assert control_exact_step(True, plan, floor, True) == (True, 4e-4)
-    assert control_exact_step(False, plan, floor, False) == (False, 1e-4)
-    assert control_exact_step(False, StepPlan(2e-5, 2e-5, False, False), floor, False) == (
-        False, floor)
-    assert control_exact_step(False, StepPlan(floor, floor, False, False), floor, True) == (
-        True, floor)
+    assert control_exact_step(certified, plan, floor, False) == (True, 1.6e-3)
+    assert control_exact_step(certified, plan, floor, True) == (True, 4e-4)
+    assert control_exact_step(sure, plan, floor, False) == (False, 1e-4)
+    assert control_exact_step(unsure, plan, floor, False) == (False, 1e-4)
+    short = StepPlan(2e-5, 2e-5, False, False)
+    assert control_exact_step(sure, short, floor, False) == (False, floor)
+    at_floor = StepPlan(floor, floor, False, False)
+    assert control_exact_step(sure, at_floor, floor, True) == (True, floor)
+    assert control_exact_step(unsure, at_floor, floor, False) == (False, 0.25 * floor)
+    finest = StepPlan(TURN_BACK_FLOOR * floor, TURN_BACK_FLOOR * floor, False, False)
+    assert control_exact_step(unsure, finest, floor, False) == (True, 4 * finest.h_step)
     landing = StepPlan(1e-4, 8e-4, True, False)  # cut short: grows from what the loop wanted
-    assert control_exact_step(True, landing, floor, False) == (True, 3.2e-3)
-    assert control_exact_step(True, landing, floor, True) == (True, 8e-4)
+    assert control_exact_step(certified, landing, floor, False) == (True, 3.2e-3)
+    assert control_exact_step(certified, landing, floor, True) == (True, 8e-4)
 
 
 def test_a_landing_is_closed_in_on_without_retrying_what_was_refused():
@@ -298,6 +305,68 @@ def test_a_landing_is_closed_in_on_without_retrying_what_was_refused():
     rejected and trial, 8 % and 10 % fewer; torque_step's within 1 %)."""
     assert shipped_run("separation", "exponential", 0.05, 1e-3).rejected_steps <= 70
     assert shipped_run("undamped", "exponential", 0.1, 1e-3).rejected_steps <= 1700
+
+
+def test_a_pinion_turning_back_across_a_switch_inside_a_step_is_not_lost():
+    """torque_step at tenfold torque, driven as the FMU drives it (1 ms calls): between 71 and
+    72 ms the torsional mode swings the pinion speed through zero just after a switch, and
+    the pinion turns back into the contact interval before and returns within 7 µs. Taken
+    uncertified at DOP853's step bound (34 µs), a step saw the pinion inside its interval at
+    both ends and lost both switches: four events in that ms where scipy's DOP853 finds six,
+    and the forces 4.8e-4 of the force scale off from then on. A step now knows where its
+    phase events are unsure (neither the speed's sign nor the angle's place in the interval
+    certified) and goes below the step bound there: within 1e-6 of the reference at 72 ms
+    (measured 1.1e-10)."""
+    model = model_of("torque_step")
+    scene = herringbone.load_scene(MODELS / "torque_step.toml")
+    stepper = CompiledStepper(model, 1e-7, "exponential")
+    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+    for k in range(71):
+        stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
+    position, torques = stepper.position(run), scene.inputs.at(0.071)
+    events = run.events
+    stepper.run_to(run, 0.072, torques)
+    truth = ScipyStepper(model, 1e-10).advance(position, 0.072, torques)
+    assert run.events - events == 6
+    expected = model.outputs(truth.state, truth.segment.contact_set, truth.segment.loaded)
+    outputs = stepper.position(run)
+    found = model.outputs(outputs.state, outputs.segment.contact_set, outputs.segment.loaded)
+    assert force_error({k: [v] for k, v in found.items()},
+                       {k: [v] for k, v in expected.items()}, model) <= 1e-6
+
+
+def test_a_step_certified_to_keep_the_pinion_inside_its_interval_keeps_it():
+    """exponential.angle_inside, on exact steps of 1 µs to 1 ms from torque_step's state at
+    71 ms (1 ms calls), where the pinion has just entered a contact interval and a torsional
+    mode swings its speed through zero: wherever it says the angle stays above 0 and below
+    the interval's length over the step, the angle sampled at 401 times of the step does;
+    and it says so of the short steps, not of the long ones."""
+    model = model_of("torque_step")
+    scene = herringbone.load_scene(MODELS / "torque_step.toml")
+    stepper = CompiledStepper(model, 1e-7, "exponential")
+    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+    for k in range(71):
+        stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
+    system, buffers, pinion = model.system, stepper.exact_buffers, model.system.pinion
+    state, torques = run.state.copy(), scene.inputs.at(0.071)
+    interval = int(run.place[0])
+    exact, length = interval * exponential.VARIANTS, stepper.lengths[interval]
+    assert exponential.variant_of(buffers, interval, stepper.counts[interval], run.loaded,
+                                  state) == exact
+    out, verdicts = np.empty_like(state), []
+    for h in np.geomspace(1e-6, 1e-3, 13):
+        exponential.step(system, buffers, exact, state, *torques, h, True, 1.0, length, out)
+        inside = exponential.angle_inside(system, buffers, exact, h, state[pinion],
+                                          out[pinion], length)
+        angles = []
+        for t in np.linspace(0.0, h, 401):
+            exponential.step(system, buffers, exact, state, *torques, t, True, 1.0, length,
+                             out)
+            angles.append(out[pinion])
+        if inside:
+            assert 0.0 < min(angles) and max(angles) < length
+        verdicts.append(inside)
+    assert verdicts[0] and not verdicts[-1]
 
 
 def interval_left(stepper, position, torques, by):

@@ -278,6 +278,10 @@ PREDICTION_FLOOR = 1e-3
 # long
 EXACT_GROWTH = 4.0
 EXACT_SHRINK = 0.25
+# An exact step that may hide the pinion turning back across an end of its interval (a
+# torsional mode swinging its speed through zero, as in torque_step) is shortened below
+# DOP853's step bound, to this fraction of it, before it is taken unsure: three quarterings
+TURN_BACK_FLOOR = 1.0 / 64.0
 NEVER = math.inf  # s: the time to an event that is not ahead
 
 # Inlining and speed. The helpers the loop runs at every step are inlined (inline="always")
@@ -360,18 +364,18 @@ def _exact_form(workspace, interval, count, loaded, state):
 
 def exact_step(system, segment, state, workspace, h, out):
     """exponential.step on the workspace's tables where it is the exponential method's (the
-    segment exact); never called in the others'."""
+    segment exact): what its certificate says; never called in the others'."""
 
 
 @overload(exact_step, inline="always")
 def _exact_step(system, segment, state, workspace, h, out):
     if _lacks(workspace, "exact"):
-        return lambda system, segment, state, workspace, h, out: False
+        return lambda system, segment, state, workspace, h, out: exponential.UNSURE
     return lambda system, segment, state, workspace, h, out: exponential.step(
         system, workspace.exact, segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
-        == exponential.ALL_LOADED else -1.0, out)
+        == exponential.ALL_LOADED else -1.0, segment.length, out)
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
@@ -813,24 +817,28 @@ def control_step(explicit, error, iterations, plan, controller):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def control_exact_step(certified, plan, floor, rejected):
-    """Accept or reject an exact step of `plan` (a StepPlan): a certified one is accepted and
-    the next may be EXACT_GROWTH times longer, or as long where the step before it was
-    `rejected` (its growth would try again what was just refused: near a landing the
-    certifiable step shrinks as the approach closes); an uncertified one only at DOP853's
-    step bound `floor` (s) or below, where the loop's checks of a step's ends and of grazing
-    hold, and the next may grow up to `floor`; a longer one is rejected and tried
-    EXACT_SHRINK times as long (not below `floor`). A step cut short (landing on the end,
-    aimed at a phase event) says nothing of the next: it grows from the size the loop
-    wanted. Returns (accepted; the step size to try next, s)."""
+def control_exact_step(verdict, plan, floor, rejected):
+    """Accept or reject an exact step of `plan` (a StepPlan) by its certificate's `verdict`
+    (exponential.step's). A certified one is accepted and the next may be EXACT_GROWTH times
+    longer, or as long where the step before it was `rejected` (its growth would try again
+    what was just refused: near a landing the certifiable step shrinks as the approach
+    closes). One whose phase events are sure is accepted at DOP853's step bound `floor` (s)
+    or below, where the loop's checks of a step's ends and of grazing see a point's approach
+    cross, and the next may grow up to `floor`; one that is not (the pinion may turn back
+    across an end of its interval and return, which no end shows) only at TURN_BACK_FLOOR of
+    `floor`. A longer one is rejected and tried EXACT_SHRINK times as long, not below where
+    it would be accepted. A step cut short (landing on the end, aimed at a phase event) says
+    nothing of the next: it grows from the size the loop wanted. Returns (accepted; the step
+    size to try next, s)."""
     h_step = plan.h_step
     grown = (plan.h_wanted if plan.landing or plan.aimed else h_step) * (
         1.0 if rejected else EXACT_GROWTH)
-    if certified:
+    if verdict == exponential.CERTIFIED:
         return True, grown
-    if h_step <= floor:
+    lowest = floor if verdict == exponential.PHASE_SURE else TURN_BACK_FLOOR * floor
+    if h_step <= lowest:
         return True, min(floor, grown)
-    return False, max(floor, EXACT_SHRINK * h_step)
+    return False, max(lowest, EXACT_SHRINK * h_step)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1270,11 +1278,12 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
     NEW_STATE, judged by control_exact_step with the Controller's memory of whether the step
     before was rejected. Returns (certified; accepted; the step size to try next, s; the
     Controller)."""
-    certified = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
-    accepted, h_next = control_exact_step(certified, plan, settings[Setting.MAX_STEP],
+    verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
+    accepted, h_next = control_exact_step(verdict, plan, settings[Setting.MAX_STEP],
                                           controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
-    return certified, accepted, h_next, Controller(controller.previous_error, not accepted)
+    return (verdict == exponential.CERTIFIED, accepted, h_next,
+            Controller(controller.previous_error, not accepted))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
