@@ -275,9 +275,14 @@ class CompiledStepper:
         self.lengths, self.counts, self.tables = model.mesh.period_table()
         self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
         self.system_arrays = model.packed_system
+        # the longest exact step taken uncertified: the loop's checks of its ends and of
+        # grazing need h·|λ|max <= EXPLICIT_STEP_BOUND; DOP853's tighter bound for lightly
+        # damped modes (explicit_step_bound) is for its own error, and an exact step makes none
+        self.exact_floor = min(float(max_step), EXPLICIT_STEP_BOUND / fastest)
         self.settings = walk.pack_settings(self.step_tolerance, self.max_step,
                                            self.event_time_tolerance, self.contact_slack,
-                                           self.absolute_tolerance, float(max_step))
+                                           self.absolute_tolerance, float(max_step),
+                                           self.exact_floor)
         self.exact_tables = exact_tables
         self.exact_buffers = (exponential.pack_tables(self.exact_tables)
                               if self.exact_tables is not None else None)

@@ -35,9 +35,10 @@ and, where contact can be lost, every point's approach keeps its sign (`keeps_si
 from the modal coefficients, either the fast modes' sum of magnitudes and the slow polynomial's
 terms, or the values at the step's ends less how far the function can bow below their chord
 (the modes' curvature; a mode that turns through much of a period, its magnitude). An uncertified
-step longer than DOP853's step bound is rejected (walk.py shortens it); at that bound the loop's
-own checks for a step's ends and for grazing (a cubic through values and slopes) see a point's
-approach cross, as for DOP853. Where the phase events are not sure (a torsional mode swinging
+step longer than h·|λ|max = 3.5 is rejected (walk.py shortens it); at that bound (walk's exact
+floor: DOP853's, less what DOP853's own error needs) the loop's own checks for a step's ends
+and for grazing (a cubic through values and slopes) see a point's approach cross, as for
+DOP853. Where the phase events are not sure (a torsional mode swinging
 the speed through zero near a switch), those checks do not see the pinion turn back across
 an end of its interval and return, and the step is shortened further (walk.TURN_BACK_FLOOR).
 A segment's opening step is aimed where the slow motion carries the pinion angle out

@@ -113,7 +113,11 @@ class Setting(IntEnum):
     EVENT_TIME_TOLERANCE = 2  # s: how far past its crossing a segment may end
     CONTACT_SLACK = 3  # m; >= 0 turns the debug contact check on, < 0 leaves it off
     EXACT_MAX_STEP = 4  # s: the longest step of an exact segment (exponential method)
-    ABSOLUTE_TOLERANCE = 5  # from here to the end: per state entry, in the entry's units
+    # s: the longest exact step taken uncertified (control_exact_step): the step bound at
+    # which the loop's checks of a step's ends and of grazing hold (h·|λ|max <= 3.5), with no
+    # error bound in it, an exact step making none
+    EXACT_FLOOR = 5
+    ABSOLUTE_TOLERANCE = 6  # from here to the end: per state entry, in the entry's units
 
 
 class Vector(IntEnum):
@@ -279,8 +283,9 @@ PREDICTION_FLOOR = 1e-3
 EXACT_GROWTH = 4.0
 EXACT_SHRINK = 0.25
 # An exact step that may hide the pinion turning back across an end of its interval (a
-# torsional mode swinging its speed through zero, as in torque_step) is shortened below
-# DOP853's step bound, to this fraction of it, before it is taken unsure: three quarterings
+# torsional mode swinging its speed through zero, as in torque_step) is shortened below the
+# exact floor (Setting.EXACT_FLOOR), to this fraction of it, before it is taken unsure: three
+# quarterings
 TURN_BACK_FLOOR = 1.0 / 64.0
 NEVER = math.inf  # s: the time to an event that is not ahead
 
@@ -300,10 +305,11 @@ NEVER = math.inf  # s: the time to an event that is not ahead
 
 def pack_settings(relative_tolerance: float, max_step: float, event_time_tolerance: float,
                   contact_slack: float, absolute_tolerance: np.ndarray,
-                  exact_max_step: float = math.inf) -> np.ndarray:
+                  exact_max_step: float, exact_floor: float) -> np.ndarray:
     """The settings record `advance` takes: the entries laid out by Setting."""
     settings = np.empty(Setting.ABSOLUTE_TOLERANCE + len(absolute_tolerance))
     settings[Setting.EXACT_MAX_STEP] = exact_max_step
+    settings[Setting.EXACT_FLOOR] = exact_floor
     settings[Setting.RELATIVE_TOLERANCE] = relative_tolerance
     settings[Setting.MAX_STEP] = max_step
     settings[Setting.EVENT_TIME_TOLERANCE] = event_time_tolerance
@@ -822,14 +828,14 @@ def control_exact_step(verdict, plan, floor, rejected):
     (exponential.step's). A certified one is accepted and the next may be EXACT_GROWTH times
     longer, or as long where the step before it was `rejected` (its growth would try again
     what was just refused: near a landing the certifiable step shrinks as the approach
-    closes). One whose phase events are sure is accepted at DOP853's step bound `floor` (s)
-    or below, where the loop's checks of a step's ends and of grazing see a point's approach
-    cross, and the next may grow up to `floor`; one that is not (the pinion may turn back
-    across an end of its interval and return, which no end shows) only at TURN_BACK_FLOOR of
-    `floor`. A longer one is rejected and tried EXACT_SHRINK times as long, not below where
-    it would be accepted. A step cut short (landing on the end, aimed at a phase event) says
-    nothing of the next: it grows from the size the loop wanted. Returns (accepted; the step
-    size to try next, s)."""
+    closes). One whose phase events are sure is accepted at the exact floor `floor` (s;
+    Setting.EXACT_FLOOR) or below, where the loop's checks of a step's ends and of grazing
+    see a point's approach cross, and the next may grow up to `floor`; one that is not (the
+    pinion may turn back across an end of its interval and return, which no end shows) only
+    at TURN_BACK_FLOOR of `floor`. A longer one is rejected and tried EXACT_SHRINK times as
+    long, not below where it would be accepted. A step cut short (landing on the end, aimed
+    at a phase event) says nothing of the next: it grows from the size the loop wanted.
+    Returns (accepted; the step size to try next, s)."""
     h_step = plan.h_step
     grown = (plan.h_wanted if plan.landing or plan.aimed else h_step) * (
         1.0 if rejected else EXACT_GROWTH)
@@ -1279,7 +1285,7 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
     before was rejected. Returns (certified; accepted; the step size to try next, s; the
     Controller)."""
     verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
-    accepted, h_next = control_exact_step(verdict, plan, settings[Setting.MAX_STEP],
+    accepted, h_next = control_exact_step(verdict, plan, settings[Setting.EXACT_FLOOR],
                                           controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
     return (verdict == exponential.CERTIFIED, accepted, h_next,
