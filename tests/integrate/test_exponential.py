@@ -327,22 +327,30 @@ def test_an_exact_step_is_taken_uncertified_up_to_the_loops_own_step_bound():
     assert stepper.accepted_steps <= 2000
 
 
-def test_a_pinion_turning_back_across_a_switch_inside_a_step_is_not_lost():
-    """torque_step at tenfold torque, driven as the FMU drives it (1 ms calls): between 71 and
-    72 ms the torsional mode swings the pinion speed through zero just after a switch, and
-    the pinion turns back into the contact interval before and returns within 7 µs. Taken
-    uncertified at DOP853's step bound (34 µs), a step saw the pinion inside its interval at
-    both ends and lost both switches: four events in that ms where scipy's DOP853 finds six,
-    and the forces 4.8e-4 of the force scale off from then on. A step now knows where its
-    phase events are unsure (neither the speed's sign nor the angle's place in the interval
-    certified) and goes below the step bound there: within 1e-6 of the reference at 72 ms
-    (measured 1.1e-10)."""
+def torque_step_at_71_ms():
+    """torque_step's model, scene, exponential stepper and run, driven as the FMU drives it
+    (1 ms calls, the schedule's torques at each call's start) to 71 ms: just before the
+    pinion turns back across a switch."""
     model = model_of("torque_step")
     scene = herringbone.load_scene(MODELS / "torque_step.toml")
     stepper = CompiledStepper(model, 1e-7, "exponential")
     run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
     for k in range(71):
         stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
+    return model, scene, stepper, run
+
+
+def test_a_pinion_turning_back_across_a_switch_inside_a_step_is_not_lost():
+    """torque_step at tenfold torque, driven as the FMU drives it (1 ms calls): between 71 and
+    72 ms the torsional mode swings the pinion speed through zero just after a switch, and
+    the pinion turns back into the contact interval before and returns within 7 µs. Taken
+    uncertified at the step bound (34 µs, DOP853's), a step saw the pinion inside its
+    interval at both ends and lost both switches: four events in that ms where scipy's
+    DOP853 finds six, and the forces 4.8e-4 of the force scale off from then on. A step now
+    knows where its phase events are unsure (neither the speed's sign nor the angle's place
+    in the interval certified) and goes below the step bound there: within 1e-6 of the
+    reference at 72 ms (measured 1.1e-10)."""
+    model, scene, stepper, run = torque_step_at_71_ms()
     position, torques = stepper.position(run), scene.inputs.at(0.071)
     events = run.events
     stepper.run_to(run, 0.072, torques)
@@ -361,12 +369,7 @@ def test_a_step_certified_to_keep_the_pinion_inside_its_interval_keeps_it():
     mode swings its speed through zero: wherever it says the angle stays above 0 and below
     the interval's length over the step, the angle sampled at 401 times of the step does;
     and it says so of the short steps, not of the long ones."""
-    model = model_of("torque_step")
-    scene = herringbone.load_scene(MODELS / "torque_step.toml")
-    stepper = CompiledStepper(model, 1e-7, "exponential")
-    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    for k in range(71):
-        stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
+    model, scene, stepper, run = torque_step_at_71_ms()
     system, buffers, pinion = model.system, stepper.exact_buffers, model.system.pinion
     state, torques = run.state.copy(), scene.inputs.at(0.071)
     interval = int(run.place[0])
