@@ -65,6 +65,11 @@ def shipped_run(name, method, stop_time, communication_step=None):
     stop_time (s), for its tallies (Run.trial_steps, Run.events, Run.rejected_steps): in one
     call with the starting torques held, or with a `communication_step` (s) as the FMU
     drives it, run_to every step with the scene's torques at the step's start."""
+    return shipped_drive(name, method, stop_time, communication_step)[3]
+
+
+def shipped_drive(name, method, stop_time, communication_step=None):
+    """shipped_run's drive, with what it drove: (model, scene, CompiledStepper, Run)."""
     import herringbone
     from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
     from herringbone.integrate.contract import start_position
@@ -73,8 +78,8 @@ def shipped_run(name, method, stop_time, communication_step=None):
     scene = herringbone.load_scene(MODELS / f"{name}.toml")
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, DEFAULT_TOLERANCE, method)
-    position = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
     step = communication_step or stop_time
     for k in range(round(stop_time / step)):
-        stepper.run_to(position, (k + 1) * step, scene.inputs.at(k * step))
-    return position
+        stepper.run_to(run, (k + 1) * step, scene.inputs.at(k * step))
+    return model, scene, stepper, run

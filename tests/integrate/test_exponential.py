@@ -7,7 +7,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import FORCES, MODELS, REGRESSION, force_error, shipped_run
+from helpers import FORCES, MODELS, REGRESSION, force_error, shipped_drive, shipped_run
 from helpers import communication_run as run
 
 import herringbone
@@ -316,28 +316,10 @@ def test_an_exact_step_is_taken_uncertified_up_to_the_loops_own_step_bound():
     1 ms calls), within 1.3e-10 of the reference over 50 ms (benchmarks/exponential.py)."""
     from herringbone.integrate.compiled_stepper import EXPLICIT_STEP_BOUND
 
-    scene = herringbone.load_scene(MODELS / "undamped.toml")
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
+    stepper = shipped_drive("undamped", "exponential", 0.1, 1e-3)[2]
     assert stepper.exact_floor == pytest.approx(EXPLICIT_STEP_BOUND / stepper.fastest_rate)
     assert stepper.exact_floor > 4.0 * stepper.max_step
-    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    for k in range(100):
-        stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
     assert stepper.accepted_steps <= 2000
-
-
-def torque_step_at_71_ms():
-    """torque_step's model, scene, exponential stepper and run, driven as the FMU drives it
-    (1 ms calls, the schedule's torques at each call's start) to 71 ms: just before the
-    pinion turns back across a switch."""
-    model = model_of("torque_step")
-    scene = herringbone.load_scene(MODELS / "torque_step.toml")
-    stepper = CompiledStepper(model, 1e-7, "exponential")
-    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    for k in range(71):
-        stepper.run_to(run, (k + 1) * 1e-3, scene.inputs.at(k * 1e-3))
-    return model, scene, stepper, run
 
 
 def test_a_pinion_turning_back_across_a_switch_inside_a_step_is_not_lost():
@@ -350,7 +332,7 @@ def test_a_pinion_turning_back_across_a_switch_inside_a_step_is_not_lost():
     knows where its phase events are unsure (neither the speed's sign nor the angle's place
     in the interval certified) and goes below the step bound there: within 1e-6 of the
     reference at 72 ms (measured 1.1e-10)."""
-    model, scene, stepper, run = torque_step_at_71_ms()
+    model, scene, stepper, run = shipped_drive("torque_step", "exponential", 0.071, 1e-3)
     position, torques = stepper.position(run), scene.inputs.at(0.071)
     events = run.events
     stepper.run_to(run, 0.072, torques)
@@ -369,7 +351,7 @@ def test_a_step_certified_to_keep_the_pinion_inside_its_interval_keeps_it():
     mode swings its speed through zero: wherever it says the angle stays above 0 and below
     the interval's length over the step, the angle sampled at 401 times of the step does;
     and it says so of the short steps, not of the long ones."""
-    model, scene, stepper, run = torque_step_at_71_ms()
+    model, scene, stepper, run = shipped_drive("torque_step", "exponential", 0.071, 1e-3)
     system, buffers, pinion = model.system, stepper.exact_buffers, model.system.pinion
     state, torques = run.state.copy(), scene.inputs.at(0.071)
     interval = int(run.place[0])

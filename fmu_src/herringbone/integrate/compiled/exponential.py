@@ -29,20 +29,20 @@ which all start there, pay only for e^{Λt} and R.
 
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, its phase events are
-sure: the pinion speed keeps its sign (each phase event function is then monotone, so the
-step's ends show whether it crossed) or the pinion angle stays inside its contact interval;
-and, where contact can be lost, every point's approach keeps its sign (`keeps_sign`): bounds
-from the modal coefficients, either the fast modes' sum of magnitudes and the slow polynomial's
-terms, or the values at the step's ends less how far the function can bow below their chord
-(the modes' curvature; a mode that turns through much of a period, its magnitude). An uncertified
-step longer than h·|λ|max = 3.5 is rejected (walk.py shortens it); at that bound (walk's exact
-floor: DOP853's, less what DOP853's own error needs) the loop's own checks for a step's ends
-and for grazing (a cubic through values and slopes) see a point's approach cross, as for
-DOP853. Where the phase events are not sure (a torsional mode swinging
-the speed through zero near a switch), those checks do not see the pinion turn back across
-an end of its interval and return, and the step is shortened further (walk.TURN_BACK_FLOOR).
-A segment's opening step is aimed where the slow motion carries the pinion angle out
-of its interval (`slow_phase_event_ahead`).
+sure: the pinion speed keeps its sign (each phase event function is then monotone, so the step's
+ends show whether it crossed) or the pinion angle stays inside its contact interval; and, where
+contact can be lost, every point's approach keeps its sign (`keeps_sign`): bounds from the modal
+coefficients, either the fast modes' sum of magnitudes and the slow polynomial's terms, or the
+values at the step's ends less how far the function can bow below their chord (the modes'
+curvature; a mode that turns through much of a period, its magnitude). An uncertified step
+longer than h·|λ|max = 3.5 is rejected (walk.py shortens it); at that bound (walk's exact floor:
+DOP853's stability bound, without the tightening DOP853's own error needs) the loop's own checks
+for a step's ends and for grazing (a cubic through values and slopes) see a point's approach
+cross, as for DOP853. Where the phase events are not sure (a torsional mode swinging the speed
+through zero near a switch), those checks do not see the pinion turn back across an end of its
+interval and return, and the step is shortened further (walk.TURN_BACK_FLOOR). A segment's
+opening step is aimed where the slow motion carries the pinion angle out of its interval
+(`slow_phase_event_ahead`).
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
@@ -665,9 +665,7 @@ def angle_inside(system, buffers, exact, h, at_start, at_end, length):
     tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     pinion = system.pinion
-    swing = 0.0
-    for k in range(tables.fast_count[exact]):
-        swing += tables.angle_size[exact, k] * tables.start_size[k]
+    swing = _angle_swing(tables, exact)
     slow = _angle_bound(tables, exact, h, pinion)
     rows = tables.fast_right[:, pinion, :]
     if not keeps_sign(tables, exact, h, tables.angle_size, rows, slow, swing, 1.0, at_start,
@@ -694,9 +692,7 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
-    swing = 0.0
-    for k in range(tables.fast_count[exact]):
-        swing += abs(tables.fast_right[exact, pinion, k]) * tables.start_size[k]
+    swing = _angle_swing(tables, exact)
     degree = _angle_polynomial(tables, exact, pinion)
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
     if terms[1] == 0.0:
@@ -884,32 +880,30 @@ def _slow_series(tables, exact, h):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _angle_swing(tables, exact):
+    """Σ|a_k| of the pinion angle's fast modes from the step's start (rad): how far they can
+    swing it either way."""
+    swing = 0.0
+    for k in range(tables.fast_count[exact]):
+        swing += tables.angle_size[exact, k] * tables.start_size[k]
+    return swing
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _angle_bound(tables, exact, h, pinion):
-    """The pinion angle's SlowBound over h from the step's start (tables.start_slow; its
-    coordinate `pinion`), by the slow block's series as _slow_series sums it, in
-    tables.series (scratch): taken only where the speed's sign is not certified."""
-    slow_count = tables.slow_count[exact]
-    series, row = tables.series, tables.slow_right[exact, pinion]
-    start = largest = 0.0
-    for k in range(slow_count):
-        coordinate = tables.start_slow[k]
-        start += row[k] * coordinate
-        series[0, k] = coordinate
-        largest = max(largest, abs(coordinate))
+    """The pinion angle's SlowBound over h from the step's start, from its slow part's
+    polynomial (_angle_polynomial, in tables.modal_slow: scratch once the step is taken):
+    Σ|c_n|·h^n over its terms of order ≥ 1, and over those of order ≥ 2 for the curve."""
+    _angle_polynomial(tables, exact, pinion)
+    terms = tables.modal_slow
     drift = curve = 0.0
-    for order in range(1, MAX_SERIES_TERMS):
-        size = change = 0.0
-        _next_term(tables, exact, slow_count, h / order)
-        for i in range(slow_count):
-            following = series[1, i]
-            series[0, i] = following
-            change += row[i] * following
-            size = max(size, abs(following))
-        drift += abs(change)
-        curve += abs(change) if order >= 2 else 0.0
-        if size <= SERIES_FLOOR * largest:
-            break
-    return SlowBound(start, drift, curve)
+    power = h
+    for order in range(1, tables.slow_count[exact]):
+        size = abs(terms[order]) * power
+        drift += size
+        curve += size if order >= 2 else 0.0
+        power *= h
+    return SlowBound(terms[0], drift, curve)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
