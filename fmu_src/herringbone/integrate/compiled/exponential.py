@@ -771,25 +771,39 @@ def keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_en
     all that can move, for a step over which the modes ring through whole periods. The
     second, for a step short against the modes that swing most: the fast modes' sum
     Σ Re(a_k·e^{λ_k·t}) is split into the modes that turn through much of a period within
-    the step (|λ|·h ≥ √8), each at least −|a|, and the others, which bow below their chord
-    by at most their curvature |a|·|λ|² times h²/8; the smaller end of f less the first kind
-    bounds the chord of the rest."""
+    the step (|λ|·h ≥ √8), each at least −|a|, and the others, whose curvature is at most
+    |a|·|λ|²: f less the first kind lies above the chord of its ends less the parabola
+    that curvature allows (chord_low), less the slow part's bow."""
     if sign * slow.start > slow.drift + swing:
         return True
-    bend = short_swing = short_start = short_end = 0.0
+    bow = short_swing = short_start = short_end = 0.0
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
-        curvature = (rate.real * rate.real + rate.imag * rate.imag) * h * h * 0.125
+        bend = (rate.real * rate.real + rate.imag * rate.imag) * h * h * 0.5
         size = sizes[exact, k] * tables.start_size[k]
-        if curvature >= 1.0:
+        if bend >= 4.0:  # |λ|·h ≥ √8
             row = rows[exact, k]
             short_swing += size
             short_start += (row * tables.start_fast[k]).real
             short_end += (row * tables.modal_fast[k]).real
         else:
-            bend += size * curvature
-    chord = min(sign * (at_start - short_start), sign * (at_end - short_end))
-    return chord > slow.curve + bend + short_swing
+            bow += size * bend
+    lowest = chord_low(sign * (at_start - short_start), sign * (at_end - short_end), bow)
+    return lowest > slow.curve + short_swing
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def chord_low(start, end, bow):
+    """The least, over s in [0, 1], of start + (end − start)·s − bow·s·(1 − s): the lowest a
+    function with these values at a step's ends can go where its second derivative is at
+    least −2·bow/h² (bow ≥ 0; h the step). Where the ends differ by at least `bow` the
+    parabola is lowest at the lower end: a step over which the function falls steeply
+    towards a root is judged by its end's value alone. With equal ends it is bow/4 below
+    them."""
+    fall = bow + start - end
+    if 0.0 < fall < 2.0 * bow:
+        return start - fall * fall / (4.0 * bow)
+    return min(start, end)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
