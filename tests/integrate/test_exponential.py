@@ -307,6 +307,19 @@ def test_a_landing_is_closed_in_on_without_retrying_what_was_refused():
     assert shipped_run("undamped", "exponential", 0.1, 1e-3).rejected_steps <= 1700
 
 
+def test_a_step_over_which_the_approach_is_monotone_is_certified_across_a_lift_off():
+    """Near a lift-off or a landing the 13 kHz modes' ringing keeps keeps_sign from
+    certifying the approach itself, and every step that reached past the crossing was
+    refused: it was closed in on by quartering down to the exact floor. Where the approach's
+    rate keeps its sign over the step (approach_monotone) the step crosses once, as its ends
+    show, and is taken. separation, 50 ms, 1 ms calls: 23 rejected and 261 accepted exact
+    steps, against 46 and 286 without it; the events as DOP853 finds them (the same contact
+    counts: test_contact_loss_scenes_agree_with_the_reference)."""
+    _, _, stepper, run = shipped_drive("separation", "exponential", 0.05, 1e-3)
+    assert run.rejected_steps <= 32
+    assert stepper.accepted_steps <= 275
+
+
 def test_an_exact_step_is_taken_uncertified_up_to_the_loops_own_step_bound():
     """DOP853's step bound is tightened where the fast modes are lightly damped, for DOP853's
     own error (undamped: 8.1e-6 s). An exact step makes no error: it is taken uncertified up
@@ -487,11 +500,12 @@ class ModalStep(NamedTuple):
     modal_fast: np.ndarray
 
 
-def random_function(rng):
+def random_function(rng, rate=False):
     """A function of the kind keeps_sign bounds: a cubic slow part plus three to seven
     damped modes from 1e2 to 1e5 1/s (ζ from 1e-4 to 0.3), some swinging more than the slow
     part, over a step of 1e-6 to 1e-3 s. Returns (its value at times t, the ModalStep of the
-    step, the modes' rows and their magnitudes, the SlowBound, h)."""
+    step, the modes' rows and their magnitudes, the SlowBound, h); with `rate`, the value
+    and the SlowBound of its rate instead (the same draws: the same function)."""
     count = int(rng.integers(3, 8))
     speed = np.exp(rng.uniform(np.log(1e2), np.log(1e5), count))
     damping = np.exp(rng.uniform(np.log(1e-4), np.log(0.3), count))
@@ -502,13 +516,16 @@ def random_function(rng):
     h = float(np.exp(rng.uniform(np.log(1e-6), np.log(1e-3))))
     terms = np.array([rng.uniform(0.5, 4.0)] + list(rng.normal(size=3) / h ** np.arange(1, 4)
                                                      * np.exp(rng.uniform(-4.0, 0.0, 3))))
+    modes = rows * rates if rate else rows
+    if rate:
+        terms = terms[1:] * np.arange(1, 4)
 
     def value(t):
         t = np.asarray(t)[..., None]
-        slow = (terms * t ** np.arange(4)).sum(axis=-1)
-        return slow + (rows * start * np.exp(rates * t)).real.sum(axis=-1)
+        slow = (terms * t ** np.arange(len(terms))).sum(axis=-1)
+        return slow + (modes * start * np.exp(rates * t)).real.sum(axis=-1)
 
-    powers = np.abs(terms[1:]) * h ** np.arange(1, 4)
+    powers = np.abs(terms[1:]) * h ** np.arange(1, len(terms))
     step = ModalStep(np.array([count]), rates[None, :], np.abs(start), start.copy(),
                      start * np.exp(rates * h))
     slow = exponential.SlowBound(terms[0], powers.sum(), powers[1:].sum())
@@ -535,6 +552,27 @@ def test_a_step_certified_to_keep_its_sign_keeps_it():
                 by_chord += not sign * slow.start > slow.drift + swing
                 assert (sign * values).min() > 0.0
     assert by_chord >= 0.2 * certified > 0
+
+
+def test_a_rate_certified_to_keep_its_sign_keeps_it():
+    """exponential._keeps_sign of a function's rate (`derivative`: each mode's row times its
+    eigenvalue, its magnitude times |λ|) on 3000 random functions (random_function): wherever
+    it certifies that f' > 0 (or < 0) over the step, f' sampled at 4001 times of the step
+    keeps that sign, so f is monotone there (approach_monotone's certificate). It certifies
+    at least a third of the rates that keep their sign (measured 549 of 1 287)."""
+    rng = np.random.default_rng(24)
+    certified = kept = 0
+    for _ in range(3000):
+        rate, step, rows, sizes, slow, h = random_function(rng, rate=True)
+        values = rate(np.linspace(0.0, h, 4001))
+        swing = float((sizes[0] * np.abs(step.rates[0]) * step.start_size).sum())
+        for sign in (1.0, -1.0):
+            kept += (sign * values).min() > 0.0
+            if exponential._keeps_sign(step, 0, h, sizes, rows, slow, swing, sign,
+                                       values[0], values[-1], True):
+                certified += 1
+                assert (sign * values).min() > 0.0
+    assert certified >= kept / 3 > 0
 
 
 def test_the_chord_bound_is_the_least_of_the_parabola_through_the_ends():

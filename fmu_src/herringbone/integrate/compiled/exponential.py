@@ -34,7 +34,9 @@ ends show whether it crossed) or the pinion angle stays inside its contact inter
 contact can be lost, every point's approach keeps its sign (`keeps_sign`): bounds from the modal
 coefficients, either the fast modes' sum of magnitudes and the slow polynomial's terms, or the
 values at the step's ends less how far the function can bow below their chord (the modes'
-curvature; a mode that turns through much of a period, its magnitude). An uncertified step
+curvature; a mode that turns through much of a period, its magnitude); where the approach's
+sign is not certified, its rate's sign may be (`approach_monotone`: the approach crosses at
+most once, as its ends show). An uncertified step
 longer than h·|λ|max = 3.5 is rejected (walk.py shortens it); at that bound (walk's exact floor:
 DOP853's stability bound, without the tightening DOP853's own error needs) the loop's own checks
 for a step's ends and for grazing (a cubic through values and slopes) see a point's approach
@@ -693,7 +695,7 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
     swing = _angle_swing(tables, exact)
-    degree = _angle_polynomial(tables, exact, pinion)
+    degree = _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
     if terms[1] == 0.0:
         return math.inf
@@ -716,10 +718,12 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _angle_polynomial(tables, exact, pinion):
-    """The pinion angle's slow part from the step's start (tables.start_slow) as a polynomial
-    in t: its coefficients R_slow[φp]·T_slow^n/n!·z_slow into tables.modal_slow (n < S: the
-    block is nilpotent but for rounding). Returns its degree."""
+def _slow_polynomial(tables, exact, row):
+    """The slow part of a function of the state from the step's start (tables.start_slow) as
+    a polynomial in t, the function's `row` of the slow columns given (R_slow[φp] for the
+    pinion angle, approach_slow for a point's approach): its coefficients
+    row·T_slow^n/n!·z_slow into tables.modal_slow (n < S: the block is nilpotent but for
+    rounding). Returns its degree."""
     slow_count = tables.slow_count[exact]
     series, terms = tables.series, tables.modal_slow
     for k in range(slow_count):
@@ -728,7 +732,7 @@ def _angle_polynomial(tables, exact, pinion):
     for power in range(slow_count):
         total = 0.0
         for k in range(slow_count):
-            total += tables.slow_right[exact, pinion, k] * series[0, k]
+            total += row[k] * series[0, k]
         terms[power] = total
         if total != 0.0:
             degree = power
@@ -762,6 +766,14 @@ class SlowBound(NamedTuple):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_end):
+    """Whether sign·f > 0 over the whole step just taken: _keeps_sign of f itself."""
+    return _keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_end,
+                       False)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_end,
+                derivative):
     """Whether sign·f > 0 over the whole step just taken (the tables' start_fast, modal_fast)
     for a function f of the state: its row of fast_right `rows` and their magnitudes `sizes`
     (ExactTables' speed_fast and speed_size, or approach_fast and approach_size), its slow
@@ -773,16 +785,20 @@ def keeps_sign(tables, exact, h, sizes, rows, slow, swing, sign, at_start, at_en
     Σ Re(a_k·e^{λ_k·t}) is split into the modes that turn through much of a period within
     the step (|λ|·h ≥ √8), each at least −|a|, and the others, whose curvature is at most
     |a|·|λ|²: f less the first kind lies above the chord of its ends less the parabola
-    that curvature allows (chord_low), less the slow part's bow."""
+    that curvature allows (chord_low), less the slow part's bow.
+
+    With `derivative` (a constant where it is inlined) the function is f's rate instead:
+    each mode's row is taken times its eigenvalue and its magnitude times |λ|; `slow`,
+    `swing` and the ends are then the rate's."""
     if sign * slow.start > slow.drift + swing:
         return True
     bow = short_swing = short_start = short_end = 0.0
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
         bend = (rate.real * rate.real + rate.imag * rate.imag) * h * h * 0.5
-        size = sizes[exact, k] * tables.start_size[k]
+        size = sizes[exact, k] * tables.start_size[k] * (abs(rate) if derivative else 1.0)
         if bend >= 4.0:  # |λ|·h ≥ √8
-            row = rows[exact, k]
+            row = rows[exact, k] * (rate if derivative else 1.0)
             short_swing += size
             short_start += (row * tables.start_fast[k]).real
             short_end += (row * tables.modal_fast[k]).real
@@ -804,6 +820,41 @@ def chord_low(start, end, bow):
     if 0.0 < fall < 2.0 * bow:
         return start - fall * fall / (4.0 * bow)
     return min(start, end)
+
+
+@njit(**NUMBERS_ONLY)
+def approach_monotone(buffers, exact, h):
+    """Whether a point's approach is monotone over the step of h (s) just taken (the tables'
+    start and its modal state at the end): its rate keeps its sign (_keeps_sign of the rate:
+    the modes' rows times their eigenvalues, the slow polynomial's derivative). The approach
+    then crosses zero at most once, and the step's ends show whether it did: walk.py takes
+    such a step as certified where keeps_sign could not certify the approach itself (a step
+    that closes in on a lift-off or a landing, or crosses it). A call of its own: it runs
+    only there. `buffers`: the tables as pack_tables packs them."""
+    tables = unpack_tables(buffers)
+    degree = min(_slow_polynomial(tables, exact, tables.approach_slow[exact]),
+                 tables.slow_count[exact] - 1)
+    terms = tables.modal_slow
+    first = terms[1] if degree >= 1 else 0.0
+    drift = curve = at_end = 0.0
+    power = 1.0
+    for order in range(1, degree + 1):  # the derivative's terms n·c_n·t^(n−1) at t = h
+        size = order * terms[order] * power
+        at_end += size
+        drift += abs(size) if order >= 2 else 0.0
+        curve += abs(size) if order >= 3 else 0.0
+        power *= h
+    slope = SlowBound(first, drift, curve)
+    swing = at_start = 0.0
+    for k in range(tables.fast_count[exact]):
+        row, rate = tables.approach_fast[exact, k], tables.rates[exact, k]
+        swing += tables.approach_size[exact, k] * abs(rate) * tables.start_size[k]
+        at_start += (row * rate * tables.start_fast[k]).real
+        at_end += (row * rate * tables.modal_fast[k]).real
+    at_start += first
+    sign = 1.0 if at_start >= 0.0 else -1.0
+    return _keeps_sign(tables, exact, h, tables.approach_size, tables.approach_fast, slope,
+                       swing, sign, at_start, at_end, True)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -906,9 +957,9 @@ def _angle_swing(tables, exact):
 @njit(cache=True, error_model="numpy", inline="always")
 def _angle_bound(tables, exact, h, pinion):
     """The pinion angle's SlowBound over h from the step's start, from its slow part's
-    polynomial (_angle_polynomial, in tables.modal_slow: scratch once the step is taken):
+    polynomial (_slow_polynomial, in tables.modal_slow: scratch once the step is taken):
     Σ|c_n|·h^n over its terms of order ≥ 1, and over those of order ≥ 2 for the curve."""
-    _angle_polynomial(tables, exact, pinion)
+    _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
     terms = tables.modal_slow
     drift = curve = 0.0
     power = h

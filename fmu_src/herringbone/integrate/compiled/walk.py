@@ -384,6 +384,19 @@ def _exact_step(system, segment, state, workspace, h, out):
         == exponential.ALL_LOADED else -1.0, segment.length, out)
 
 
+def exact_monotone(workspace, segment, h):
+    """exponential.approach_monotone on the workspace's tables where it is the exponential
+    method's; False in the others'."""
+
+
+@overload(exact_monotone, inline="always")
+def _exact_monotone(workspace, segment, h):
+    if _lacks(workspace, "exact"):
+        return lambda workspace, segment, h: False
+    return lambda workspace, segment, h: exponential.approach_monotone(
+        workspace.exact, segment.exact, h)
+
+
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
     """exponential.slow_phase_event_ahead on the workspace's tables where it is the exponential
     method's; −1 (none) in the others'."""
@@ -865,13 +878,24 @@ def grazing_check(system, segment, state, rate, new_state, rate_after, values, h
     the step's end shows (a dip inside a short contact interval): grazing_suspect's turning
     point, −1 for none. The slopes at its start are taken from `state` and `rate` where the
     step before did not take them (a certified exact step leaves them NaN)."""
+    slopes_before, slopes_after = approach_slopes(system, segment, state, rate, new_state,
+                                                  rate_after, values)
+    return grazing_suspect(values[Values.BEFORE], values[Values.AFTER],
+                           slopes_before, slopes_after, h, segment.point_count,
+                           segment.loaded)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def approach_slopes(system, segment, state, rate, new_state, rate_after, values):
+    """The approach slopes (m/s) at a step's end (from `new_state` and its rate) into the
+    SLOPES_AFTER row of `values`, and at its start (from `state` and `rate`) into SLOPES_BEFORE
+    where the step before did not take them (a certified exact step leaves them NaN).
+    Returns the two rows."""
     slopes_before, slopes_after = values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER]
     if math.isnan(slopes_before[0]):
         approach_rates(system, segment.points, segment.point_count, state, rate, slopes_before)
     approach_rates(system, segment.points, segment.point_count, new_state, rate_after, slopes_after)
-    return grazing_suspect(values[Values.BEFORE], values[Values.AFTER],
-                           slopes_before, slopes_after, h, segment.point_count,
-                           segment.loaded)
+    return slopes_before, slopes_after
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1282,9 +1306,14 @@ def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, co
 def take_exact_step(system, segment, settings, state, workspace, rows, plan, controller):
     """The step of `plan` (a StepPlan) from `state` by the segment's exact solution into
     NEW_STATE, judged by control_exact_step with the Controller's memory of whether the step
-    before was rejected. Returns (certified; accepted; the step size to try next, s; the
-    Controller)."""
+    before was rejected. A step longer than the exact floor whose approach is not certified
+    to keep its sign is certified where the approach is monotone over it
+    (exponential.approach_monotone): it crosses at most once, as the step's ends show.
+    Returns (certified; accepted; the step size to try next, s; the Controller)."""
     verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
+    if verdict == exponential.PHASE_SURE and plan.h_step > settings[Setting.EXACT_FLOOR] \
+            and exact_monotone(workspace, segment, plan.h_step):
+        verdict = exponential.CERTIFIED
     accepted, h_next = control_exact_step(verdict, plan, settings[Setting.EXACT_FLOOR],
                                           controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
@@ -1308,9 +1337,14 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event, ce
     """The grazing check of an accepted step of h_step (s) (grazing_check; the rate at its
     end in RATE_AFTER), and where it finds a suspect, the probe (probe_inside). A `certified`
     exact step has no grazing inside: it marks the approach slopes at its end not taken, for
-    the next step's check to take them if it needs them. Returns (the event crossed first, −1
-    for none; the bracket's high end, s)."""
+    the next step's check to take them if it needs them; one that crossed a contact event
+    (its approach monotone) takes them at both ends, for the location's first estimate.
+    Returns (the event crossed first, −1 for none; the bracket's high end, s)."""
     vectors, values = workspace.vectors, workspace.values
+    if certified and event >= Event.CONTACT:  # a monotone approach crossed zero
+        approach_slopes(system, segment, state, vectors[Vector.RATE], vectors[Vector.NEW_STATE],
+                        vectors[Vector.RATE_AFTER], values)
+        return event, h_step
     if certified:
         values[Values.SLOPES_AFTER, 0] = math.nan
         return event, h_step
@@ -1329,8 +1363,10 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     located (locate_event), a debug run's check up to it (violated_before), the samples from
     the `k`-th on before it taken where the segment is exact (sample_inside), the run moved
     past it (pass_event; `end`: where the step would land, s) and into the next segment
-    (end_segment), which the loop begins where this returns Status.OK. Returns (Status; the
-    next sample's index). It returns numbers only, so it is compiled without reference counts
+    (end_segment), which the loop begins where this returns Status.OK; after a contact event
+    in an exact segment, with a step no longer than the exact floor (the approach starts at
+    zero, where a longer one is not certified). Returns (Status; the next sample's index).
+    It returns numbers only, so it is compiled without reference counts
     (counting.py): it runs at every event, and counting every array of the records it is
     handed cost a fifth of the exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
@@ -1343,6 +1379,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
+        if event >= Event.CONTACT and segment.exact >= 0:
+            run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
         workspace.memory[Memory.OPENING_AHEAD] = opening_ahead(system, mesh, run, workspace,
                                                                segment)
     return status, k
