@@ -34,17 +34,16 @@ ends show whether it crossed) or the pinion angle stays inside its contact inter
 contact can be lost, every point's approach keeps its sign (`keeps_sign`): bounds from the modal
 coefficients, either the fast modes' sum of magnitudes and the slow polynomial's terms, or the
 values at the step's ends less how far the function can bow below their chord (the modes'
-curvature; a mode that turns through much of a period, its magnitude); where the approach's
-sign is not certified, its rate's sign may be (`approach_monotone`: the approach crosses at
-most once, as its ends show). An uncertified step
-longer than h·|λ|max = 3.5 is rejected (walk.py shortens it); at that bound (walk's exact floor:
-DOP853's stability bound, without the tightening DOP853's own error needs) the loop's own checks
-for a step's ends and for grazing (a cubic through values and slopes) see a point's approach
-cross, as for DOP853. Where the phase events are not sure (a torsional mode swinging the speed
-through zero near a switch), those checks do not see the pinion turn back across an end of its
-interval and return, and the step is shortened further (walk.TURN_BACK_FLOOR). A segment's
-opening step is aimed where the slow motion carries the pinion angle out of its interval
-(`slow_phase_event_ahead`).
+curvature; a mode that turns through much of a period, its magnitude); where the approach's sign
+is not certified, its rate's sign may be (`approach_monotone`: the approach crosses at most
+once, as its ends show). An uncertified step longer than h·|λ|max = 3.5 is rejected (walk.py
+shortens it); at that bound (walk's exact floor: DOP853's stability bound, without the
+tightening DOP853's own error needs) the loop's own checks for a step's ends and for grazing (a
+cubic through values and slopes) see a point's approach cross, as for DOP853. Where the phase
+events are not sure (a torsional mode swinging the speed through zero near a switch), those
+checks do not see the pinion turn back across an end of its interval and return, and the step is
+shortened further (walk.TURN_BACK_FLOOR). A segment's opening step is aimed where the slow
+motion carries the pinion angle out of its interval (`slow_phase_event_ahead`).
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
