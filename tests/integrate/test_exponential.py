@@ -2,6 +2,7 @@
 matrix exponential, which contact sets it takes exactly, agreement with the scipy reference on
 the reference scene and on scenes that lose and regain contact, exact re-runs from a saved
 position, and DOP853's results, bit for bit, where no segment is exact."""
+import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -130,6 +131,20 @@ def test_the_modes_the_tilt_sees_are_left_out(reference_model):
             state = np.concatenate([scaled, [1.0, 1.0, 1.0]]) * scales
             modal = np.abs(left[fast] @ state)
             assert modal[~free].max() <= 1e-10 * modal[free].max()
+
+
+def test_the_tables_of_a_huge_torque_warn_of_no_overflow(reference_scene):
+    """A load torque of 1e300 N·m is finite, so allowed (its run fails, with a message); it
+    scales the state to some 1e300. The tilt's rows and the modes' columns are normalized
+    after their largest entry, not by norms whose squares overflow: building the tables
+    warns of nothing, which a host would print before the FMU's message, and the modes the
+    tilt sees are the reference scene's."""
+    usual = CompiledStepper(GearTrainModel(reference_scene), 1e-7, "exponential")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        huge = CompiledStepper(GearTrainModel(reference_scene.with_inputs(M_load=1e300)),
+                               1e-7, "exponential")
+    assert np.array_equal(huge.exact_tables.fast_count, usual.exact_tables.fast_count)
 
 
 @pytest.mark.parametrize("name, exact", [

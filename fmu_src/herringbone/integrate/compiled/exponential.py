@@ -283,11 +283,20 @@ def unseen_by_tilt(rows: np.ndarray, columns: np.ndarray, scales: np.ndarray) ->
     a mode the tilt sees comes out at 0.1 to 0.7, one it does not at 1e-15."""
     if len(rows) == 0:
         return np.ones(columns.shape[1], dtype=bool)
-    scaled_rows = rows * scales[None, :rows.shape[1]]
-    scaled_columns = columns / scales[:columns.shape[0], None]
-    cosines = np.abs(scaled_rows @ scaled_columns) / (
-        np.linalg.norm(scaled_rows, axis=1)[:, None] * np.linalg.norm(scaled_columns, axis=0))
+    scaled_rows = _unit_rows(rows * scales[None, :rows.shape[1]])
+    scaled_columns = _unit_rows((columns / scales[:columns.shape[0], None]).T)
+    cosines = np.abs(scaled_rows @ scaled_columns.T)
     return cosines.max(axis=0) <= TILT_SEEN
+
+
+def _unit_rows(matrix: np.ndarray) -> np.ndarray:
+    """`matrix`'s rows each divided by its Euclidean norm (a zero row left zero), taken after
+    its largest entry, so that scales of a huge input (a torque of 1e300 N·m) do not overflow
+    the squares."""
+    largest = np.abs(matrix).max(axis=1, keepdims=True)
+    shrunk = matrix / np.where(largest > 0.0, largest, 1.0)
+    norms = np.linalg.norm(shrunk, axis=1, keepdims=True)
+    return shrunk / np.where(norms > 0.0, norms, 1.0)
 
 
 def build_tables(system: System, period_table, state_scales: np.ndarray,
@@ -403,9 +412,8 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["approach_size"][place][:fast] = np.abs(approach_fast)
     arrays["angle_size"][place][:fast] = np.abs(fast_right[system.pinion])
     # measured in the state's scales: a row's product is then a relative tilt
-    scaled = rows * state_scales[None, :]
-    norms = np.maximum(np.linalg.norm(scaled, axis=1), 1e-300)
-    arrays["tilt_rows"][place][:len(rows)] = rows / norms[:, None]
+    arrays["tilt_rows"][place][:len(rows)] = (_unit_rows(rows * state_scales[None, :])
+                                               / state_scales[None, :])
     arrays["tilt_count"][place] = len(rows)
 
 
