@@ -622,7 +622,7 @@ UNSURE = 2  # the pinion may turn back across an end of its contact interval and
 
 @njit(**NUMBERS_ONLY)
 def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_loss,
-         loaded_variant_sign, length, out):
+         loaded_variant_sign, length, floor, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
     (variant_of's index) of the train `system` with the torques (N·m) held, into `out`, its
     momentum along the rigid rotation kept exact; returns what the step's certificate says
@@ -630,8 +630,9 @@ def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_lo
     over the whole step the pinion speed keeps its sign (each phase event function is then
     monotone) or the pinion angle stays inside its contact interval of `length` (rad); and
     where `contact_loss`, the step is certified where also the points' approach keeps the
-    sign `loaded_variant_sign` (+1 loaded, −1 unloaded). `buffers`: the tables as pack_tables
-    packs them."""
+    sign `loaded_variant_sign` (+1 loaded, −1 unloaded), or, in a step longer than `floor`
+    (s; walk's exact floor, below which an uncertified step is taken anyway), is monotone
+    over it (approach_monotone). `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     speed_swing, approach_swing = _fast_modes(tables, exact, h)
@@ -644,7 +645,8 @@ def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_lo
     if contact_loss and not keeps_sign(tables, exact, h, tables.approach_size,
                                        tables.approach_fast, approach_slow, approach_swing,
                                        loaded_variant_sign, _approach(system, state),
-                                       _approach(system, out)):
+                                       _approach(system, out)) \
+            and not (h > floor and approach_monotone(buffers, exact, h)):
         return PHASE_SURE
     return CERTIFIED
 
@@ -834,31 +836,24 @@ def approach_monotone(buffers, exact, h):
     """Whether a point's approach is monotone over the step of h (s) just taken (the tables'
     start and its modal state at the end): its rate keeps its sign (_keeps_sign of the rate:
     the modes' rows times their eigenvalues, the slow polynomial's derivative). The approach
-    then crosses zero at most once, and the step's ends show whether it did: walk.py takes
-    such a step as certified where keeps_sign could not certify the approach itself (a step
-    that closes in on a lift-off or a landing, or crosses it). A call of its own: it runs
-    only there. `buffers`: the tables as pack_tables packs them."""
+    then crosses zero at most once, and the step's ends show whether it did: `step` asks it
+    where keeps_sign could not certify the approach itself (a step that closes in on a
+    lift-off or a landing, or crosses it). A call of its own: it runs only there. `buffers`:
+    the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    degree = min(_slow_polynomial(tables, exact, tables.approach_slow[exact]),
-                 tables.slow_count[exact] - 1)
-    terms = tables.modal_slow
-    first = terms[1] if degree >= 1 else 0.0
-    drift = curve = at_end = 0.0
-    power = 1.0
-    for order in range(1, degree + 1):  # the derivative's terms n·c_n·t^(n−1) at t = h
-        size = order * terms[order] * power
-        at_end += size
-        drift += abs(size) if order >= 2 else 0.0
-        curve += abs(size) if order >= 3 else 0.0
-        power *= h
-    slope = SlowBound(first, drift, curve)
+    _slow_polynomial(tables, exact, tables.approach_slow[exact])
+    count, terms = tables.slow_count[exact], tables.modal_slow
+    for order in range(1, count):  # the derivative's coefficients n·c_n, in place
+        terms[order - 1] = order * terms[order]
+    terms[count - 1] = 0.0
+    slope, at_end = _polynomial_bound(terms, count, h)
     swing = at_start = 0.0
     for k in range(tables.fast_count[exact]):
         row, rate = tables.approach_fast[exact, k], tables.rates[exact, k]
         swing += tables.approach_size[exact, k] * abs(rate) * tables.start_size[k]
         at_start += (row * rate * tables.start_fast[k]).real
         at_end += (row * rate * tables.modal_fast[k]).real
-    at_start += first
+    at_start += slope.start
     sign = 1.0 if at_start >= 0.0 else -1.0
     return _keeps_sign(tables, exact, h, tables.approach_size, tables.approach_fast, slope,
                        swing, sign, at_start, at_end, True)
@@ -964,18 +959,26 @@ def _angle_swing(tables, exact):
 @njit(cache=True, error_model="numpy", inline="always")
 def _angle_bound(tables, exact, h, pinion):
     """The pinion angle's SlowBound over h from the step's start, from its slow part's
-    polynomial (_slow_polynomial, in tables.modal_slow: scratch once the step is taken):
-    Σ|c_n|·h^n over its terms of order ≥ 1, and over those of order ≥ 2 for the curve."""
+    polynomial (_slow_polynomial, in tables.modal_slow: scratch once the step is taken)."""
     _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
-    terms = tables.modal_slow
+    return _polynomial_bound(tables.modal_slow, tables.slow_count[exact], h)[0]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _polynomial_bound(terms, count, h):
+    """Of the polynomial Σ c_n·t^n with the `count` coefficients `terms`, over [0, h]: its
+    SlowBound (Σ|c_n|·h^n over its terms of order ≥ 1, and over those of order ≥ 2 for the
+    curve), and its value at h."""
     drift = curve = 0.0
+    value = terms[0]
     power = h
-    for order in range(1, tables.slow_count[exact]):
-        size = abs(terms[order]) * power
-        drift += size
-        curve += size if order >= 2 else 0.0
+    for order in range(1, count):
+        term = terms[order] * power
+        value += term
+        drift += abs(term)
+        curve += abs(term) if order >= 2 else 0.0
         power *= h
-    return SlowBound(terms[0], drift, curve)
+    return SlowBound(terms[0], drift, curve), value
 
 
 @njit(cache=True, error_model="numpy", inline="always")
