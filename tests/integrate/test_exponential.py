@@ -388,14 +388,13 @@ def test_a_step_certified_to_keep_the_pinion_inside_its_interval_keeps_it():
                                   state) == exact
     out, verdicts = np.empty_like(state), []
     for h in np.geomspace(1e-6, 1e-3, 13):
-        exponential.step(system, buffers, exact, state, *torques, h, True, 1.0, length,
-                         stepper.exact_floor, out)
+        exponential.step(system, buffers, exact, state, *torques, h, True, 1.0, length, out)
         inside = exponential.angle_inside(system, buffers, exact, h, state[pinion],
                                           out[pinion], length)
         angles = []
         for t in np.linspace(0.0, h, 401):
             exponential.step(system, buffers, exact, state, *torques, t, True, 1.0, length,
-                             stepper.exact_floor, out)
+                             out)
             angles.append(out[pinion])
         if inside:
             assert 0.0 < min(angles) and max(angles) < length

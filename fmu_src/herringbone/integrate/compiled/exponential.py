@@ -622,7 +622,7 @@ UNSURE = 2  # the pinion may turn back across an end of its contact interval and
 
 @njit(**NUMBERS_ONLY)
 def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_loss,
-         loaded_variant_sign, length, floor, out):
+         loaded_variant_sign, length, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
     (variant_of's index) of the train `system` with the torques (N·m) held, into `out`, its
     momentum along the rigid rotation kept exact; returns what the step's certificate says
@@ -630,9 +630,8 @@ def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_lo
     over the whole step the pinion speed keeps its sign (each phase event function is then
     monotone) or the pinion angle stays inside its contact interval of `length` (rad); and
     where `contact_loss`, the step is certified where also the points' approach keeps the
-    sign `loaded_variant_sign` (+1 loaded, −1 unloaded), or, in a step longer than `floor`
-    (s; walk's exact floor, below which an uncertified step is taken anyway), is monotone
-    over it (approach_monotone). `buffers`: the tables as pack_tables packs them."""
+    sign `loaded_variant_sign` (+1 loaded, −1 unloaded). `buffers`: the tables as pack_tables
+    packs them."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     speed_swing, approach_swing = _fast_modes(tables, exact, h)
@@ -645,8 +644,7 @@ def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_lo
     if contact_loss and not keeps_sign(tables, exact, h, tables.approach_size,
                                        tables.approach_fast, approach_slow, approach_swing,
                                        loaded_variant_sign, _approach(system, state),
-                                       _approach(system, out)) \
-            and not (h > floor and approach_monotone(buffers, exact, h)):
+                                       _approach(system, out)):
         return PHASE_SURE
     return CERTIFIED
 
@@ -836,10 +834,10 @@ def approach_monotone(buffers, exact, h):
     """Whether a point's approach is monotone over the step of h (s) just taken (the tables'
     start and its modal state at the end): its rate keeps its sign (_keeps_sign of the rate:
     the modes' rows times their eigenvalues, the slow polynomial's derivative). The approach
-    then crosses zero at most once, and the step's ends show whether it did: `step` asks it
-    where keeps_sign could not certify the approach itself (a step that closes in on a
-    lift-off or a landing, or crosses it). A call of its own: it runs only there. `buffers`:
-    the tables as pack_tables packs them."""
+    then crosses zero at most once, and the step's ends show whether it did: walk.py takes
+    such a step as certified where keeps_sign could not certify the approach itself (a step
+    that closes in on a lift-off or a landing, or crosses it). A call of its own: it runs
+    only there. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     _slow_polynomial(tables, exact, tables.approach_slow[exact])
     count, terms = tables.slow_count[exact], tables.modal_slow

@@ -368,21 +368,33 @@ def _exact_form(workspace, interval, count, loaded, state):
         workspace.exact, interval, count, loaded, state)
 
 
-def exact_step(system, segment, state, workspace, h, floor, out):
+def exact_step(system, segment, state, workspace, h, out):
     """exponential.step on the workspace's tables where it is the exponential method's (the
-    segment exact; `floor`: the exact floor, s, or NEVER where the verdict goes unused, which
-    spares the monotone check): what its certificate says; never called in the others'."""
+    segment exact): what its certificate says; never called in the others'."""
 
 
 @overload(exact_step, inline="always")
-def _exact_step(system, segment, state, workspace, h, floor, out):
+def _exact_step(system, segment, state, workspace, h, out):
     if _lacks(workspace, "exact"):
-        return lambda system, segment, state, workspace, h, floor, out: exponential.UNSURE
-    return lambda system, segment, state, workspace, h, floor, out: exponential.step(
+        return lambda system, segment, state, workspace, h, out: exponential.UNSURE
+    return lambda system, segment, state, workspace, h, out: exponential.step(
         system, workspace.exact, segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
-        == exponential.ALL_LOADED else -1.0, segment.length, floor, out)
+        == exponential.ALL_LOADED else -1.0, segment.length, out)
+
+
+def exact_monotone(workspace, segment, h):
+    """exponential.approach_monotone on the workspace's tables where it is the exponential
+    method's; False in the others'."""
+
+
+@overload(exact_monotone, inline="always")
+def _exact_monotone(workspace, segment, h):
+    if _lacks(workspace, "exact"):
+        return lambda workspace, segment, h: False
+    return lambda workspace, segment, h: exponential.approach_monotone(
+        workspace.exact, segment.exact, h)
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
@@ -439,7 +451,7 @@ def exact_samples(system, segment, state, workspace, times, rows, k, time, until
     of the first sample left."""
     scratch = workspace.vectors[Vector.TRIAL]
     while k < times.shape[0] and times[k] < until:
-        exact_step(system, segment, state, workspace, times[k] - time, NEVER, scratch)
+        exact_step(system, segment, state, workspace, times[k] - time, scratch)
         outputs(system, segment.points, segment.point_count, segment.loaded, scratch, rows[k])
         k += 1
     return k
@@ -562,7 +574,7 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     vectors = workspace.vectors
     workspace.counters[Counter.TRIAL_STEPS] += 1
     if segment.exact >= 0:
-        exact_step(system, segment, state, workspace, h, NEVER, out)
+        exact_step(system, segment, state, workspace, h, out)
     elif is_explicit(workspace):
         dop853.step(system, segment, state, vectors[Vector.RATE], h,
                     settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
@@ -1294,11 +1306,17 @@ def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, co
 def take_exact_step(system, segment, settings, state, workspace, rows, plan, controller):
     """The step of `plan` (a StepPlan) from `state` by the segment's exact solution into
     NEW_STATE, judged by control_exact_step with the Controller's memory of whether the step
-    before was rejected. Returns (certified; accepted; the step size to try next, s; the
-    Controller)."""
-    floor = settings[Setting.EXACT_FLOOR]
-    verdict = exact_step(system, segment, state, workspace, plan.h_step, floor, rows.new_state)
-    accepted, h_next = control_exact_step(verdict, plan, floor, controller.rejected)
+    before was rejected. A step longer than the exact floor whose approach is not certified
+    to keep its sign is certified where the approach is monotone over it
+    (exponential.approach_monotone): it crosses at most once, as the step's ends show.
+    Returns (certified; accepted; the step size to try next, s; the Controller)."""
+    verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
+    # (asked here, not inside exponential.step: a call there slows every exact step)
+    if verdict == exponential.PHASE_SURE and plan.h_step > settings[Setting.EXACT_FLOOR] \
+            and exact_monotone(workspace, segment, plan.h_step):
+        verdict = exponential.CERTIFIED
+    accepted, h_next = control_exact_step(verdict, plan, settings[Setting.EXACT_FLOOR],
+                                          controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
     return (verdict == exponential.CERTIFIED, accepted, h_next,
             Controller(controller.previous_error, not accepted))
