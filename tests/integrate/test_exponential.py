@@ -505,6 +505,43 @@ def test_a_scene_without_a_modal_form_runs_by_runge_kutta_under_auto_and_by_part
     assert force_error(result, reference, model) <= 1e-7
 
 
+def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
+    """tests/regression/found_aaeb0efe2e.toml has no bearings: with its points unloaded the
+    pinion is one free body and the wheel with its load another. Their zero eigenvalues sit on
+    chains that rounding splits into ±9.3e-3 s⁻¹ with nearly parallel eigenvectors, so numpy's
+    eig finds a basis where jump_resonance's has none, of condition 7e4; an exact step on it
+    moved the wheel 1e-4 rad off scipy's expm, and a run at 12 600 rad/s backwards lost a
+    phase event and failed. modal_form refuses such a form as it refuses a singular one: the
+    unloaded sets are stepped by DOP853, the loaded ones stay exact (half of them: the others
+    load a point on an edge ramp), and every form it keeps
+    is the matrix exponential to 1e-9 of the state's scales (a state of that run)."""
+    model = GearTrainModel(herringbone.load_scene(REGRESSION / "found_aaeb0efe2e.toml"))
+    lengths, counts, tables = model.mesh.period_table()
+    variants = {}
+    for variant in (exponential.ALL_LOADED, exponential.NONE_LOADED):
+        loaded = np.full(counts[0], 1.0 if variant == exponential.ALL_LOADED else 0.0)
+        a, b = exponential.linear_system(model.system, tables[0], counts[0], loaded)
+        try:
+            variants[variant] = exponential.modal_form(a, b, scales_of(model)), a, b
+        except np.linalg.LinAlgError as refusal:
+            assert "condition number" in str(refusal)
+    assert list(variants) == [exponential.ALL_LOADED]
+    valid = CompiledStepper(model, 1e-7, "exponential").exact_tables.valid.reshape(
+        -1, exponential.VARIANTS)
+    assert valid[:, exponential.ALL_LOADED].any() and not valid[:, exponential.NONE_LOADED].any()
+    (right, left, rates, slow), a, b = variants[exponential.ALL_LOADED]
+    size = a.shape[0]
+    augmented = np.zeros((size + 3, size + 3))
+    augmented[:size, :size], augmented[:size, size:] = a, b
+    start = np.array([0.0882, 0.0172, -29.3, -12624.0, -3033.0, -3800.0, 67.4, 134.7, 1.0])
+    for h in (1e-7, 1e-6, 5e-6):
+        modal = left @ start
+        modal[len(slow):] *= np.exp(rates[len(slow):] * h)
+        modal[:len(slow)] = scipy.linalg.expm(slow * h) @ modal[:len(slow)]
+        exact = scipy.linalg.expm(augmented * h) @ start
+        assert np.abs(((right @ modal).real - exact)[:size] / model.state_scales()).max() <= 1e-9
+
+
 class ModalStep(NamedTuple):
     """The fields of ExactTables that exponential.keeps_sign reads, for one exact form."""
 
