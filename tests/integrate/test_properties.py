@@ -70,6 +70,25 @@ DISAGREEMENTS = {
                         "at 1e-12, reference_simulate estimates its error at 17 even at "
                         "scipy's finest step tolerance; the compiled run lies 19.2 (1e-7) and "
                         "8.1 (1e-9) from it",
+    "found_7829a34ec8": "a rattling train (mesh damping ζ 0.0067, undamped bearings, a mode of "
+                        "1.8e3 rad/s at ζ 0.0011; contact lost and regained) on which the "
+                        "reference agrees with itself (1e-10 against 1e-12: 2e-9): the compiled "
+                        "run converges with its tolerance (1.99 of the force scale at 1e-7, "
+                        "0.087 at 1e-9, 1.4e-3 at 1e-11) but its steps are held to the "
+                        "tolerance cut by its fast modes' damping (0.11 times it), where the "
+                        "reference cuts it to 2.2e-12 for the 458 radians the train rings",
+    "found_345d6831cc": "no mesh damping and undamped wheel bearings (a mode of 1.16e3 rad/s at "
+                        "ζ 6.5e-11, 6 560 radians of ringing): the reference agrees with "
+                        "itself, the compiled run lies 0.0122 of the force scale off it at 1e-7 "
+                        "and 1.3e-4 at 1e-9, its step tolerance cut to the least, 0.03 of it, "
+                        "where the reference's is 1.5e-13",
+}
+# Scenes the two agree on within the default bound but not within the tight one
+TIGHT_DISAGREEMENTS = {
+    "found_cf90c2c007": "modes of 656 and 1.02e4 rad/s damped at ζ 0.005 and 0.007, slower than "
+                        "the fast modes that set the compiled step tolerance (within 0.1 of the "
+                        "fastest, 8.7e5 rad/s): 2.4e-6 of the force scale off the reference at "
+                        "1e-9 (5.8e-5 at 1e-7, within its bound 1e-4)",
 }
 
 
@@ -80,12 +99,13 @@ SLOW_WHEN_TIGHT = {"undamped_stiff_bearings", *DISAGREEMENTS}
 
 def regression_cases():
     """Every regression scene at the default and at the tight tolerance, a known disagreement
-    as a strict xfail naming it."""
+    (at the tight one only: TIGHT_DISAGREEMENTS) as a strict xfail naming it."""
     cases = []
     for path in REGRESSION_SCENES:
         for tight in (False, True):
-            marks = [pytest.mark.xfail(strict=True, reason=DISAGREEMENTS[path.stem])] \
-                if path.stem in DISAGREEMENTS else []
+            reason = DISAGREEMENTS.get(path.stem) or (
+                TIGHT_DISAGREEMENTS.get(path.stem) if tight else None)
+            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
             if tight and path.stem in SLOW_WHEN_TIGHT:
                 marks.append(pytest.mark.slow)
             cases.append(pytest.param(path, tight, marks=marks,
