@@ -542,24 +542,6 @@ def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
         assert np.abs(((right @ modal).real - exact)[:size] / model.state_scales()).max() <= 1e-9
 
 
-def test_an_event_whose_bracket_does_not_close_fails_the_run(monkeypatch):
-    """With CONDITION_LIMIT lifted, found_aaeb0efe2e's unloaded sets get back the
-    ill-conditioned form of the test above. Its rounding holds a landing's approach at exactly
-    zero over a stretch of a step, Newton's estimate stays at the bracket's low end, and the
-    trial steps creep up by the event time tolerance each, sixty of them, without closing the
-    bracket. The run fails there, saying so, where it used to take the landing at the step's
-    end, past a phase event it had not seen, and fail at its end (its pinion outside its
-    contact interval)."""
-    monkeypatch.setattr(exponential, "CONDITION_LIMIT", np.inf)
-    scene = herringbone.load_scene(REGRESSION / "found_aaeb0efe2e.toml")
-    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "exponential")
-    assert stepper.exact_tables.valid.reshape(-1, exponential.VARIANTS)[
-        :, exponential.NONE_LOADED].any()
-    with pytest.raises(herringbone.integrate.contract.IntegrationError,
-                       match="an event could not be located"):
-        simulate_with(stepper, scene)
-
-
 class ModalStep(NamedTuple):
     """The fields of ExactTables that exponential.keeps_sign reads, for one exact form."""
 

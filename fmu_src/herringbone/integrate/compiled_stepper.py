@@ -169,10 +169,7 @@ FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing con
             walk.Status.CONTACT_VIOLATED: "a point carried tension, or penetrated without load, "
                                           "inside a step (contact check of a debug run)",
             walk.Status.LEFT_INTERVAL: "the pinion left its contact interval unseen (the state "
-                                       "is beyond the integrator's resolution)",
-            walk.Status.NOT_LOCATED: "an event could not be located: its trial steps did not "
-                                     "close in on it (the state is beyond the integrator's "
-                                     "resolution)"}
+                                       "is beyond the integrator's resolution)"}
 
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 # Samples per compiled call (`advance`, `advance_sampled`): a callback (on_sample) is handed

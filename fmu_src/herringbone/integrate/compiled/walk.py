@@ -94,7 +94,6 @@ class Status(IntEnum):
     CONTACT_VIOLATED = 5  # the debug check found tension or penetration inside a step
     OVER_BUDGET = 6  # `max_steps` steps taken short of `end`
     LEFT_INTERVAL = 7  # the pinion ended outside its contact interval, past PHASE_SLACK
-    NOT_LOCATED = 8  # MAX_LOCATION_TRIALS trial steps left an event's bracket open
 
 
 class Method(IntEnum):
@@ -972,8 +971,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     of the cubic through the event's values and slopes at the step's ends (first_estimate);
     the next ones Newton's from the latest trial (its slope: event_slope). Trials are judged
     against the bracket's low end, so that of several events crossed the earliest is taken.
-    Returns (the event; the bracket's high end, s, its state in NEW_STATE; whether the bracket
-    closed within MAX_LOCATION_TRIALS trials)."""
+    Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
     low_values, high_values = values[Values.LOW], values[Values.HIGH]
@@ -988,12 +986,10 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
                    else event_slope(system, segment, new_state, workspace, event))
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
-    located = False
     for _ in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
         # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
         if low >= high - 2.0 * tolerance:
-            located = True
             break
         if estimate < 0.0:
             estimate = next_estimate(event, older_h, older_value, newer_h, newer_value,
@@ -1004,7 +1000,6 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             # located, unless another event that had also crossed by `high` crossed
             # earlier: then a trial just before this crossing says which
             if crossings(low_values, high_values, segment.events, segment.loaded) == 1:
-                located = True
                 break
             trial_h = high - 2.0 * tolerance
         else:
@@ -1025,7 +1020,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
             copy_into(high_values, trial_values)
         newer_h, newer_value = trial_h, trial_values[event]
         newer_slope = event_slope(system, segment, trial, workspace, event)
-    return event, high, located or low >= high - 2.0 * tolerance
+    return event, high
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1376,10 +1371,7 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     (counting.py): it runs at every event, and counting every array of the records it is
     handed cost a fifth of the exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
-    event, high, located = locate_event(system, segment, settings, state, workspace, event,
-                                        high, h_step)
-    if not located:  # (the run stays at the step's start)
-        return Status.NOT_LOCATED, k
+    event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     workspace.counters[Counter.EVENTS] += 1
     if violated_before(system, segment, settings, state, workspace, high, h_step):
         return Status.CONTACT_VIOLATED, k
