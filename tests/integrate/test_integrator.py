@@ -296,6 +296,26 @@ def test_landings_of_every_point_at_once_are_located_in_few_trials(method):
     assert position.trial_steps <= 4.5 * position.events
 
 
+def test_a_location_bisects_once_newton_has_not_closed_in():
+    """walk.location_estimate: a Newton estimate inside the bracket is taken for the first
+    NEWTON_LOCATION_TRIALS trials, one outside it never; then the bracket's middle, which
+    halves it at every trial. An event function that rounding holds at zero over a stretch
+    keeps Newton at the bracket's low end, and trials aimed just past it crept up by the event
+    time tolerance each: sixty of them left 1.5e-6 s of a 7e-6 s step open
+    (tests/regression/found_aaeb0efe2e.toml on a modal form it no longer gets)."""
+    from herringbone.integrate.compiled import walk
+
+    low, high = 5.4955e-6, 7.0e-6
+    assert walk.location_estimate(0, 6e-6, low, high) == 6e-6
+    assert walk.location_estimate(walk.NEWTON_LOCATION_TRIALS - 1, low, low, high) == low
+    assert walk.location_estimate(3, 8e-6, low, high) == 0.5 * (low + high)
+    assert walk.location_estimate(walk.NEWTON_LOCATION_TRIALS, 6e-6, low, high) == \
+        0.5 * (low + high)
+    for trials in range(walk.NEWTON_LOCATION_TRIALS, walk.MAX_LOCATION_TRIALS):
+        low = walk.location_estimate(trials, low, low, high)  # the event lies above it
+    assert high - low <= 1e-14 * high  # the tightest a location asks: 2e-14 of the step
+
+
 def test_a_contact_event_is_located_by_newton_on_the_approach():
     """models/contact_loss.toml has 6 000 events a simulated second, nearly all of them points
     lost or regained. A contact event is located as a phase event is: its first estimate is

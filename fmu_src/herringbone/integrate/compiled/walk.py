@@ -267,6 +267,8 @@ PROBE_FRACTIONS = (0.25, 0.5, 0.75)
 MAX_EVENTS_WITHOUT_PROGRESS = 1000  # chattering contact (grazing) beyond this is an error
 # trial steps to locate one event (a bisection alone halves the bracket 60 times)
 MAX_LOCATION_TRIALS = 60
+# trials after which a location bisects its bracket (location_estimate)
+NEWTON_LOCATION_TRIALS = 12
 # A contact set that throws the pinion back into the previous one, and that one forward again:
 # beyond this many reversals in a row the train is stuck on the switch (a point entering at
 # full load with sharp face edges, at low speed), which an edge ramp resolves
@@ -942,6 +944,20 @@ def next_estimate(event, older_h, older_value, newer_h, newer_value, newer_slope
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def location_estimate(trials, estimate, low, high):
+    """Where the next trial of a location aims (s from the step's start), after `trials`
+    trials, given the Newton or secant `estimate` and the bracket [low, high): the estimate,
+    but the bracket's middle where the estimate lies outside it or NEWTON_LOCATION_TRIALS
+    trials have not closed it. Newton's estimates close a bracket in one to ten trials; where
+    an event function stays at zero over a stretch (rounding), they stay at its low end and
+    the trials, aimed just past them, creep up by the event time tolerance each, which sixty
+    trials do not close. Bisection closes any bracket within the trials left."""
+    if trials >= NEWTON_LOCATION_TRIALS or not low <= estimate < high:
+        return 0.5 * (low + high)
+    return estimate
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def first_estimate(system, state, new_state, values, event, high, h_step):
     """Where (s from the step's start) `event` crosses zero inside a whole step of h_step (s)
     that crossed it (`high` == h_step: NEW_STATE and the AFTER values at its end), from its
@@ -969,7 +985,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
     by trial steps of the method, to the event time tolerance. The first estimate is the zero
     of the cubic through the event's values and slopes at the step's ends (first_estimate);
-    the next ones Newton's from the latest trial (its slope: event_slope). Trials are judged
+    the next ones Newton's from the latest trial (its slope: event_slope), until a bisection
+    takes over (location_estimate). Trials are judged
     against the bracket's low end, so that of several events crossed the earliest is taken.
     Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
@@ -986,7 +1003,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
                    else event_slope(system, segment, new_state, workspace, event))
     tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
-    for _ in range(MAX_LOCATION_TRIALS):
+    for trials in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
         # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
         if low >= high - 2.0 * tolerance:
@@ -994,8 +1011,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
         if estimate < 0.0:
             estimate = next_estimate(event, older_h, older_value, newer_h, newer_value,
                                      newer_slope)
-        if not low <= estimate < high:
-            estimate = 0.5 * (low + high)
+        estimate = location_estimate(trials, estimate, low, high)
         if high - estimate <= 2.0 * tolerance:
             # located, unless another event that had also crossed by `high` crossed
             # earlier: then a trial just before this crossing says which
