@@ -986,8 +986,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     by trial steps of the method, to the event time tolerance. The first estimate is the zero
     of the cubic through the event's values and slopes at the step's ends (first_estimate);
     the next ones Newton's from the latest trial (its slope: event_slope), until a bisection
-    takes over (location_estimate). Trials are judged
-    against the bracket's low end, so that of several events crossed the earliest is taken.
+    takes over (location_estimate). Trials are judged against the bracket's low end, so that
+    of several events crossed the earliest is taken.
     Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
