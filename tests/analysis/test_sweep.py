@@ -1,6 +1,7 @@
 """Speed and parameter sweeps (herringbone.sweep): agreement with single runs, the same table
 serial and on Dask, the dynamic factor at a resonance of `herringbone info`, the settle time,
 the FMU path, bad arguments; the Campbell crossings; `run --plot` and its progress bar."""
+import contextlib
 import math
 import os
 import socket
@@ -75,6 +76,21 @@ def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+@pytest.mark.filterwarnings("error::UserWarning")
+def test_a_local_cluster_leaves_port_8787_to_others(reference_scene):
+    """A sweep's LocalCluster serves its scheduler's HTTP routes (health, metrics) on a free
+    port: with 8787, Dask's default, held by another cluster on the machine, it starts without
+    Dask's "Port 8787 is already in use" warning, which a host with warnings as errors turns
+    into "Cluster failed to start"."""
+    with socket.socket() as holder:
+        with contextlib.suppress(OSError):  # (held already: as good)
+            holder.bind(("127.0.0.1", 8787))
+            holder.listen()
+        table = sweep(reference_scene, speeds=[157.08], protocol=SHORT, workers=1,
+                      progress=False, method="time")
+    assert len(table) == 1
 
 
 @pytest.fixture

@@ -69,9 +69,12 @@ class _dask_client:
             load_integrator(self.scene)  # fills the cache that the workers then load from
             for name in THREAD_VARIABLES:
                 os.environ.setdefault(name, "1")
+            # no dashboard; the scheduler's own HTTP routes (health, metrics) on a free port,
+            # not on 8787, which another cluster on the machine may hold (Dask then warns)
             self.cluster = LocalCluster(n_workers=self.workers or os.cpu_count(),
                                         threads_per_worker=1, processes=True,
-                                        host="127.0.0.1", dashboard_address=None)
+                                        host="127.0.0.1", dashboard_address=None,
+                                        scheduler_kwargs={"dashboard_address": ":0"})
             self.client = Client(self.cluster)
         else:
             self.client = Client(_checked_address(self.scheduler), timeout="20s")
