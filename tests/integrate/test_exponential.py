@@ -76,6 +76,21 @@ def test_packed_tables_unpack_to_views_of_the_same_arrays(scene_name):
         assert any(np.shares_memory(view, buffer) for buffer in buffers), name
 
 
+def modal_step_error(form, a, b, start, h, state_scales):
+    """R·diag(exp(T_slow·h), e^{Λh})·L·X of a modal form (modal_form's R, L, Λ, T_slow) of
+    the system (a, b) from the augmented start X, against scipy's expm of the augmented
+    matrix: the largest difference in the state's scales."""
+    right, left, rates, slow = form
+    size = a.shape[0]
+    augmented = np.zeros((size + 3, size + 3))
+    augmented[:size, :size], augmented[:size, size:] = a, b
+    modal = left @ start
+    modal[len(slow):] *= np.exp(rates[len(slow):] * h)
+    modal[:len(slow)] = scipy.linalg.expm(slow * h) @ modal[:len(slow)]
+    exact = scipy.linalg.expm(augmented * h) @ start
+    return np.abs(((right @ modal).real - exact)[:size] / state_scales).max()
+
+
 @pytest.mark.parametrize("variant", [exponential.ALL_LOADED, exponential.NONE_LOADED])
 def test_modal_form_is_the_matrix_exponential(reference_model, variant):
     """R·diag(exp(T_slow·h), e^{Λh})·L·X against scipy's expm of the augmented matrix, at
@@ -85,20 +100,13 @@ def test_modal_form_is_the_matrix_exponential(reference_model, variant):
     lengths, counts, tables = model.mesh.period_table()
     loaded = np.full(counts[0], 1.0 if variant == exponential.ALL_LOADED else 0.0)
     a, b = exponential.linear_system(model.system, tables[0], counts[0], loaded)
-    right, left, rates, slow = exponential.modal_form(a, b, scales_of(model))
+    form = exponential.modal_form(a, b, scales_of(model))
     size = a.shape[0]
-    augmented = np.zeros((size + 3, size + 3))
-    augmented[:size, :size], augmented[:size, size:] = a, b
     start = np.concatenate([np.random.default_rng(1).normal(size=size) * model.state_scales(),
                             [500.0, 1800.0, 1.0]])
     start[model.pinion], start[size // 2 + model.pinion] = 0.1, 157.0
     for h in (1e-6, 1e-4, 4e-3):
-        modal = left @ start
-        modal[len(slow):] *= np.exp(rates[len(slow):] * h)
-        modal[:len(slow)] = scipy.linalg.expm(slow * h) @ modal[:len(slow)]
-        exact = scipy.linalg.expm(augmented * h) @ start
-        error = np.abs(((right @ modal).real - exact)[:size] / model.state_scales()).max()
-        assert error <= 1e-9
+        assert modal_step_error(form, a, b, start, h, model.state_scales()) <= 1e-9
 
 
 def test_the_modes_the_tilt_sees_are_left_out(reference_model):
@@ -513,8 +521,8 @@ def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
     moved the wheel 1e-4 rad off scipy's expm, and a run at 12 600 rad/s backwards lost a
     phase event and failed. modal_form refuses such a form as it refuses a singular one: the
     unloaded sets are stepped by DOP853, the loaded ones stay exact (half of them: the others
-    load a point on an edge ramp), and every form it keeps
-    is the matrix exponential to 1e-9 of the state's scales (a state of that run)."""
+    load a point on an edge ramp), and every form it keeps is the matrix exponential to 1e-9
+    of the state's scales (a state of that run)."""
     model = GearTrainModel(herringbone.load_scene(REGRESSION / "found_aaeb0efe2e.toml"))
     lengths, counts, tables = model.mesh.period_table()
     variants = {}
@@ -529,17 +537,10 @@ def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
     valid = CompiledStepper(model, 1e-7, "exponential").exact_tables.valid.reshape(
         -1, exponential.VARIANTS)
     assert valid[:, exponential.ALL_LOADED].any() and not valid[:, exponential.NONE_LOADED].any()
-    (right, left, rates, slow), a, b = variants[exponential.ALL_LOADED]
-    size = a.shape[0]
-    augmented = np.zeros((size + 3, size + 3))
-    augmented[:size, :size], augmented[:size, size:] = a, b
+    form, a, b = variants[exponential.ALL_LOADED]
     start = np.array([0.0882, 0.0172, -29.3, -12624.0, -3033.0, -3800.0, 67.4, 134.7, 1.0])
     for h in (1e-7, 1e-6, 5e-6):
-        modal = left @ start
-        modal[len(slow):] *= np.exp(rates[len(slow):] * h)
-        modal[:len(slow)] = scipy.linalg.expm(slow * h) @ modal[:len(slow)]
-        exact = scipy.linalg.expm(augmented * h) @ start
-        assert np.abs(((right @ modal).real - exact)[:size] / model.state_scales()).max() <= 1e-9
+        assert modal_step_error(form, a, b, start, h, model.state_scales()) <= 1e-9
 
 
 class ModalStep(NamedTuple):

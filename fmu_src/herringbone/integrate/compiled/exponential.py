@@ -255,8 +255,9 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
 def _require_conditioned(vectors: np.ndarray) -> None:
     """Raise np.linalg.LinAlgError where the eigenvectors `vectors` (columns) of the fast
     block leave an eigenvalue's condition number ‖v‖·‖w‖ (w its row of the inverse) above
-    CONDITION_LIMIT: a defective system that rounding has made diagonalizable, as
-    inaccurately as one that it has not (whose eigenvectors are singular: the same error)."""
+    CONDITION_LIMIT: a defective system that rounding has made diagonalizable, though too
+    inaccurately to be used. It is refused as numpy refuses one whose eigenvectors rounding
+    left singular (the inverse raises the same error), and build_tables treats both alike."""
     condition = np.linalg.norm(vectors, axis=0) * np.linalg.norm(np.linalg.inv(vectors), axis=1)
     if condition.max(initial=0.0) > CONDITION_LIMIT:
         raise np.linalg.LinAlgError(

@@ -1358,12 +1358,12 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event, ce
     (its approach monotone) takes them at both ends, for the location's first estimate.
     Returns (the event crossed first, −1 for none; the bracket's high end, s)."""
     vectors, values = workspace.vectors, workspace.values
-    if certified and event >= Event.CONTACT:  # a monotone approach crossed zero
-        approach_slopes(system, segment, state, vectors[Vector.RATE], vectors[Vector.NEW_STATE],
-                        vectors[Vector.RATE_AFTER], values)
-        return event, h_step
     if certified:
-        values[Values.SLOPES_AFTER, 0] = math.nan
+        if event >= Event.CONTACT:  # a monotone approach crossed zero
+            approach_slopes(system, segment, state, vectors[Vector.RATE],
+                            vectors[Vector.NEW_STATE], vectors[Vector.RATE_AFTER], values)
+        else:
+            values[Values.SLOPES_AFTER, 0] = math.nan
         return event, h_step
     suspect = grazing_check(system, segment, state, vectors[Vector.RATE],
                             vectors[Vector.NEW_STATE], vectors[Vector.RATE_AFTER], values, h_step)
