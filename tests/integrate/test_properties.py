@@ -300,3 +300,33 @@ def test_contact_counts_may_differ_only_at_a_switch(clean_runs):
     near = first_sample(reference, lambda *sample: least_force(*sample) <= hair)
     checks.contact_counts_agree(corrupted(compiled, lambda o, s: o["n_contacts"].__setitem__(
         near, o["n_contacts"][near] + 1)), reference, checks.DEFAULT_BOUND)
+
+
+def _benchmark_module(name):
+    """benchmarks/<name>.py, loaded as a module (the benchmarks are scripts, not a package)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_random_scene_benchmark_judges_only_against_a_truth_good_to_a_tenth_of_the_bound():
+    """benchmarks/random_scenes.py counts a compiled run off the truth (the reference at 1e-12)
+    only where the truth's own estimate of its error over the run is within a tenth of the
+    bound: seed 7097's truth (1.3e-4) judges neither compiled run, 7066's (5.2e-7) the one at
+    1e-7 (bound 1e-4) but not the one at 1e-9 (bound 1e-6), a run never checked (no landing:
+    no estimate) both."""
+    summary = _benchmark_module("random_scenes").summary
+    rows = [{"seed": seed, "error_reference_1e-10": 0.0, "error_compiled_1e-7": 2e-2,
+             "error_compiled_1e-9": 2e-4, **estimate}
+            for seed, estimate in ((7097, {"estimate_reference_1e-12": 1.3e-4}),
+                                   (7066, {"estimate_reference_1e-12": 5.2e-7}), (1, {}))]
+    lines = summary(rows, 1.0, "test").splitlines()
+    judged = [line for line in lines if "within 0.1 of the bound" in line]
+    assert judged[0].endswith("2 of 2 (seeds [7066, 1])"), judged
+    assert judged[1].endswith("1 of 1 (seeds [1])"), judged
+    assert any(line.endswith("2 of 3 (seeds [7097, 7066])") for line in lines), lines
