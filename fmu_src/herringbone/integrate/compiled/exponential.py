@@ -86,8 +86,12 @@ ZERO = 1e-11
 # symmetric train with no lead error loads or unloads all its points at once)
 ALL_LOADED, NONE_LOADED = 0, 1
 VARIANTS = 2
-# The tilt a segment may start with, in units of the state scales times the step tolerance
+# The tilt a segment may start with, in units of the state scales times the step tolerance,
+# and at least TILT_ROUNDING (in the state scales): the modal round trip leaves a relative
+# tilt of some 5e-15 in an undamped train, which a bound of 1e-3 of a step tolerance of 3e-12
+# (undamped at 1e-10) would refuse, stepping its exact segments by DOP853
 TILT_FRACTION = 1e-3
+TILT_ROUNDING = 1e-13
 # A mode's largest cosine with the tilt rows above which the tilt sees it (unseen_by_tilt)
 TILT_SEEN = 1e-6
 # The phase event's time from the slow polynomial (slow_phase_event_ahead): Newton's
@@ -179,7 +183,11 @@ def linear_system(system: System, points: np.ndarray, count: int,
 
 def tilt_rows(system: System, a: np.ndarray) -> np.ndarray:
     """Orthonormal rows spanning the tilt's observability space of A: the state lies where
-    the tilt stays zero (absent forcing) exactly when their products with it vanish."""
+    the tilt stays zero (absent forcing) exactly when their products with it vanish. A
+    coordinate that none of the rows it is spanned by involves gets an exact zero, not the
+    SVD's rounding: the pinion angle runs to hundreds of its scale within an interval, and
+    a rounding entry of 4e-15 on it made the tilt of an exact segment read 1e-12 mid-way,
+    beyond the bound at tight tolerances (variant_of)."""
     n = system.mass.shape[0]
     tilt = system.contact_row_tilt_relative
     if not tilt.any():
@@ -190,7 +198,9 @@ def tilt_rows(system: System, a: np.ndarray) -> np.ndarray:
     stacked = np.array(rows)
     stacked /= np.abs(stacked).max(axis=1, keepdims=True)
     _, values, vectors = np.linalg.svd(stacked, full_matrices=False)
-    return vectors[:int((values > 1e-9 * values[0]).sum())]
+    spanning = vectors[:int((values > 1e-9 * values[0]).sum())]
+    spanning[:, ~stacked.any(axis=0)] = 0.0
+    return spanning
 
 
 def exact_condition(system: System, points: np.ndarray, count: int, loaded: np.ndarray,
@@ -344,7 +354,7 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
         _fill_place(arrays, place, form, rows_of[place], system, state_scales)
     inertia = float(np.sum(system.mass * system.rigid_rotation ** 2))
     return ExactTables(
-        valid=valid, **arrays, tilt_bound=float(TILT_FRACTION * step_tolerance),
+        valid=valid, **arrays, tilt_bound=max(TILT_FRACTION * step_tolerance, TILT_ROUNDING),
         inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
         start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
         modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
