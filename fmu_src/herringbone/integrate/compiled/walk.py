@@ -459,6 +459,39 @@ def exact_samples(system, segment, state, workspace, times, rows, k, time, until
     return k
 
 
+def sample_in_window(samples, k, system, segment, state, workspace, time, until, event):
+    """window_samples where the run has a sample before `until`; k (none taken) for a run
+    without (None) or where the next sample lies at or past it."""
+
+
+@overload(sample_in_window, inline="always")
+def _sample_in_window(samples, k, system, segment, state, workspace, time, until, event):
+    if isinstance(samples, types.NoneType):
+        return lambda samples, k, system, segment, state, workspace, time, until, event: k
+    return lambda samples, k, system, segment, state, workspace, time, until, event: (
+        k if k >= samples.times.shape[0] or samples.times[k] >= until else window_samples(
+            system, segment, state, workspace, samples.times, samples.rows, k, time, until,
+            event))
+
+
+@njit(**NUMBERS_ONLY)
+def window_samples(system, segment, state, workspace, times, rows, k, time, until, event):
+    """exact_samples for the samples in the location's window before a located crossing of
+    `event` at `until` (s), which lies somewhere in it: each taken only where the event has
+    not crossed at its own time (its function keeps the sign it had at `time`). One past the
+    crossing belongs to the next segment, whose solution reaches back to it, as a run that
+    stops at the sample finds. Returns the index of the first sample left."""
+    scratch, values = workspace.vectors[Vector.TRIAL], workspace.values
+    while k < times.shape[0] and times[k] < until:
+        exact_step(system, segment, state, workspace, times[k] - time, scratch)
+        event_values(system, segment, scratch, values[Values.APPROACH], values[Values.TRIAL])
+        if crosses(values[Values.BEFORE], values[Values.TRIAL], event, segment.loaded):
+            break
+        outputs(system, segment.points, segment.point_count, segment.loaded, scratch, rows[k])
+        k += 1
+    return k
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def segment_of(system, mesh, interval, loaded, torques, exact):
     """The CompiledSegment of contact interval `interval` of the mesh's period (a
@@ -979,6 +1012,14 @@ def first_estimate(system, state, new_state, values, event, high, h_step):
                                high * slope_before, high * slope_after)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def location_tolerance(settings, h_step):
+    """How closely (s) an event is located in a step of h_step (s): the settings' event time
+    tolerance, not below the step's rounding. A located crossing lies within twice this
+    before the bracket's high end."""
+    return max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)
+
+
 @njit(**NUMBERS_ONLY)
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
@@ -1001,7 +1042,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     # (a contact's slope at `high` is the grazing check's, where it took one)
     newer_slope = (values[Values.SLOPES_AFTER, event - Event.CONTACT] if event >= Event.CONTACT
                    else event_slope(system, segment, new_state, workspace, event))
-    tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)  # not below rounding
+    tolerance = location_tolerance(settings, h_step)
     estimate = first_estimate(system, state, new_state, values, event, high, h_step)
     for trials in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
@@ -1060,7 +1101,7 @@ def violated_before(system, segment, settings, state, workspace, high, h_step):
     (contact_violated_inside); the event's own crossing lies within two location
     tolerances of `high`, so a step that short is not looked into. False in a run that is not
     a debug run."""
-    tolerance = max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)
+    tolerance = location_tolerance(settings, h_step)
     return (settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss
             and high > 16.0 * tolerance
             and contact_violated_inside(system, segment, settings, state, workspace, high))
@@ -1378,7 +1419,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     """After an accepted step of `plan` (a StepPlan) in `segment` from the run's time that
     crossed `event` by `high` (s from the step's start; its state in NEW_STATE): the crossing
     located (locate_event), a debug run's check up to it (violated_before), the samples from
-    the `k`-th on before it taken where the segment is exact (sample_inside), the run moved
+    the `k`-th on before it taken where the segment is exact (sample_inside; sample_in_window
+    for those in the location's window), the run moved
     past it (pass_event; `end`: where the step would land, s) and into the next segment
     (end_segment), which the loop begins where this returns Status.OK; after a contact event
     in an exact segment, with a step no longer than the exact floor (the approach starts at
@@ -1392,7 +1434,12 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     if violated_before(system, segment, settings, state, workspace, high, h_step):
         return Status.CONTACT_VIOLATED, k
     if segment.exact >= 0:
-        k = sample_inside(samples, k, system, segment, state, workspace, time, time + high)
+        # the crossing lies within twice the location tolerance before `high`: a sample there
+        # is on the side its own time puts it
+        window_start = time + high - 2.0 * location_tolerance(settings, h_step)
+        k = sample_inside(samples, k, system, segment, state, workspace, time, window_start)
+        k = sample_in_window(samples, k, system, segment, state, workspace, time, time + high,
+                             event)
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
