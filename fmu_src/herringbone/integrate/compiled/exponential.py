@@ -185,9 +185,9 @@ def tilt_rows(system: System, a: np.ndarray) -> np.ndarray:
     """Orthonormal rows spanning the tilt's observability space of A: the state lies where
     the tilt stays zero (absent forcing) exactly when their products with it vanish. A
     coordinate that none of the rows it is spanned by involves gets an exact zero, not the
-    SVD's rounding: the pinion angle runs to hundreds of its scale within an interval, and
-    a rounding entry of 4e-15 on it made the tilt of an exact segment read 1e-12 mid-way,
-    beyond the bound at tight tolerances (variant_of)."""
+    SVD's rounding: the pinion angle runs to hundreds of its scale within an interval, so a
+    rounding entry of 4e-15 on it would read as a tilt of 1e-12 mid-way, beyond the bound
+    (variant_of) at tight tolerances."""
     n = system.mass.shape[0]
     tilt = system.contact_row_tilt_relative
     if not tilt.any():
