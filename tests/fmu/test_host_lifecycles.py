@@ -6,26 +6,15 @@ libcosim, the C host); each case checks its own results and must exit 0. Here ev
 RUNS fresh processes, two at a time: a bounded sample on every push. The stress run of the same
 cases (hundreds of processes each) is `python benchmarks/host_lifecycles.py --runs 200`.
 """
-import importlib.util
 import shutil
 import sys
 from pathlib import Path
 
 import pytest
-from helpers import ROOT
+from helpers import benchmark_module
 
 RUNS = 3
-HARNESS = ROOT / "benchmarks" / "host_lifecycles.py"
-
-
-def _harness():
-    spec = importlib.util.spec_from_file_location("host_lifecycles", HARNESS)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-lifecycles = _harness()
+lifecycles = benchmark_module("host_lifecycles")
 
 
 @pytest.fixture(scope="module")

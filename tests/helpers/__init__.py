@@ -68,8 +68,9 @@ def shipped_run(name, method, stop_time, communication_step=None):
     return shipped_drive(name, method, stop_time, communication_step)[3]
 
 
-def shipped_drive(name, method, stop_time, communication_step=None):
-    """shipped_run's drive, with what it drove: (model, scene, CompiledStepper, Run)."""
+def shipped_drive(name, method, stop_time, communication_step=None, tolerance=None):
+    """shipped_run's drive, with what it drove: (model, scene, CompiledStepper, Run); at
+    `tolerance` (None: the default one)."""
     import herringbone
     from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
     from herringbone.integrate.contract import start_position
@@ -77,9 +78,20 @@ def shipped_drive(name, method, stop_time, communication_step=None):
 
     scene = herringbone.load_scene(MODELS / f"{name}.toml")
     model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, DEFAULT_TOLERANCE, method)
+    stepper = CompiledStepper(model, DEFAULT_TOLERANCE if tolerance is None else tolerance,
+                              method)
     run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
     step = communication_step or stop_time
     for k in range(round(stop_time / step)):
         stepper.run_to(run, (k + 1) * step, scene.inputs.at(k * step))
     return model, scene, stepper, run
+
+
+def benchmark_module(name):
+    """benchmarks/<name>.py loaded as a module (the benchmarks are scripts, not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

@@ -141,18 +141,6 @@ def test_the_modes_the_tilt_sees_are_left_out(reference_model):
             assert modal[~free].max() <= 1e-10 * modal[free].max()
 
 
-def driven_steps(scene, tolerance, stop_time=0.02, communication_step=1e-3):
-    """Accepted steps of the exponential method driven as the FMU drives it (run_to every
-    communication step, the schedule's torques at each step's start) to `stop_time` (s)."""
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, tolerance, "exponential")
-    run_ = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    for k in range(round(stop_time / communication_step)):
-        stepper.run_to(run_, (k + 1) * communication_step,
-                       scene.inputs.at(k * communication_step))
-    return stepper.accepted_steps
-
-
 @pytest.mark.parametrize("name", ["stiff_bearings", "undamped", "wide_face"])
 def test_a_tight_tolerance_leaves_the_exact_segments_exact(name):
     """A call's end lies inside a segment, whose tilt must read zero there for the next call
@@ -164,11 +152,12 @@ def test_a_tight_tolerance_leaves_the_exact_segments_exact(name):
     method's steps hardly depend on the tolerance (now the same from 1e-7 to 1e-12): at 1e-10
     at most twice those at 1e-7, and the tilt rows have exact zeros where no power of A
     reaches."""
-    scene = herringbone.load_scene(MODELS / f"{name}.toml")
-    assert driven_steps(scene, 1e-10) <= 2 * driven_steps(scene, 1e-7)
-    tables = CompiledStepper(GearTrainModel(scene), 1e-10, "exponential").exact_tables
-    pinion = GearTrainModel(scene).system.pinion
-    assert not tables.tilt_rows[:, :, pinion].any()
+    steps = {}
+    for tolerance in (1e-7, 1e-10):
+        model, _, stepper, _ = shipped_drive(name, "exponential", 0.02, 1e-3, tolerance)
+        steps[tolerance] = stepper.accepted_steps
+    assert steps[1e-10] <= 2 * steps[1e-7]
+    assert not stepper.exact_tables.tilt_rows[:, :, model.system.pinion].any()
 
 
 def test_the_tables_of_a_huge_torque_warn_of_no_overflow(reference_scene):

@@ -26,6 +26,7 @@ import os
 import helpers.property_checks as checks
 import numpy as np
 import pytest
+from helpers import benchmark_module
 from helpers.random_scenes import random_scene, scenes
 from helpers.scene_distribution import LOW_SPEED
 from hypothesis import HealthCheck, given, settings
@@ -302,25 +303,13 @@ def test_contact_counts_may_differ_only_at_a_switch(clean_runs):
         near, o["n_contacts"][near] + 1)), reference, checks.DEFAULT_BOUND)
 
 
-def _benchmark_module(name):
-    """benchmarks/<name>.py, loaded as a module (the benchmarks are scripts, not a package)."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_the_random_scene_benchmark_judges_only_against_a_truth_good_to_a_tenth_of_the_bound():
     """benchmarks/random_scenes.py counts a compiled run off the truth (the reference at 1e-12)
     only where the truth's own estimate of its error over the run is within a tenth of the
     bound: seed 7097's truth (1.3e-4) judges neither compiled run, 7066's (5.2e-7) the one at
     1e-7 (bound 1e-4) but not the one at 1e-9 (bound 1e-6), a run never checked (no landing:
     no estimate) both."""
-    summary = _benchmark_module("random_scenes").summary
+    summary = benchmark_module("random_scenes").summary
     rows = [{"seed": seed, "error_reference_1e-10": 0.0, "error_compiled_1e-7": 2e-2,
              "error_compiled_1e-9": 2e-4, **estimate}
             for seed, estimate in ((7097, {"estimate_reference_1e-12": 1.3e-4}),
