@@ -25,6 +25,7 @@ from pathlib import Path
 import pytest
 from helpers import MODELS
 
+from herringbone.arguments import COMPILED_METHODS
 from herringbone.model.document import with_generated_tables
 
 ROOT = MODELS.parent
@@ -55,6 +56,19 @@ def test_nothing_points_outside_the_repository():
 
 
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def test_every_list_of_the_compiled_methods_names_them_all():
+    """A line of the documents that names the compiled integrator's methods as choices (both
+    `dop853` and `radau` in code) names every one that arguments.py allows, so that a method
+    added to the package is not left out where a user reads what to choose."""
+    offenders = []
+    for document in DOCUMENTS:
+        for number, line in enumerate(document.read_text(encoding="utf-8").splitlines(), 1):
+            named = set(re.findall(r"`([a-z0-9]+)`", line))
+            if {"dop853", "radau"} <= named and not set(COMPILED_METHODS) <= named:
+                offenders.append(f"{document.relative_to(ROOT)}:{number}")
+    assert not offenders, f"these lines leave out a method of {COMPILED_METHODS}: {offenders}"
 
 
 def _herringbone() -> list[str]:
