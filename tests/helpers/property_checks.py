@@ -272,13 +272,16 @@ def _toml_value(value) -> str:
     return repr(float(value))
 
 
+def regression_name(scene) -> str:
+    """The name its regression file takes: found_<digest>, the digest of the scene itself."""
+    return "found_" + hashlib.sha1(scene_toml(scene, "").encode()).hexdigest()[:10]
+
+
 def save_regression_scene(scene, failure: str, folder: Path = REGRESSION_DIR) -> Path:
-    """Write the scene with `failure` as its header to folder/found_<digest>.toml (the digest of
-    the scene itself, so the same scene found twice is one file, its header saying every
-    failure found on it); returns the path."""
-    body = scene_toml(scene, "")
-    digest = hashlib.sha1(body.encode()).hexdigest()[:10]
-    path = folder / f"found_{digest}.toml"
+    """Write the scene with `failure` as its header to folder/<regression_name> .toml (so the
+    same scene found twice is one file, its header saying every failure found on it); returns
+    the path."""
+    path = folder / f"{regression_name(scene)}.toml"
     header = f"Found by tests/integrate/test_properties.py: {failure}"
     if path.exists():
         known = path.read_text(encoding="utf-8").split("\n[", 1)[0]
