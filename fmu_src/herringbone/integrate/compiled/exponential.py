@@ -680,6 +680,20 @@ def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_lo
     return CERTIFIED
 
 
+@njit(**NUMBERS_ONLY)
+def state_after(system, buffers, exact, state, motor_torque, load_torque, h, out):
+    """The exact state after h (s) from `state`, into `out`, as `step` computes it, without
+    the certificate: for what lies inside a step already taken (the event location's trial
+    steps, the samples), where only the state is asked for. `buffers`: the tables as
+    pack_tables packs them."""
+    tables = unpack_tables(buffers)
+    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    _fast_modes(tables, exact, h)
+    _slow_series(tables, exact, h)
+    _from_modal(tables, exact, out)
+    _keep_momentum(system, tables, state, motor_torque, load_torque, h, out)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _phase_sure(system, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
                 length):

@@ -386,6 +386,20 @@ def _exact_step(system, segment, state, workspace, h, out):
         == exponential.ALL_LOADED else -1.0, segment.length, out)
 
 
+def exact_state(system, segment, state, workspace, h, out):
+    """exponential.state_after on the workspace's tables where it is the exponential
+    method's (the segment exact): the state only; never called in the others'."""
+
+
+@overload(exact_state, inline="always")
+def _exact_state(system, segment, state, workspace, h, out):
+    if _lacks(workspace, "exact"):
+        return lambda system, segment, state, workspace, h, out: None
+    return lambda system, segment, state, workspace, h, out: exponential.state_after(
+        system, workspace.exact, segment.exact, state, segment.motor_torque,
+        segment.load_torque, h, out)
+
+
 def exact_monotone(workspace, segment, h):
     """exponential.approach_monotone on the workspace's tables where it is the exponential
     method's; False in the others'."""
@@ -453,7 +467,7 @@ def exact_samples(system, segment, state, workspace, times, rows, k, time, until
     of the first sample left."""
     scratch = workspace.vectors[Vector.TRIAL]
     while k < times.shape[0] and times[k] < until:
-        exact_step(system, segment, state, workspace, times[k] - time, scratch)
+        exact_state(system, segment, state, workspace, times[k] - time, scratch)
         outputs(system, segment.points, segment.point_count, segment.loaded, scratch, rows[k])
         k += 1
     return k
@@ -483,7 +497,7 @@ def window_samples(system, segment, state, workspace, times, rows, k, time, unti
     stops at the sample finds. Returns the index of the first sample left."""
     scratch, values = workspace.vectors[Vector.TRIAL], workspace.values
     while k < times.shape[0] and times[k] < until:
-        exact_step(system, segment, state, workspace, times[k] - time, scratch)
+        exact_state(system, segment, state, workspace, times[k] - time, scratch)
         event_values(system, segment, scratch, values[Values.APPROACH], values[Values.TRIAL])
         if crosses(values[Values.BEFORE], values[Values.TRIAL], event, segment.loaded):
             break
@@ -609,7 +623,7 @@ def trial_step(system, segment, settings, state, workspace, h, out):
     vectors = workspace.vectors
     workspace.counters[Counter.TRIAL_STEPS] += 1
     if segment.exact >= 0:
-        exact_step(system, segment, state, workspace, h, out)
+        exact_state(system, segment, state, workspace, h, out)
     elif is_explicit(workspace):
         dop853.step(system, segment, state, vectors[Vector.RATE], h,
                     settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
