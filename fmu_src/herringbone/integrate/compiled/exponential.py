@@ -736,13 +736,13 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
     of `length` (rad) in the segment of exact form `exact` with the torques (N·m) held: where
     the slow part of its motion (a polynomial in t, no exponentials) reaches `length` plus the
     fast modes' swing of the angle (moving forward), or minus it below zero (moving back),
-    by Newton's method; inf where it stands still or turns back first; −1 (no prediction)
-    where that swing is more than PREDICTION_SPREAD of the way, so that a step aimed there
-    would overshoot the event by much (a torsional mode swinging the angle, as in
-    torque_step). The instantaneous speed and acceleration, which walk.phase_event_ahead
-    extrapolates, carry the fast modes' ringing (a switch sets the pinion accelerating at
-    1e6 rad/s² and more), and the slow part does not. `buffers`: the tables as pack_tables
-    packs them."""
+    by Newton's method; inf where it stands still or turns back first. Returns that time
+    and whether it is a tight aim: the swing no more than PREDICTION_SPREAD of the way (a
+    torsional mode swinging the angle, as in torque_step, makes a step aimed there overshoot
+    the event by much, though it still bounds where the event can lie). The instantaneous
+    speed and acceleration, which walk.phase_event_ahead extrapolates, carry the fast modes'
+    ringing (a switch sets the pinion accelerating at 1e6 rad/s² and more), and the slow part
+    does not. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
@@ -750,10 +750,9 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
     degree = _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
     if terms[1] == 0.0:
-        return math.inf
+        return math.inf, True
     target = length + swing if terms[1] > 0.0 else -swing
-    if swing > PREDICTION_SPREAD * abs(target - terms[0]):
-        return -1.0
+    tight = swing <= PREDICTION_SPREAD * abs(target - terms[0])
     ahead = (target - terms[0]) / terms[1]
     for _ in range(PREDICTION_ITERATIONS):
         value, slope = terms[degree], 0.0
@@ -761,12 +760,12 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
             slope = slope * ahead + value
             value = value * ahead + terms[power]
         if ahead <= 0.0 or slope * terms[1] <= 0.0:  # turns back before it gets there
-            return math.inf
+            return math.inf, tight
         change = (value - target) / slope
         ahead -= change
         if abs(change) <= PREDICTION_PRECISION * ahead:
             break
-    return ahead if ahead > 0.0 else math.inf
+    return (ahead if ahead > 0.0 else math.inf), tight
 
 
 @njit(cache=True, error_model="numpy", inline="always")

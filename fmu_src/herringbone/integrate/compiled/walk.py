@@ -183,6 +183,9 @@ class Memory(IntEnum):
     # s: when the next phase event lies ahead of an exact segment's opening step, taken as the
     # segment was entered (opening_ahead); −1: none
     OPENING_AHEAD = 1
+    # s: the time by which it has surely happened, where OPENING_AHEAD is none because that
+    # time is too loose an aim; −1: none
+    OPENING_SURE = 2
 
 
 class Workspace(NamedTuple):
@@ -415,13 +418,14 @@ def _exact_monotone(workspace, segment, h):
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
     """exponential.slow_phase_event_ahead on the workspace's tables where it is the exponential
-    method's; −1 (none) in the others'."""
+    method's; (−1, False) (none) in the others'."""
 
 
 @overload(exact_event_ahead, inline="always")
 def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
     if _lacks(workspace, "exact"):
-        return lambda system, workspace, exact, state, motor_torque, load_torque, length: -1.0
+        return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
+                (-1.0, False))
     return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
             exponential.slow_phase_event_ahead(system, workspace.exact, exact, state,
                                                motor_torque, load_torque, length))
@@ -553,13 +557,18 @@ def phase_event_ahead(system, state, rate, length):
 @njit(cache=True, error_model="numpy", inline="always")
 def event_ahead(system, segment, state, workspace, rate, explicit):
     """When (s from now) the next phase event is predicted, for the step to be aimed just
-    past it (plan_step): for an exact segment's opening step, the time opening_ahead took;
-    else from φp's rate and acceleration `rate` (phase_event_ahead) for DOP853 and the
-    exponential method, and never for Radau IIA (plan_step says why)."""
+    past it (plan_step): for an exact segment's opening step, the time opening_ahead took,
+    or where that was too loose an aim, the sooner of it and phase_event_ahead's; else from
+    φp's rate and acceleration `rate` (phase_event_ahead) for DOP853 and the exponential
+    method, and never for Radau IIA (plan_step says why)."""
     if segment.exact >= 0 and workspace.counters[Counter.OPENING] >= 0:
-        ahead = workspace.memory[Memory.OPENING_AHEAD]
+        ahead, sure = workspace.memory[Memory.OPENING_AHEAD], workspace.memory[Memory.OPENING_SURE]
         if ahead >= 0.0:
             return ahead
+        if sure >= 0.0:
+            # (the ringing often sends phase_event_ahead to inf, which no step is aimed at:
+            # an opening step grown to milliseconds then crossed the event early on)
+            return min(sure, phase_event_ahead(system, state, rate, segment.length))
     return phase_event_ahead(system, state, rate, segment.length) if explicit else NEVER
 
 
@@ -1156,16 +1165,17 @@ def opening_ahead(system, mesh, run, workspace, segment):
     """Where the run has just entered an exact segment forward (end_segment; the torques
     those of `segment`, the one it left): when the next phase event lies ahead
     (exponential.slow_phase_event_ahead, from the slow part of the motion), for the opening step
-    to be aimed at; −1 elsewhere. φp's acceleration just after a switch is the fast modes'
-    (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
-    halfway. Taken here, once an event, where it was measured to cost least
-    (docs/exponential-integrator.md, "An opening step aimed by the slow motion")."""
+    to be aimed at, and whether that is a tight aim; (−1, False) elsewhere. φp's
+    acceleration just after a switch is the fast modes' (1e6 rad/s² and more), so
+    phase_event_ahead's extrapolation lands the opening step halfway. Taken here, once an
+    event, where it was measured to cost least (docs/exponential-integrator.md, "An opening
+    step aimed by the slow motion")."""
     if workspace.counters[Counter.OPENING] < 0:
-        return -1.0
+        return -1.0, False
     interval = run.place[0]
     exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     if exact < 0:
-        return -1.0
+        return -1.0, False
     return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
                              segment.load_torque, mesh.lengths[interval])
 
@@ -1459,8 +1469,9 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
         end_segment(system, mesh, run, workspace, event)
         if event >= Event.CONTACT and segment.exact >= 0:
             run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
-        workspace.memory[Memory.OPENING_AHEAD] = opening_ahead(system, mesh, run, workspace,
-                                                               segment)
+        ahead, tight = opening_ahead(system, mesh, run, workspace, segment)
+        workspace.memory[Memory.OPENING_AHEAD] = ahead if tight else -1.0
+        workspace.memory[Memory.OPENING_SURE] = -1.0 if tight else ahead
     return status, k
 
 
@@ -1481,7 +1492,7 @@ def begin_walk(workspace):
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
     workspace.memory[Memory.FACTORED_H] = 0.0
-    workspace.memory[Memory.OPENING_AHEAD] = -1.0
+    workspace.memory[Memory.OPENING_AHEAD] = workspace.memory[Memory.OPENING_SURE] = -1.0
 
 
 # --- a run sampled in one call ----------------------------------------------------------------
