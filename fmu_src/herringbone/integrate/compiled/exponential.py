@@ -25,7 +25,8 @@ vibration modes, diagonalized): X(t) = R·diag(exp(T_slow·t), e^{Λt})·L·X(0)
 a polynomial in t, summed as its series. A step evaluates that at one t (`step`), O(N²): the
 slow block in real arithmetic, one mode of each conjugate pair (ExactTables says why). The
 coordinates L·X(0) of a step's start are kept, so the trial steps of an event's location,
-which all start there, pay only for e^{Λt} and R.
+which all start there, pay only for e^{Λt} and R (`state_after`: the state alone, where a
+step's certificate is not asked for).
 
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, its phase events are
@@ -43,7 +44,8 @@ cubic through values and slopes) see a point's approach cross, as for DOP853. Wh
 events are not sure (a torsional mode swinging the speed through zero near a switch), those
 checks do not see the pinion turn back across an end of its interval and return, and the step is
 shortened further (walk.TURN_BACK_FLOOR). A segment's opening step is aimed where the slow
-motion carries the pinion angle out of its interval (`slow_phase_event_ahead`).
+motion carries the pinion angle out of its interval (`slow_phase_event_ahead`), and where that
+is too loose an aim, it ends no later.
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
