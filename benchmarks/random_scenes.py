@@ -41,7 +41,11 @@ import numpy as np  # noqa: E402
 from helpers.scene_distribution import random_scene  # noqa: E402
 
 import herringbone  # noqa: E402
-from herringbone.integrate.global_error import ReferenceAccuracyWarning  # noqa: E402
+from herringbone.integrate.global_error import (  # noqa: E402
+    TRUTH_SHARE,
+    ReferenceAccuracyWarning,
+    can_judge,
+)
 from herringbone.integrate.reference import checked_reference_run  # noqa: E402
 from herringbone.model.assembly import GearTrainModel  # noqa: E402
 
@@ -52,9 +56,6 @@ RUNS = (("reference_1e-12", "reference", 1e-12), ("reference_1e-10", "reference"
         ("compiled_1e-7", "compiled", 1e-7), ("compiled_1e-9", "compiled", 1e-9))
 # (run, bound): what counts as disagreeing (issue 15)
 BOUNDS = (("compiled_1e-7", 1e-4), ("compiled_1e-9", 1e-6), ("reference_1e-10", 1e-6))
-# a compiled run is judged against the truth where the truth's own estimate of its error over
-# the run (reference_simulate's check of a run that lands) is at most this share of the bound
-TRUTH_SHARE = 0.1
 
 
 class SceneTimeout(Exception):
@@ -167,7 +168,7 @@ def summary(rows: list[dict], elapsed: float, command: str) -> str:
                  f"{len(unsure)} of {len(rows)} (seeds {unsure[:10]})")
     for label, bound in BOUNDS[:2]:
         trusted = [r for r in rows if r.get("error_reference_1e-10", math.inf) <= 1e-6
-                   and r.get(f"estimate_{truth}", 0.0) <= TRUTH_SHARE * bound]
+                   and can_judge(r.get(f"estimate_{truth}", 0.0), bound)]
         beyond = [r["seed"] for r in trusted if r.get(f"error_{label}", 0.0) > bound]
         lines.append(f"{label} beyond {bound:g} where the reference agrees with itself to 1e-6 "
                      f"and estimates its own error within {TRUTH_SHARE:g} of the bound: "

@@ -37,6 +37,7 @@ from hypothesis import HealthCheck, assume, given, settings
 import herringbone
 from herringbone import ReferenceAccuracyWarning
 from herringbone.integrate.contract import IntegrationError
+from herringbone.integrate.global_error import can_judge
 from herringbone.integrate.reference import checked_reference_run
 
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
@@ -182,14 +183,10 @@ def test_random_scene_at_a_tight_tolerance(seed):
     check_tight(random_scene(seed))
 
 
-# A drawn scene is judged only where the scipy reference resolves it: its own estimate of its
-# error over the run within this share of the bound (the random-scene benchmark's rule)
-TRUTH_SHARE = 0.1
-
-
 def resolved_by_the_reference(scene, tolerance: float, bound: float) -> bool:
     """Whether reference_simulate at `tolerance` estimates its own error over the run (its
-    check of a run that lands) within TRUTH_SHARE of `bound`. A train that rattles beyond what
+    check of a run that lands) well enough to judge against `bound` (global_error.can_judge,
+    the random-scene benchmark's rule). A train that rattles beyond what
     double precision resolves (no damping anywhere, dozens to hundreds of landings) puts every
     run, reference or compiled, force scales apart: it can judge no integrator, and the draw
     found one after another. A scene the reference refuses is left to check_scene."""
@@ -199,7 +196,7 @@ def resolved_by_the_reference(scene, tolerance: float, bound: float) -> bool:
             _, check = checked_reference_run(scene, tolerance=tolerance)
     except IntegrationError:
         return True
-    return check.estimate is None or check.estimate <= TRUTH_SHARE * bound
+    return can_judge(check.estimate, bound)
 
 
 def known_disagreement(scene, tight: bool) -> bool:

@@ -51,6 +51,9 @@ SAFETY = 0.25
 # the tolerance or on the floor but where the error is far from proportional; a fourth is the
 # last, so that a check costs at most four runs.
 MAX_RUNS = 4
+# A reference run can judge another against a bound where its own estimated error over the run
+# is within this share of the bound (the random-scene benchmark, the drawn property tests)
+TRUTH_SHARE = 0.1
 
 
 class ReferenceAccuracyWarning(UserWarning):
@@ -69,6 +72,13 @@ class Check:
     estimate: float | None
     runs: int
     landings: int
+
+
+def can_judge(estimate: float | None, bound: float) -> bool:
+    """Whether a reference run whose check estimated its error over the run at `estimate` (a
+    fraction of the force scale; None where the run was not checked) is good enough to judge
+    another run against `bound`: within TRUTH_SHARE of it."""
+    return estimate is None or estimate <= TRUTH_SHARE * bound
 
 
 def force_difference(a: Result, b: Result, model: GearTrainModel) -> float:
