@@ -343,6 +343,12 @@ class GearTrainModel:
         return self._element_matrix(self.element_damping) + self.mesh_damping_factor * (
             self.mean_stiffness_matrix() - self._element_matrix(self.element_stiffness))
 
+    def free_flight_matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """K and C over q of the shafts and bearings alone: the train with no point in
+        contact, as it flies between a lift-off and a landing."""
+        return (self._element_matrix(self.element_stiffness),
+                self._element_matrix(self.element_damping))
+
     def _element_matrix(self, values, rows=None) -> np.ndarray:
         """Σ value·g·gᵀ over the shafts and bearings (rows g, or the given ones)."""
         rows = self.element_rows if rows is None else rows
