@@ -101,6 +101,14 @@ DISAGREEMENTS = {
                         "8.1e-5, 9.8e-6, 8.6e-7, 2.1e-7 at 1e-7 to 1e-12): the train amplifies "
                         "a step's error some 1e8-fold, beyond what a tolerance per step holds "
                         "(0.60 at 1e-7 before the steps saw the free flight's undamped modes)",
+    "found_de62c18e83": "a light train at 2500 rad/s with no damping at all (no mesh damping, "
+                        "an undamped input shaft, no bearings), a lead error and sharp face "
+                        "edges, that loses and regains contact 17 times in 7.8 ms: "
+                        "reference_simulate resolves it (its error over the run estimated at "
+                        "7e-8), but a relative 1e-11 on the initial pinion speed moves its "
+                        "forces by 7.5e-6: the per-step references lie 4.8e-4 (1e-10) and "
+                        "3.1e-6 (1e-12) from it, the compiled runs 2.6e-3 (1e-7) and 1.6e-5 "
+                        "(1e-9) (found by the draw on 2026-11-27)",
     "found_7829a34ec8": "a rattling train (mesh damping ζ 0.0067, undamped bearings; contact lost "
                         "and regained 97 times): reference_simulate, which checks a run that "
                         "lands, warns that even at scipy's finest step tolerance its error over "
@@ -124,6 +132,13 @@ TIGHT_DISAGREEMENTS = {
                         "rad/s); the reference resolves it (reference_simulate's error over the "
                         "run estimated at 1.3e-8 at 1e-12), the compiled run at 1e-9 lies 2.4e-6 "
                         "of the force scale from it (5.9e-5 at 1e-7, within its bound 1e-4)",
+    "found_a2c385b6f6": "a train at 1 rad/s with undamped shafts, no bearings and a lead error, "
+                        "that a torque step at 2 ms sets rattling (31 landings in 10 ms): the "
+                        "reference resolves it (reference_simulate's error over the run "
+                        "estimated at 3e-9 at 1e-12); the compiled run at 1e-9 lies 1.2e-6 of "
+                        "the force scale from it (9e-5 at 1e-7, within its bound), the per-step "
+                        "reference at 1e-10 9.9e-6 (found by the draw on 2026-11-27, 2.5e-5 "
+                        "off before the steps saw the free flight's undamped modes)",
 }
 
 
