@@ -20,7 +20,6 @@ from herringbone.analysis.report import resonance_speeds
 from herringbone.analysis.stability import largest_multiplier
 from herringbone.analysis.sweep import run_sweep, sweep
 from herringbone.analysis.sweep_point import Protocol, timing, window_figures
-from herringbone.integrate.compiled_stepper import eigenvalues
 from herringbone.model.assembly import GearTrainModel, natural_modes
 
 MODELS = MODELS
@@ -63,7 +62,7 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
 def test_settle_is_the_decay_of_the_least_damped_mode(reference_scene):
     """Default settle: whole mesh periods just past ln(1000)/σ, σ the slowest decay among the
     train's non-rigid eigenvalues (the 113 Hz motor-load torsional mode, σ ≈ 2 1/s)."""
-    modes = eigenvalues(GearTrainModel(reference_scene))
+    modes = GearTrainModel(reference_scene).eigenvalues()
     slowest = min([m for m in modes if abs(m) > 1.0 and m.imag >= 0], key=lambda m: -m.real)
     assert abs(slowest.imag) / (2 * math.pi) == pytest.approx(112.9, abs=0.5)
     when = timing(reference_scene, Protocol())

@@ -15,7 +15,6 @@ from herringbone.integrate.compiled_stepper import (
     DEFAULT_TOLERANCE,
     LEAST_RINGING_FACTOR,
     CompiledStepper,
-    eigenvalues,
     ringing_factor,
     runge_kutta_method,
     step_tolerance_factor,
@@ -131,7 +130,7 @@ def test_stiff_lightly_damped_modes_are_followed_explicitly(reference_scene):
     takes the exponential method, tests/integrate/test_exponential.py), whose stability
     bound then matches the accuracy it needs anyway."""
     model = GearTrainModel(stiff_scene(reference_scene, 2000.0))
-    assert runge_kutta_method(eigenvalues(model)) == "dop853"
+    assert runge_kutta_method(model.eigenvalues()) == "dop853"
     stepper = CompiledStepper(model, 1e-7, "dop853")
     reference = run(ScipyStepper(model, 1e-10), 2e-3, 1e-4)
     assert force_error(run(stepper, 2e-3, 1e-4), reference, model) <= 1e-5
@@ -147,14 +146,14 @@ def test_the_steps_are_held_to_the_undamped_modes_of_the_free_flight_too():
     and its engaged modes alone set the steps."""
     scene = herringbone.load_scene(REGRESSION / "found_6be024234d.toml")
     model = GearTrainModel(scene)
-    modes = eigenvalues(model)
+    modes = model.eigenvalues()
     assert ringing_factor(modes) == pytest.approx(0.193, abs=0.005)
     assert step_tolerance_factor(model, modes) == LEAST_RINGING_FACTOR
     assert CompiledStepper(model, 1e-7).step_tolerance == pytest.approx(
         1e-7 * LEAST_RINGING_FACTOR, rel=1e-12)
     held = GearTrainModel(dataclasses.replace(scene, given={**scene.given,
                                                             "contact_loss": False}))
-    assert step_tolerance_factor(held, eigenvalues(held)) == pytest.approx(0.193, abs=0.005)
+    assert step_tolerance_factor(held, held.eigenvalues()) == pytest.approx(0.193, abs=0.005)
 
 
 def test_implicit_method_steps_over_overdamped_stiff_modes(reference_scene):
@@ -164,7 +163,7 @@ def test_implicit_method_steps_over_overdamped_stiff_modes(reference_scene):
     choice is Radau IIA ("auto" takes the exponential method, the scene being symmetric),
     which steps by accuracy (about 500 steps) and agrees with DOP853 run at 1e-11."""
     model = GearTrainModel(stiff_scene(reference_scene, 2e5))
-    assert runge_kutta_method(eigenvalues(model)) == "radau"
+    assert runge_kutta_method(model.eigenvalues()) == "radau"
     stepper = CompiledStepper(model, 1e-7, "radau")
     explicit = CompiledStepper(model, 1e-11, "dop853")
     truth = run(explicit, 1e-3, 1e-4)

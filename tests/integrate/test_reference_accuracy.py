@@ -173,7 +173,7 @@ def test_points_the_static_deflection_leaves_unloaded_add_no_damping():
     with every point loaded, to the bit (and so keep their steps)."""
     model = GearTrainModel(random_scene(1278))
     horizon = model.scene.experiment.stop_time
-    every_point = stepping.mode_radians(stepping.linearized_eigenvalues(model), horizon)
+    every_point = stepping.mode_radians(model.eigenvalues(), horizon)
     assert every_point == pytest.approx(464, rel=0.01)
     assert stepping.driving_torques(model, horizon) == pytest.approx([36.806, 74.917],
                                                                      rel=1e-4)
@@ -183,7 +183,7 @@ def test_points_the_static_deflection_leaves_unloaded_add_no_damping():
         torque = stepping.driving_torques(model, 0.02)[0]
         assert stepping.statically_loaded_matrices(model, torque) is None
         assert stepping.ringing_radians(model, 0.02) == stepping.mode_radians(
-            stepping.linearized_eigenvalues(model), 0.02)
+            model.eigenvalues(), 0.02)
 
 
 @pytest.mark.slow  # 20 s

@@ -44,7 +44,7 @@ import numpy as np
 
 from ..arguments import check_scene
 from ..integrate.compiled import equations
-from ..integrate.compiled_stepper import EXPLICIT_STEP_BOUND, CompiledStepper, eigenvalues
+from ..integrate.compiled_stepper import EXPLICIT_STEP_BOUND, CompiledStepper
 from ..integrate.contract import IntegrationError, Position, start_position
 from ..integrate.segments import Segment, begin, contact_band, point_approaches
 from ..integrate.variational import VariationalFlow, multiplier_step
@@ -343,7 +343,7 @@ class PeriodMap:
     @functools.cached_property
     def modes(self) -> np.ndarray:
         """The eigenvalues (1/s) of the train at its mean stiffness and damping."""
-        return eigenvalues(self.model)
+        return self.model.eigenvalues()
 
     @functools.cached_property
     def variational_flow(self) -> VariationalFlow:

@@ -3,7 +3,7 @@ recorded over whole mesh periods, and the figures a drivetrain engineer reads of
 
 The protocol (`Protocol`, `timing`):
 - settle: the least-damped mode of the train (linearized at the period-mean stiffness,
-  compiled_stepper.eigenvalues) decays like exp(−σ·t); the start-up transient is run for
+  GearTrainModel.eigenvalues) decays like exp(−σ·t); the start-up transient is run for
   ln(1/settle_residual)/σ, rounded up to whole mesh periods, so it has decayed to
   `settle_residual` of its initial amplitude (or for a given `settle_time`, also rounded up);
 - window: `window_periods` mesh periods T = 2π/(z_pinion·|w0_pinion|), sampled
@@ -28,7 +28,7 @@ from ..arguments import (
     SETTLE_TIME,
     WINDOW_PERIODS,
 )
-from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, eigenvalues
+from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from ..integrate.contract import Position, start_position
 from ..model.assembly import GearTrainModel
 from ..model.parameters import RPM_PER_RAD_S
@@ -84,7 +84,7 @@ def least_damped_decay_rate(scene) -> float:
     eigenvalues at the period-mean stiffness and damping; rigid: |λ| < 1e-6·|λ|max). The rigid
     rotation's eigenvalue is a defective double zero, which rounding moves by about
     √ε·|λ|max (1.2e-9·|λ|max on the gear pair alone, models/jump_resonance.toml), not ε·|λ|max."""
-    modes = eigenvalues(GearTrainModel(scene))
+    modes = GearTrainModel(scene).eigenvalues()
     elastic = modes[np.abs(modes) > RIGID_FRACTION * np.abs(modes).max()]
     return float(np.abs(elastic.real).min())
 

@@ -73,18 +73,6 @@ LEAST_RINGING_FACTOR = 0.03
 EVENT_ERROR_FRACTION = 1e-2
 
 
-def eigenvalues(model: GearTrainModel, stiffness=None, damping=None) -> np.ndarray:
-    """Eigenvalues (1/s) of the train linearized at its period-averaged stiffness and damping
-    (or at the given stiffness and damping matrices over q)."""
-    size = model.size
-    stiffness = model.mean_stiffness_matrix() if stiffness is None else stiffness
-    damping = model.mean_damping_matrix() if damping is None else damping
-    mass_inverse = 1.0 / model.mass[:, None]
-    state_matrix = np.block([[np.zeros((size, size)), np.eye(size)],
-                             [-mass_inverse * stiffness, -mass_inverse * damping]])
-    return np.linalg.eigvals(state_matrix)
-
-
 def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> str:
     """The method "auto" stands for on this model; the others are returned as they are.
 
@@ -104,7 +92,7 @@ def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> st
         :, exponential.ALL_LOADED]
     if exact.all():
         return "exponential"
-    choice = runge_kutta_method(eigenvalues(model) if modes is None else modes)
+    choice = runge_kutta_method(model.eigenvalues() if modes is None else modes)
     return "exponential" if choice == "dop853" and exact.mean() >= EXACT_SHARE else choice
 
 
@@ -134,15 +122,16 @@ def ringing_factor(modes) -> float:
 
 def step_tolerance_factor(model: GearTrainModel, modes) -> float:
     """What the tolerance is multiplied by for the steps of this train: ringing_factor of its
-    engaged modes (`modes`, eigenvalues'), and where contact can be lost, of its free flight's
-    too (shafts and bearings alone, GearTrainModel.free_flight_matrices), the smaller. In
-    flight a mode the mesh damped may not be damped at all (undamped bearings): a step's
-    error then rings on until the next landing, at a frequency the engaged modes do not show
-    (tests/regression/found_6be024234d.toml: 33 to 72 kHz undamped, the compiled error about
-    ω·t times the tolerance with the engaged modes' factor alone)."""
+    engaged modes (`modes`, GearTrainModel.eigenvalues'), and where contact can be lost, of
+    its free flight's too (shafts and bearings alone, GearTrainModel.free_flight_matrices),
+    the smaller. In flight a mode the mesh damped may not be damped at all (undamped
+    bearings): a step's error then rings on until the next landing, at a frequency the
+    engaged modes do not show (tests/regression/found_6be024234d.toml: 33 to 72 kHz
+    undamped; with the engaged modes' factor alone its compiled error was 1800 times the
+    tolerance)."""
     factor = ringing_factor(modes)
     if model.contact_loss:
-        factor = min(factor, ringing_factor(eigenvalues(model, *model.free_flight_matrices())))
+        factor = min(factor, ringing_factor(model.eigenvalues(*model.free_flight_matrices())))
     return factor
 
 
@@ -263,7 +252,7 @@ class CompiledStepper:
         if it finds one (seven times the cost)."""
         self.model = model
         self.tolerance = float(tolerance)
-        modes = eigenvalues(model)
+        modes = model.eigenvalues()
         self.method = choose_method(model, method, modes)
         # the tolerance each step is held to: tighter where lightly damped modes ring on
         self.step_tolerance = self.tolerance * step_tolerance_factor(model, modes)

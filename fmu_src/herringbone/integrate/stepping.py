@@ -280,20 +280,6 @@ class ScipyStepper:
                 f"{approach[point, node]:.3e} m")
 
 
-def linearized_eigenvalues(model: GearTrainModel, stiffness=None, damping=None) -> np.ndarray:
-    """The eigenvalues of the linearized train (mass, mean stiffness and mean damping over a
-    mesh period, every point loaded; or the given stiffness and damping matrices over q):
-    −ζω ± iω√(1−ζ²) of each mode, 1/s."""
-    size = model.size
-    stiffness = model.mean_stiffness_matrix() if stiffness is None else stiffness
-    damping = model.mean_damping_matrix() if damping is None else damping
-    inverse_mass = 1.0 / model.mass[:, None]
-    state_matrix = np.block([
-        [np.zeros((size, size)), np.eye(size)],
-        [-inverse_mass * stiffness, -inverse_mass * damping]])
-    return np.linalg.eigvals(state_matrix)
-
-
 def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
                                ) -> tuple[np.ndarray, np.ndarray] | None:
     """Stiffness and damping over q averaged over one mesh period (the nodes of
@@ -303,7 +289,7 @@ def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
     mesh damping (η·c acts through the loaded points alone), so where a lead error or a tilt
     leaves part of the face unloaded the mesh damps the train less than with every point loaded.
     None where every point of every node is loaded: the train is the one of every point loaded
-    (linearized_eigenvalues's own matrices)."""
+    (GearTrainModel.eigenvalues's own matrices)."""
     stiffness = np.zeros((model.size, model.size))
     damping = np.zeros((model.size, model.size))
     eta = model.mesh_damping_factor
@@ -324,7 +310,7 @@ def statically_loaded_matrices(model: GearTrainModel, motor_torque: float
 
 
 def mode_radians(eigenvalues: np.ndarray, horizon: float) -> float:
-    """The most radians any oscillating mode of the eigenvalues (linearized_eigenvalues) rings
+    """The most radians any oscillating mode of the eigenvalues (GearTrainModel.eigenvalues) rings
     within `horizon` seconds: max of min(ω·horizon, 1/ζ); 0 where none oscillates."""
     frequency = np.abs(eigenvalues)  # ω, rad/s
     decay = np.maximum(-eigenvalues.real, 0.0)  # ζω, 1/s
@@ -334,8 +320,8 @@ def mode_radians(eigenvalues: np.ndarray, horizon: float) -> float:
 
 
 def fastest_rate(model: GearTrainModel) -> float:
-    """|λ|max over the eigenvalues of the linearized train (linearized_eigenvalues), 1/s."""
-    return float(np.abs(linearized_eigenvalues(model)).max())
+    """|λ|max over the eigenvalues of the linearized train (GearTrainModel.eigenvalues), 1/s."""
+    return float(np.abs(model.eigenvalues()).max())
 
 
 def driving_torques(model: GearTrainModel, horizon: float) -> list[float]:
@@ -354,12 +340,12 @@ def ringing_radians(model: GearTrainModel, horizon: float) -> float:
     that the static deflection under each motor torque of the scene's input table within the
     horizon loads (statically_loaded_matrices): the most of these. Modes that do not oscillate
     ring 0."""
-    radians = mode_radians(linearized_eigenvalues(model), horizon)
+    radians = mode_radians(model.eigenvalues(), horizon)
     if model.contact_loss:
         for torque in driving_torques(model, horizon):
             matrices = statically_loaded_matrices(model, torque)
             if matrices is not None:
-                radians = max(radians, mode_radians(linearized_eigenvalues(model, *matrices),
+                radians = max(radians, mode_radians(model.eigenvalues(*matrices),
                                                     horizon))
     return radians
 

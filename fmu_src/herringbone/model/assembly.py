@@ -343,6 +343,17 @@ class GearTrainModel:
         return self._element_matrix(self.element_damping) + self.mesh_damping_factor * (
             self.mean_stiffness_matrix() - self._element_matrix(self.element_stiffness))
 
+    def eigenvalues(self, stiffness=None, damping=None) -> np.ndarray:
+        """The eigenvalues of the linearized train, 1/s: −ζω ± iω√(1−ζ²) of each mode, at the
+        mean stiffness and damping over a mesh period, every point loaded, or at the given
+        stiffness and damping matrices over q."""
+        stiffness = self.mean_stiffness_matrix() if stiffness is None else stiffness
+        damping = self.mean_damping_matrix() if damping is None else damping
+        inverse_mass = 1.0 / self.mass[:, None]
+        state_matrix = np.block([[np.zeros((self.size, self.size)), np.eye(self.size)],
+                                 [-inverse_mass * stiffness, -inverse_mass * damping]])
+        return np.linalg.eigvals(state_matrix)
+
     def free_flight_matrices(self) -> tuple[np.ndarray, np.ndarray]:
         """K and C over q of the shafts and bearings alone: the train with no point in
         contact, as it flies between a lift-off and a landing."""
