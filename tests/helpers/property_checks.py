@@ -2,7 +2,8 @@
 (tests/regression/*.toml): both integrators run it, then
 
   (a) the compiled run's F_mesh and bearing forces agree with the reference's within a bound of
-      the force scale (GearTrainModel.force_scale());
+      the force scale (GearTrainModel.force_scale()); where the reference's run lifts off and
+      lands, with reference_simulate's (force_judge says why);
   (b) no tension: with contact_loss, no half's mesh force and no loaded point's force is below
       -TENSION_BOUND of the force scale, and no free point is pressed by more than that (a
       regain the run missed); without contact_loss points may pull, and nothing is checked;
@@ -16,14 +17,16 @@
 
 A scene that both integrators refuse with the chatter message (IntegrationError naming
 "edge_ramp > 0": sharp face edges at low speed) passes; one refused by one integrator only fails.
-`run_recorded` runs exactly what herringbone.reference_simulate and herringbone.simulate run,
-keeping the state at every sample so that the per-point checks can see the contact points.
+`run_recorded` runs what herringbone.simulate runs, and the scipy reference at the step
+tolerance reference_simulate starts from, keeping the state at every sample so that the
+per-point checks can see the contact points.
 """
 from __future__ import annotations
 
 import hashlib
 import math
 import textwrap
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,6 +36,8 @@ from helpers import force_errors
 from herringbone.integrate.compiled import equations
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import IntegrationError, simulate_with
+from herringbone.integrate.global_error import ReferenceAccuracyWarning
+from herringbone.integrate.reference import checked_reference_run
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
 
@@ -62,6 +67,7 @@ class RecordedRun:
     model: GearTrainModel
     outputs: dict
     samples: list = field(default_factory=list)
+    landings: int = 0  # the reference's: ScipyStepper.landings
 
 
 def run_recorded(scene, integrator: str, tolerance: float) -> RecordedRun:
@@ -79,6 +85,7 @@ def run_recorded(scene, integrator: str, tolerance: float) -> RecordedRun:
     stepper = (ScipyStepper(model, tolerance) if integrator == "reference"
                else _SampledAtPositions(CompiledStepper(model, tolerance)))
     run.outputs = simulate_with(stepper, scene)
+    run.landings = getattr(stepper, "landings", 0)
     if len(run.samples) == len(run.outputs["time"]) + 1:
         # the last output time fell a rounding short of stop_time, so it was sampled on the way
         # and then overwritten by the state at stop_time itself: keep what was stored
@@ -112,6 +119,34 @@ def point_forces(model: GearTrainModel, state, contact_set) -> np.ndarray:
     equations.approaches(model.system, contact_set.table, count, state, approach)
     stiffness, _, _ = model.contact_geometry(state[:model.size], contact_set)
     return stiffness * approach
+
+
+def checked_reference(scene, tolerance: float):
+    """reference_simulate's run of the scene at `tolerance` and its global_error.Check, once
+    per scene and tolerance in a process (the drawn tests ask for it twice), its
+    ReferenceAccuracyWarning left to whoever reads the Check's estimate."""
+    key = (regression_name(scene), tolerance)
+    if key not in _CHECKED:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ReferenceAccuracyWarning)
+            _CHECKED[key] = checked_reference_run(scene, tolerance=tolerance)
+    return _CHECKED[key]
+
+
+_CHECKED: dict = {}
+
+
+def force_judge(scene, reference: RecordedRun, tolerance: float) -> RecordedRun:
+    """The run (a) judges the compiled forces against: the recorded reference, or where it
+    lifts off and lands, reference_simulate's run at the same tolerance, which checks its error
+    over the run and tightens its steps until it holds. A train that lands amplifies a step's
+    error from landing to landing, and the recorded run, one run at the starting step
+    tolerance, lay further from the checked one than the bound: 5.5e-4 of the force scale on
+    found_302cde7a53 at 1e-10, 1.7e-6 on found_1b70095ae3 at 1e-12, where the compiled runs
+    lay 8.7e-4 and 3.9e-8 from it."""
+    if not reference.landings:
+        return reference
+    return RecordedRun(reference.model, checked_reference(scene, tolerance)[0])
 
 
 def forces_agree(run: RecordedRun, reference: RecordedRun, bound: float) -> None:
@@ -214,7 +249,7 @@ def check_scene(scene, tolerance=DEFAULT_TOLERANCE, bound=DEFAULT_BOUND,
             outputs_finite(run, label)
             no_tension(run, label)
             momentum_follows_torques(run, label)
-        forces_agree(compiled, reference, bound)
+        forces_agree(compiled, force_judge(scene, reference, reference_tolerance), bound)
         contact_counts_agree(compiled, reference, bound)
     except Exception as failure:
         save_if_final(scene, f"compiled at {tolerance:g}, reference at {reference_tolerance:g}: "
