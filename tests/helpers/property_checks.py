@@ -57,6 +57,8 @@ MOMENTUM_BOUND = 1e-9
 # pitches): a pitch of 1e-6 is where the two runs' pinion angles may differ at 1e-4 force error.
 PHASE_HAIR = 1e-6
 CHATTER_CURE = "edge_ramp > 0"
+# checked_reference's runs, by (the scene's regression name, tolerance)
+_CHECKED: dict = {}
 
 
 @dataclass
@@ -132,8 +134,6 @@ def checked_reference(scene, tolerance: float):
             _CHECKED[key] = checked_reference_run(scene, tolerance=tolerance)
     return _CHECKED[key]
 
-
-_CHECKED: dict = {}
 
 
 def force_judge(scene, reference: RecordedRun, tolerance: float) -> RecordedRun:
