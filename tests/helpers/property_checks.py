@@ -36,7 +36,7 @@ from helpers import force_error, force_errors
 from herringbone.integrate.compiled import equations
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import IntegrationError, simulate_with
-from herringbone.integrate.global_error import ReferenceAccuracyWarning
+from herringbone.integrate.global_error import ReferenceAccuracyWarning, can_judge
 from herringbone.integrate.reference import checked_reference_run
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
@@ -88,7 +88,7 @@ def run_recorded(scene, integrator: str, tolerance: float) -> RecordedRun:
     stepper = (ScipyStepper(model, tolerance) if integrator == "reference"
                else _SampledAtPositions(CompiledStepper(model, tolerance)))
     run.outputs = simulate_with(stepper, scene)
-    run.landings = getattr(stepper, "landings", 0)
+    run.landings = stepper.landings if integrator == "reference" else 0
     if len(run.samples) == len(run.outputs["time"]) + 1:
         # the last output time fell a rounding short of stop_time, so it was sampled on the way
         # and then overwritten by the state at stop_time itself: keep what was stored
@@ -143,6 +143,28 @@ def recorded_reference(scene, tolerance: float) -> RecordedRun:
     if key not in _RECORDED:
         _RECORDED[key] = run_recorded(scene, "reference", tolerance)
     return _RECORDED[key]
+
+
+def can_be_judged(scene, tolerance: float, bound: float) -> bool:
+    """Whether a drawn scene can judge the compiled run against the reference at `tolerance`
+    by `bound`: the reference resolves it (resolved_by_the_reference) and holds its own steps
+    to the bound (per_step_holds)."""
+    return (resolved_by_the_reference(scene, tolerance, bound)
+            and per_step_holds(scene, tolerance, bound))
+
+
+def resolved_by_the_reference(scene, tolerance: float, bound: float) -> bool:
+    """Whether reference_simulate at `tolerance` estimates its own error over the run (its
+    check of a run that lands) well enough to judge against `bound` (global_error.can_judge,
+    the random-scene benchmark's rule). A train that rattles beyond what
+    double precision resolves (no damping anywhere, dozens to hundreds of landings) puts every
+    run, reference or compiled, force scales apart: it can judge no integrator, and the draw
+    found one after another. A scene the reference refuses is left to check_scene."""
+    try:
+        _, check = checked_reference(scene, tolerance)
+    except IntegrationError:
+        return True
+    return can_judge(check.estimate, bound)
 
 
 def per_step_holds(scene, tolerance: float, bound: float) -> bool:

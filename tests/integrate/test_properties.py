@@ -19,9 +19,10 @@ random, and shrink what fails:
 
 A scene that fails is written to tests/regression/found_<digest>.toml (its header says what failed
 and by how much; property_checks.save_if_final): commit it, and the regression test runs it from
-then on. The drawn tests pass over a scene that is already a known disagreement there, one
-that the reference does not resolve (resolved_by_the_reference): there every run, reference or
-compiled, lies force scales from every other, and no integrator can be judged; and one whose
+then on. The drawn tests pass over a scene that is already a known disagreement there, and
+over one that cannot judge (property_checks.can_be_judged): one that the reference does not
+resolve (resolved_by_the_reference): there every run, reference or compiled, lies force
+scales from every other, and no integrator can be judged; and one whose
 recorded reference, at a tolerance per step a thousand times tighter than the compiled run's,
 does not hold the bound itself (property_checks.per_step_holds): a train that amplifies a
 step's error from landing to landing beyond what any tolerance per step holds.
@@ -38,8 +39,6 @@ from helpers.scene_distribution import LOW_SPEED
 from hypothesis import HealthCheck, assume, given, settings
 
 import herringbone
-from herringbone.integrate.contract import IntegrationError
-from herringbone.integrate.global_error import can_judge
 
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
@@ -205,20 +204,6 @@ def test_random_scene_at_a_tight_tolerance(seed):
     check_tight(random_scene(seed))
 
 
-def resolved_by_the_reference(scene, tolerance: float, bound: float) -> bool:
-    """Whether reference_simulate at `tolerance` estimates its own error over the run (its
-    check of a run that lands) well enough to judge against `bound` (global_error.can_judge,
-    the random-scene benchmark's rule). A train that rattles beyond what
-    double precision resolves (no damping anywhere, dozens to hundreds of landings) puts every
-    run, reference or compiled, force scales apart: it can judge no integrator, and the draw
-    found one after another. A scene the reference refuses is left to check_scene."""
-    try:
-        _, check = checks.checked_reference(scene, tolerance)
-    except IntegrationError:
-        return True
-    return can_judge(check.estimate, bound)
-
-
 def known_disagreement(scene, tight: bool) -> bool:
     """Whether a drawn scene is a regression scene whose disagreement is known: its strict
     xfail in test_regression_scene holds it, and Hypothesis's database, which replays every
@@ -232,8 +217,7 @@ def known_disagreement(scene, tight: bool) -> bool:
 @given(scenes())
 def test_many_random_scenes_at_the_default_tolerance(scene):
     assume(not known_disagreement(scene, tight=False))
-    assume(resolved_by_the_reference(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
-    assume(checks.per_step_holds(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
+    assume(checks.can_be_judged(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
     checks.check_scene(scene)
 
 
@@ -242,8 +226,7 @@ def test_many_random_scenes_at_the_default_tolerance(scene):
 @given(scenes())
 def test_many_random_scenes_at_a_tight_tolerance(scene):
     assume(not known_disagreement(scene, tight=True))
-    assume(resolved_by_the_reference(scene, 1e-12, checks.TIGHT_BOUND))
-    assume(checks.per_step_holds(scene, 1e-12, checks.TIGHT_BOUND))
+    assume(checks.can_be_judged(scene, 1e-12, checks.TIGHT_BOUND))
     check_tight(scene)
 
 
@@ -297,9 +280,9 @@ def test_the_draw_judges_only_what_the_reference_resolves():
     def load(name):
         return herringbone.load_scene(checks.REGRESSION_DIR / f"{name}.toml")
     bound = (checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND)
-    assert not resolved_by_the_reference(load("found_42d38d1d40"), *bound)
-    assert resolved_by_the_reference(load("found_345d6831cc"), *bound)
-    assert resolved_by_the_reference(random_scene(0), *bound)
+    assert not checks.resolved_by_the_reference(load("found_42d38d1d40"), *bound)
+    assert checks.resolved_by_the_reference(load("found_345d6831cc"), *bound)
+    assert checks.resolved_by_the_reference(random_scene(0), *bound)
 
 
 def test_a_train_that_lands_is_judged_against_the_checked_reference():
