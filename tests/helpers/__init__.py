@@ -20,6 +20,13 @@ FORCES = ("F_mesh", "F_brg_pinion_left", "F_brg_pinion_right", "F_brg_wheel_left
           "F_brg_wheel_right")
 
 
+def regression_scene(name: str):
+    """The scene tests/regression/<name>.toml."""
+    import herringbone
+
+    return herringbone.load_scene(REGRESSION / f"{name}.toml")
+
+
 def _names(run) -> set[str]:
     """The outputs a run has: a dict's keys, or a structured array's fields (fmpy's result)."""
     names = getattr(getattr(run, "dtype", None), "names", None)

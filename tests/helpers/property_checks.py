@@ -71,13 +71,14 @@ class RecordedRun:
     outputs: dict
     samples: list = field(default_factory=list)
     landings: int = 0  # the reference's: ScipyStepper.landings
+    name: str = "reference"  # what the run is, as a failure message names it
 
 
 def run_recorded(scene, integrator: str, tolerance: float) -> RecordedRun:
     """reference_simulate ("reference", scipy DOP853) or simulate ("compiled", method "auto")
     at `tolerance` over the scene's experiment, keeping each sample's state."""
     model = GearTrainModel(scene)
-    run = RecordedRun(model, {})
+    run = RecordedRun(model, {}, name=integrator)
     plain_outputs = model.outputs
 
     def outputs_kept(state, contact_set, loaded):
@@ -192,7 +193,8 @@ def force_judge(scene, reference: RecordedRun, tolerance: float) -> RecordedRun:
     lay 8.7e-4 and 3.9e-8 from it."""
     if not reference.landings:
         return reference
-    return RecordedRun(reference.model, checked_reference(scene, tolerance)[0])
+    return RecordedRun(reference.model, checked_reference(scene, tolerance)[0],
+                       name="checked reference")
 
 
 def forces_agree(run: RecordedRun, reference: RecordedRun, bound: float) -> None:
@@ -203,7 +205,7 @@ def forces_agree(run: RecordedRun, reference: RecordedRun, bound: float) -> None
     at = reference.outputs["time"][np.argmax(np.abs(run.outputs[worst]
                                                     - reference.outputs[worst]))]
     assert errors[worst] <= bound, (
-        f"compiled vs reference: {worst} {errors[worst]:.3g} of the force scale "
+        f"compiled vs {reference.name}: {worst} {errors[worst]:.3g} of the force scale "
         f"({scale:.4g} N) off at t = {at:.6g} s, bound {bound:g}")
 
 

@@ -8,7 +8,15 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import FORCES, MODELS, REGRESSION, force_error, shipped_drive, shipped_run
+from helpers import (
+    FORCES,
+    MODELS,
+    REGRESSION,
+    force_error,
+    regression_scene,
+    shipped_drive,
+    shipped_run,
+)
 from helpers import communication_run as run
 
 import herringbone
@@ -568,7 +576,7 @@ def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
     unloaded sets are stepped by DOP853, the loaded ones stay exact (half of them: the others
     load a point on an edge ramp), and every form it keeps is the matrix exponential to 1e-9
     of the state's scales (a state of that run)."""
-    model = GearTrainModel(herringbone.load_scene(REGRESSION / "found_aaeb0efe2e.toml"))
+    model = GearTrainModel(regression_scene("found_aaeb0efe2e"))
     lengths, counts, tables = model.mesh.period_table()
     variants = {}
     for variant in (exponential.ALL_LOADED, exponential.NONE_LOADED):

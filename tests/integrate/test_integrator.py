@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import MODELS, REGRESSION, force_error, shipped_run
+from helpers import MODELS, force_error, regression_scene, shipped_run
 from helpers import communication_run as run
 
 import herringbone
@@ -144,7 +144,7 @@ def test_the_steps_are_held_to_the_undamped_modes_of_the_free_flight_too():
     scale off the reference at 1e-7 before, beyond the property checks' bound 1e-4, and 2.8e-5
     now: test_properties.py's test_regression_scene.) A train held in contact never flies free,
     and its engaged modes alone set the steps."""
-    scene = herringbone.load_scene(REGRESSION / "found_6be024234d.toml")
+    scene = regression_scene("found_6be024234d")
     model = GearTrainModel(scene)
     modes = model.eigenvalues()
     assert ringing_factor(modes) == pytest.approx(0.193, abs=0.005)
@@ -252,8 +252,6 @@ def test_phase_event_prediction_is_the_quadratic_root(reference_model, speed, ac
 
 # --- issue 15: separation and re-engagement, undamped stiff modes -------------------------------
 
-REGRESSION = REGRESSION
-
 
 def scene_run(scene, tolerance, stop_time=None):
     """The compiled integrator through a scene's torque table, with the debug contact check on
@@ -261,10 +259,6 @@ def scene_run(scene, tolerance, stop_time=None):
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, tolerance, check_contact=True)
     return simulate_with(stepper, scene, stop_time=stop_time)
-
-
-def regression_scene(name):
-    return herringbone.load_scene(REGRESSION / f"{name}.toml")
 
 
 @functools.cache

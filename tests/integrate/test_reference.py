@@ -5,16 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import MODELS, REGRESSION, force_error
+from helpers import MODELS, REGRESSION, force_error, regression_scene
 from helpers.independent_model import radii
 
 import herringbone
 from herringbone.integrate import contract, segments, stepping
 from herringbone.integrate.compiled import reference_events, walk
 from herringbone.model.assembly import GearTrainModel
-
-REGRESSION = REGRESSION
-
 
 
 def test_converges_to_a_hundred_times_tighter_tolerance(reference_scene):
@@ -113,7 +110,7 @@ def test_agrees_with_itself_at_a_hundred_times_tighter_tolerance(path, stop_time
 
 @pytest.fixture(scope="module")
 def missed_loss_regain():
-    return herringbone.load_scene(REGRESSION / "missed_loss_regain.toml")
+    return regression_scene("missed_loss_regain")
 
 
 def test_no_point_pulls_or_penetrates_unloaded_on_a_fine_grid(missed_loss_regain):
