@@ -295,10 +295,11 @@ class CompiledStepper:
 
     def _exact_tables(self, model, method, modes, step_tolerance):
         """The exponential method's modal forms of every contact set; where a set's linear
-        system has no such form (a defective one: the gear pair alone with its points
-        unloaded has two free bodies), "auto" takes `runge_kutta_method`'s choice instead (its
-        rule was measured on scenes with every form), and an explicit "exponential" steps that
-        set by DOP853, as it does every set that is not exact."""
+        system has no such form (free bodies whose zero eigenvalues rounding splits, with
+        eigenvectors too nearly parallel: exponential.CONDITION_LIMIT), "auto" takes
+        `runge_kutta_method`'s choice instead (its rule was measured on scenes with every
+        form), and an explicit "exponential" steps that set by DOP853, as it does every set
+        that is not exact."""
         force = model.force_scale()
         torque_scales = (force * model.geometry.radius_pinion, force * model.geometry.radius_wheel)
         arguments = (model.system, model.mesh.period_table(), model.state_scales(),

@@ -22,11 +22,12 @@ augmented matrix Â = [[A, B], [0, 0]] acting on X = [x; u] is split by a sorted
 and a Sylvester equation into its slow block (eigenvalues near zero: the pinion angle and speed
 of the rigid rotation, the held inputs; nilpotent, a Jordan chain) and its fast block (the
 vibration modes, diagonalized): X(t) = R·diag(exp(T_slow·t), e^{Λt})·L·X(0). The slow block is
-a polynomial in t, summed as its series. A step evaluates that at one t (`step`), O(N²): the
-slow block in real arithmetic, one mode of each conjugate pair (ExactTables says why). The
-coordinates L·X(0) of a step's start are kept, so the trial steps of an event's location,
-which all start there, pay only for e^{Λt} and R (`state_after`: the state alone, where a
-step's certificate is not asked for).
+a polynomial in t, summed as its series. Where nothing elastic acts (the gear pair alone in
+flight: two free bodies) Â is nilpotent and the slow block is all of it. A step evaluates that
+at one t (`step`), O(N²): the slow block in real arithmetic, one mode of each conjugate pair
+(ExactTables says why). The coordinates L·X(0) of a step's start are kept, so the trial steps
+of an event's location, which all start there, pay only for e^{Λt} and R (`state_after`: the
+state alone, where a step's certificate is not asked for).
 
 Error control. Nothing is approximated within a segment, so there is no error to estimate; the
 steps serve the events only. A step is `certified` when, over all of it, its phase events are
@@ -238,7 +239,8 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
     It is made on Â measured in `scales` (one an entry of X: the state's, then the inputs'),
     D⁻¹·Â·D with D = diag(scales): the pinion's speed and the torques are then no longer
     millions of times a deflection, and R's condition falls by as much (rounding in R·z
-    scales with it)."""
+    scales with it). A nilpotent Â (every eigenvalue exactly zero: free bodies with nothing
+    elastic between them) is its slow block alone, with no fast mode."""
     size = a.shape[0] + b.shape[1]
     augmented = np.zeros((size, size))
     augmented[:a.shape[0], :a.shape[0]] = a
@@ -246,7 +248,7 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
     augmented = augmented * scales[None, :] / scales[:, None]
     threshold = SLOW_FRACTION * np.abs(np.linalg.eigvals(augmented)).max()
     form, unitary, slow = scipy.linalg.schur(
-        augmented, output="real", sort=lambda re, im: math.hypot(re, im) < threshold)
+        augmented, output="real", sort=lambda re, im: math.hypot(re, im) <= threshold)
     slow_block, coupling, fast_block = form[:slow, :slow], form[:slow, slow:], form[slow:, slow:]
     # T_slow·X − X·T_fast = −T_coupling: the change of basis that decouples the two blocks
     decoupling = scipy.linalg.solve_sylvester(slow_block, -fast_block, -coupling)
