@@ -1,8 +1,12 @@
 """Static equilibrium at t = 0 (docs/model.md sections 6-7): every output of the first sample."""
+import numpy as np
 import pytest
+from helpers import force_error
 from helpers.independent_model import bearing_positions, radii, static_state
 
 import herringbone
+from herringbone.integrate.contract import start_position
+from herringbone.model.assembly import GearTrainModel
 
 STATIC_TOLERANCE = 1e-9  # relative: the start is an exact linear solve
 
@@ -81,3 +85,23 @@ def test_helix_error_moves_load_to_the_other_half(reference_scene):
             assert sign * shift > 0.01 * base["F_mesh"]  # 5e-5 rad: 1.4 % of the load
             assert out[f"F_mesh_{other}"] - base[f"F_mesh_{other}"] == pytest.approx(-shift,
                                                                                   rel=1e-9)
+
+
+def test_a_train_turning_backwards_from_a_switch_starts_static_in_the_set_it_turns_into(
+        reference_scene):
+    """The reference scene turned backwards (w0_pinion −157.08 rad/s) starts at φp = 0, on a
+    switch: its contact set is the one that ends there, the one the pinion turns into, and the
+    start is that set's static equilibrium, so the mesh force holds until the next switch
+    (2.9 ms away). Started in the set that begins there (six points, not four), the train left
+    it at once: the two integrators gave the outputs before and after that switch at t = 0,
+    0.33 of the force scale apart, and the run opened with a transient."""
+    scene = reference_scene.with_parameters(w0_pinion=-157.08)
+    model = GearTrainModel(scene)
+    contact_set = start_position(model, scene.inputs.at(0.0)[0]).segment.contact_set
+    assert contact_set.pinion_angle + contact_set.length == pytest.approx(0.0, abs=1e-12)
+    compiled = herringbone.simulate(scene, stop_time=0.002, output_interval=1e-5)
+    reference = herringbone.reference_simulate(scene, stop_time=0.002, output_interval=1e-5)
+    assert force_error(compiled, reference, model) <= STATIC_TOLERANCE
+    for run in (compiled, reference):
+        assert np.ptp(run["F_mesh"]) <= STATIC_TOLERANCE * model.force_scale()
+        assert np.all(run["n_contacts"] == len(contact_set))

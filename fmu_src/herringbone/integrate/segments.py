@@ -61,8 +61,10 @@ def start(model: GearTrainModel, pinion_angle: float, motor_torque: float,
           pinion_speed: float) -> tuple[Segment, np.ndarray]:
     """The first segment and state: rigid rotation at `pinion_speed` on the static deflection
     under `motor_torque`, every point whose approach is not negative loaded (the initial
-    condition, shared by every integrator)."""
-    contact_set = model.mesh.contact_set(*model.mesh.locate(pinion_angle))
+    condition, shared by every integrator), in the contact set the pinion turns into from
+    `pinion_angle`: on a switch, turning backwards, the one that ends there."""
+    contact_set = model.mesh.contact_set(*model.mesh.locate(pinion_angle,
+                                                             backwards=pinion_speed < 0.0))
     y = np.zeros(model.size)
     y[model.pinion] = pinion_angle - contact_set.pinion_angle
     return static_start(model, contact_set, y, motor_torque, pinion_speed)

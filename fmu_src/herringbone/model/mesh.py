@@ -130,14 +130,17 @@ class Mesh:
         average ∫w dz / p_x = b / p_x points (the edge ramp keeps the area of w)."""
         return self.c_point * sum(self.geometry.axial_overlap(s.half) for s in self.streams)
 
-    def locate(self, pinion_angle: float) -> tuple[int, int]:
+    def locate(self, pinion_angle: float, backwards: bool = False) -> tuple[int, int]:
         """(cycle, interval) of the phase interval that holds φp; an angle on a switch belongs to
-        the interval that starts there (points enter at z = 0 inclusive)."""
+        the interval that starts there (points enter at z = 0 inclusive), or where the pinion
+        turns `backwards`, to the one that ends there: the one it moves into."""
         phase = pinion_angle / self.geometry.angular_pitch
         cycle = math.floor(phase + PHASE_TOLERANCE)
         within = phase - cycle
         interval = int(np.searchsorted(self.switch_phases, within + PHASE_TOLERANCE,
                                        side="right")) - 1
+        if backwards and interval >= 0 and within - self.switch_phases[interval] <= PHASE_TOLERANCE:
+            interval -= 1  # on the switch
         if interval < 0:  # before the first switch: the last interval of the previous cycle
             return cycle - 1, len(self.switch_phases) - 1
         return cycle, interval
