@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from helpers import force_error, force_errors
+from helpers import REGRESSION, force_error, force_errors
 from herringbone.integrate.compiled import equations
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import IntegrationError, simulate_with
@@ -41,7 +41,6 @@ from herringbone.integrate.reference import checked_reference_run
 from herringbone.integrate.stepping import ScipyStepper
 from herringbone.model.assembly import GearTrainModel
 
-REGRESSION_DIR = Path(__file__).resolve().parent.parent / "regression"
 REFERENCE_TOLERANCE = 1e-10  # reference_simulate's default
 # (a) compiled at its default tolerance (1e-7) against the reference: issue 15's bound; at 1e-9
 # the compiled run must be a hundred times closer.
@@ -361,7 +360,7 @@ def regression_name(scene) -> str:
     return "found_" + hashlib.sha1(scene_toml(scene, "").encode()).hexdigest()[:10]
 
 
-def save_regression_scene(scene, failure: str, folder: Path = REGRESSION_DIR) -> Path:
+def save_regression_scene(scene, failure: str, folder: Path = REGRESSION) -> Path:
     """Write the scene with `failure` as its header to folder/<regression_name> .toml (so the
     same scene found twice is one file, its header saying every failure found on it); returns
     the path."""

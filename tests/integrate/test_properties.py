@@ -33,7 +33,7 @@ import os
 import helpers.property_checks as checks
 import numpy as np
 import pytest
-from helpers import MODELS, benchmark_module, force_error, regression_scene
+from helpers import MODELS, REGRESSION, benchmark_module, force_error, regression_scene
 from helpers.random_scenes import random_scene, scenes
 from helpers.scene_distribution import LOW_SPEED
 from hypothesis import HealthCheck, assume, given, settings
@@ -42,7 +42,7 @@ import herringbone
 
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
-REGRESSION_SCENES = sorted(checks.REGRESSION_DIR.glob("*.toml"))
+REGRESSION_SCENES = sorted(REGRESSION.glob("*.toml"))
 # Scenes of the draw that the two integrators do not agree on, each a fault not yet cured; strict,
 # so that a cure makes its test fail until the entry is removed
 DISAGREEMENTS = {
