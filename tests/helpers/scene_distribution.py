@@ -75,6 +75,18 @@ def random_scene(seed: int):
                                        name=f"random_{seed}", source=f"<random scene {seed}>")
 
 
+def turned_backwards(scene, torques_too: bool):
+    """The scene with its initial pinion speed reversed, and where `torques_too` its torques:
+    the train running backwards under reversed torques, or braked by the torques as drawn (the
+    motor against the motion, the load with it)."""
+    scene = scene.with_parameters(w0_pinion=-scene.parameters["w0_pinion"])
+    if not torques_too:
+        return scene
+    inputs = scene.inputs
+    return scene.with_inputs(table=[[t, -motor, -load] for t, motor, load
+                                    in zip(inputs.times, inputs.M_motor, inputs.M_load)])
+
+
 def pitch_radii(p: dict) -> tuple[float, float]:
     """Rp, Rw = z·m_n / (2 cos β)."""
     return tuple(p[z] * p["m_n"] / (2.0 * math.cos(p["beta"])) for z in ("z_pinion", "z_wheel"))
