@@ -57,10 +57,10 @@ def probe(setup: str, body: str, given: str) -> str:
     """A probe's script: PRELUDE, `setup` (loads the kernels: the first call of what `body`
     measures), the arrays passed in (the stepper's and the run's, and the expression `given`,
     a tuple), their references counted, `body`, and REPORT."""
-    return (PRELUDE + setup + "\ngiven = list(arrays((stepper.system_arrays, stepper.mesh, "
-            "stepper.settings, run.clock, run.place, run.state, run.loaded, run.first_steps, "
-            f"run.outputs, run.workspace, {given})))\ncounted = references(given)\n"
-            + body + REPORT)
+    return (PRELUDE + setup + "\ngiven = list(arrays((stepper.constants, stepper.exact_buffers, "
+            "run.implicit, run.buffers, run.clock, run.place, run.state, run.loaded, "
+            f"run.first_steps, run.outputs, tuple(run.workspace), {given})))\n"
+            "counted = references(given)\n" + body + REPORT)
 
 
 def run_probe(probe: str, scene: str, method: str, interval: float) -> dict:

@@ -33,7 +33,8 @@ import numpy as np
 
 from ..arguments import COMPILED_DEFAULT_TOLERANCE, COMPILED_METHODS, check_compiled_run
 from ..model.assembly import GearTrainModel
-from .compiled import dop853, exponential, walk
+from .compiled import buffers, dop853, exponential, walk
+from .compiled.equations import PeriodTable
 from .contract import IntegrationError, Position
 from .segments import Segment
 
@@ -190,25 +191,26 @@ class StepBudgetExceeded(IntegrationError):
 
 
 class Run:
-    """A run on the compiled loop, held in the arrays walk.advance updates in place, so that a
-    communication step allocates nothing. It is mutable and has one owner (the FMU slave keeps
-    one); `CompiledStepper.position` takes an immutable snapshot of it, for saving and
-    restoring, and `CompiledStepper.start` makes a run from one."""
+    """A run on the compiled loop, held in the buffers walk.advance updates in place
+    (walk.pack_run), so that a communication step allocates nothing. It is mutable and has one
+    owner (the FMU slave keeps one); `CompiledStepper.position` takes an immutable snapshot of
+    it, for saving and restoring, and `CompiledStepper.start` makes a run from one. Its
+    position's arrays are views of the buffers: clock, [time (s), step size to try next (s)];
+    place, [contact interval, mesh cycle]; state, [y, ẏ]; loaded, per point of the set
+    (padded to the widest set), 1 loaded, 0 not; first_steps, per contact interval, its first
+    step size (0: none); outputs, equations.outputs at the run's position
+    (model.output_layout). `workspace`, the loop's scratch (walk.Workspace), is not part of
+    the position."""
 
-    __slots__ = ("clock", "place", "state", "loaded", "first_steps", "outputs", "workspace",
-                 "arrays")
+    __slots__ = ("buffers", "implicit", "clock", "place", "state", "loaded", "first_steps",
+                 "outputs", "workspace")
 
-    def __init__(self, clock, place, state, loaded, first_steps, outputs, workspace):
-        self.clock = clock  # [time (s), step size to try next (s)]
-        self.place = place  # [contact interval, mesh cycle]
-        self.state = state  # [y, ẏ]
-        self.loaded = loaded  # per point of the set (padded to the widest set): 1 loaded, 0 not
-        self.first_steps = first_steps  # per contact interval, its first step size (0: none)
-        self.outputs = outputs  # equations.outputs at the run's position (model.output_layout)
-        # walk.allocate_workspace's scratch arrays: what they hold is not part of the position
-        self.workspace = workspace
-        # walk.advance's run record, built once: a communication step then builds no tuple
-        self.arrays = (clock, place, state, loaded, first_steps, outputs)
+    def __init__(self, buffers, implicit, exact):
+        self.buffers = buffers  # walk.pack_run's
+        self.implicit = implicit  # walk.allocate_implicit's
+        arrays, self.workspace = walk.run_records(buffers, implicit, exact)
+        (self.clock, self.place, self.state, self.loaded, self.first_steps,
+         self.outputs) = arrays
 
     @property
     def time(self) -> float:
@@ -234,7 +236,7 @@ class Run:
 
     @property
     def _counters(self):
-        return self.workspace[walk.Workspace._fields.index("counters")]
+        return self.workspace.counters
 
 
 class CompiledStepper:
@@ -277,9 +279,8 @@ class CompiledStepper:
             check_contact = os.environ.get("HERRINGBONE_CHECK_CONTACT") == "1"
         self.contact_slack = (self.tolerance * model.force_scale() / model.mesh.c_point
                               if check_contact else -1.0)
-        self.lengths, self.counts, self.tables = model.mesh.period_table()
-        self.mesh = (self.lengths, self.counts, self.tables)  # walk.advance takes plain tuples
-        self.system_arrays = model.packed_system
+        self.mesh = PeriodTable(*model.mesh.period_table())
+        self.lengths, self.counts, self.tables = self.mesh
         # the longest exact step taken uncertified: the loop's checks of its ends and of
         # grazing need h·|λ|max <= EXPLICIT_STEP_BOUND; DOP853's tighter bound for lightly
         # damped modes (explicit_step_bound) is for its own error, and an exact step makes none
@@ -288,6 +289,8 @@ class CompiledStepper:
                                            self.event_time_tolerance, self.contact_slack,
                                            self.absolute_tolerance, float(max_step),
                                            self.exact_floor)
+        # walk.advance's constants
+        self.constants = buffers.pack_constants(model.packed_system, self.mesh, self.settings)
         self.exact_tables = exact_tables
         self.exact_buffers = (exponential.pack_tables(self.exact_tables)
                               if self.exact_tables is not None else None)
@@ -323,11 +326,11 @@ class CompiledStepper:
                                             position.segment.loaded))
         first_steps = (position.first_steps.copy() if position.first_steps is not None
                        else np.zeros(len(self.lengths)))
-        return Run(np.array([position.time, h]),
-                   np.array([contact_set.index, contact_set.cycle], dtype=np.int64),
-                   position.state.copy(), loaded, first_steps, outputs,
-                   walk.allocate_workspace(self.method_code, len(position.state),
-                                           self.tables.shape[2], self.exact_buffers))
+        return Run(walk.pack_run([position.time, h], [contact_set.index, contact_set.cycle],
+                                 position.state, loaded, first_steps, outputs,
+                                 self.tables.shape[2]),
+                   walk.allocate_implicit(self.method_code, len(position.state)),
+                   self.exact_buffers)
 
     def position(self, run: Run) -> Position:
         """A snapshot of the run: its own copies, unchanged by the run going on."""
@@ -346,8 +349,8 @@ class CompiledStepper:
             return
         # float(): an int would make numba compile another version
         status, steps = walk.advance(
-            self.system_arrays, self.mesh, self.settings,
-            run.arrays, run.workspace, float(end), (float(torques[0]), float(torques[1])),
+            self.constants, self.exact_buffers, run.implicit, run.buffers, float(end),
+            float(torques[0]), float(torques[1]),
             NO_STEP_BUDGET if max_steps is None else int(max_steps))
         self.accepted_steps += steps
         if status != COMPLETED:
@@ -371,8 +374,8 @@ class CompiledStepper:
             raise ValueError(f"rows: {rows.shape}, C-contiguous {rows.flags.c_contiguous}; "
                              f"allowed: a C-contiguous {(len(times), len(run.outputs))} array")
         status, steps, written = walk.advance_sampled(
-            self.system_arrays, self.mesh, self.settings, run.arrays, run.workspace, times, rows,
-            float(end), (float(torques[0]), float(torques[1])),
+            self.constants, self.exact_buffers, run.implicit, run.buffers, times, rows,
+            float(end), float(torques[0]), float(torques[1]),
             NO_STEP_BUDGET if max_steps is None else int(max_steps))
         self.accepted_steps += steps
         if on_sample is not None:

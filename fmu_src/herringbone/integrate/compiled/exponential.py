@@ -58,8 +58,9 @@ from typing import NamedTuple
 import numpy as np
 import scipy.linalg
 from numba import njit
-from numba.np.arrayobj import reshape_unchecked
 
+from .buffers import cube_view as _cube
+from .buffers import matrix_view as _matrix
 from .counting import NUMBERS_ONLY
 from .equations import (
     LEAD_ERROR0,
@@ -478,24 +479,6 @@ def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 # --- the kernels ---------------------------------------------------------------------------------
-
-# unpack_tables' readers: a C-ordered block of the flat `buffer` from entry `at`, as a view.
-# Not a reshape: numba's checks the layout through a call of its runtime, and each kernel takes
-# the tables apart at every call. reshape_unchecked is the view that numba's as_strided makes,
-# lowered in place; as_strided itself is a compiled function returning an array, which code
-# compiled without reference counts (counting.py) may not call.
-@njit(cache=True, error_model="numpy", inline="always")
-def _matrix(buffer, at, rows, columns):
-    item = buffer.itemsize
-    return reshape_unchecked(buffer[at:], (rows, columns), (columns * item, item))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _cube(buffer, at, pages, rows, columns):
-    item = buffer.itemsize
-    return reshape_unchecked(buffer[at:], (pages, rows, columns),
-                             (rows * columns * item, columns * item, item))
-
 
 @njit(cache=True, error_model="numpy", inline="always")
 def unpack_tables(buffers):

@@ -48,9 +48,10 @@ located by `locate_event` to the event time tolerance, the run moved into the ne
 `end_segment`, which the loop then begins: `begin_segment`). Trial steps (`trial_step`) serve
 the location, the probe and the debug check. They work on records laid out once: the stepper's
 settings (one float array, `Setting`), the run's arrays (`RunArrays`, its position), the mesh
-period (`equations.PeriodTable`) and the run's `Workspace`, the scratch arrays that
-`allocate_workspace` makes once per run (rows named by `Vector` and `Values`, the loop's memory
-by `Counter` and `Memory`). They come from Python as plain tuples, which `advance` names.
+period (`equations.PeriodTable`) and the run's `Workspace`, the scratch arrays that `pack_run`
+allocates once per run (rows named by `Vector` and `Values`, the loop's memory by `Counter`
+and `Memory`). They come from Python as a few flat buffers (buffers.py), which `advance` takes
+apart into these records (`unpack_records`).
 
 Units: time and step sizes in s, angles in rad, the state as model.py lays it out, approaches
 in m (their rates in m/s), torques in N·m.
@@ -65,16 +66,14 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from . import dop853, exponential, radau
+from . import buffers, dop853, exponential, radau
 from .counting import NUMBERS_ONLY, UNCOUNTED
 from .equations import (
     Event,
-    PeriodTable,
     approach_rates,
     approaches,
     derivative,
     outputs,
-    unpack_system,
 )
 
 # How far past its contact interval (a fraction of its length) a run's pinion may end: the
@@ -106,7 +105,7 @@ class Method(IntEnum):
 
 class Setting(IntEnum):
     """Entries of the settings record (`pack_settings`), one float array per stepper. (The
-    method is not among them: it is the workspace's, see allocate_workspace.)"""
+    method is not among them: it is the workspace's, see allocate_implicit.)"""
 
     RELATIVE_TOLERANCE = 0
     MAX_STEP = 1  # s
@@ -189,7 +188,7 @@ class Memory(IntEnum):
 
 
 class Workspace(NamedTuple):
-    """The scratch arrays of a run (`allocate_workspace`), reused by every call of `advance`,
+    """The scratch arrays of a run (`pack_run`), reused by every call of `advance`,
     whose results do not depend on what they held. Radau IIA's three are None in the other
     methods' workspaces, the exponential method's tables None in the others': the method is so
     a matter of the workspace's type, which numba compiles `advance` for, and the code of the
@@ -323,25 +322,48 @@ def pack_settings(relative_tolerance: float, max_step: float, event_time_toleran
     return settings
 
 
-def allocate_workspace(method: Method, size: int, max_points: int,
-                       exact_tables: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-                       ) -> tuple:
-    """The Workspace of a run of `method` with `size` state entries and sets of up to
-    `max_points` points, allocated once per run (CompiledStepper.start), as a plain tuple in
-    Workspace's order: numba types a plain tuple argument by its fast path, a named one by
-    Python code at every call (3 µs for four fields), so `advance` takes plain tuples and
-    names them. `exact_tables`: the exponential method's, as exponential.pack_tables packs
-    them."""
-    implicit = method == Method.IMPLICIT
-    return tuple(Workspace(
-        vectors=np.zeros((Vector.STAGES + dop853.STAGE_ROWS, size)),
-        values=np.zeros((len(Values), Event.CONTACT + max_points)),
-        matrices=np.zeros((2, size, size)) if implicit else None,
-        complex_factors=np.zeros((size, size), dtype=np.complex128) if implicit else None,
-        pivots=np.zeros((2, size), dtype=np.int64) if implicit else None,
-        counters=np.zeros(len(Counter), dtype=np.int64),
-        memory=np.zeros(len(Memory)),
-        exact=exact_tables if method == Method.EXPONENTIAL else None))
+def pack_run(clock, place, state, loaded, first_steps, outputs, max_points: int
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """A run's buffers (buffers.pack_run): its position, RunArrays' fields, copied in, and the
+    scratch of its Workspace for sets of up to `max_points` points, allocated once per run
+    (CompiledStepper.start)."""
+    return buffers.pack_run(clock, place, state, loaded, first_steps, outputs,
+                            Vector.STAGES + dop853.STAGE_ROWS, len(Values),
+                            Event.CONTACT + max_points, len(Memory), len(Counter))
+
+
+def allocate_implicit(method: Method, size: int) -> tuple:
+    """Radau IIA's arrays of a run with `size` state entries (Workspace's matrices,
+    complex_factors and pivots), None for the other methods: the method is so a matter of
+    the workspace's type, which numba compiles `advance` for."""
+    if method != Method.IMPLICIT:
+        return None, None, None
+    return (np.zeros((2, size, size)), np.zeros((size, size), dtype=np.complex128),
+            np.zeros((2, size), dtype=np.int64))
+
+
+def run_records(run, implicit, exact) -> tuple[RunArrays, Workspace]:
+    """A run's RunArrays and Workspace as views of its buffers (pack_run), with Radau IIA's
+    arrays (allocate_implicit) and the exponential method's tables
+    (exponential.pack_tables; None for the other methods): for Python; `advance` takes them
+    apart alike in compiled code."""
+    views = buffers.run_views(run)
+    matrices, complex_factors, pivots = implicit
+    return RunArrays(*views[:6]), Workspace(views[6], views[7], matrices, complex_factors,
+                                            pivots, views[8], views[9], exact)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def unpack_records(constants, exact, implicit, run):
+    """advance's arguments as the loop's records: (System, PeriodTable, settings, RunArrays,
+    Workspace), views of the buffers."""
+    system, mesh, settings = buffers.unpack_constants(constants)
+    clock, place, state, loaded, first_steps, outputs_, vectors, values, counters, memory = \
+        buffers.unpack_run(run)
+    workspace = Workspace(vectors, values, implicit[0], implicit[1], implicit[2], counters,
+                          memory, exact)
+    return (system, mesh, settings,
+            RunArrays(clock, place, state, loaded, first_steps, outputs_), workspace)
 
 
 def _lacks(record_type, field):
@@ -1260,31 +1282,30 @@ def all_finite(state):
 
 
 @njit(**UNCOUNTED)
-def advance(system_arrays, mesh, settings, run, workspace, end, torques, max_steps):
-    """Integrate a run to exactly `end` (s) with the torques (motor, load; N·m) held. Returns
-    (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond them the
-    run stops where it is with OVER_BUDGET (a runaway that would hold its caller for ever).
+def advance(constants, exact, implicit, run, end, motor_torque, load_torque, max_steps):
+    """Integrate a run to exactly `end` (s) with the motor and load torques (N·m) held.
+    Returns (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond
+    them the run stops where it is with OVER_BUDGET (a runaway that would hold its caller for
+    ever).
 
-    Its records come as plain tuples (allocate_workspace says why), in the order of the named
-    tuple each becomes here: system_arrays, equations.pack_system's two arrays; mesh, a
-    PeriodTable; settings, pack_settings' record; run, RunArrays (the run's position, read and
-    written back, also where the run fails; its `outputs` get equations.outputs there);
-    workspace, a Workspace. Compiled UNCOUNTED (counting.py): its body neither allocates nor
-    copies by slices."""
-    status, steps, _ = advance_to(system_arrays, mesh, settings, run, workspace, end, torques,
-                                  max_steps, None, 0)
+    Its records come as a few buffers (buffers.py says why): constants, buffers.pack_constants'
+    (the System, the mesh period, the settings); exact, exponential.pack_tables' (None but
+    for the exponential method); implicit, allocate_implicit's; run, pack_run's (the run's
+    position, read and written back, also where the run fails, its `outputs` getting
+    equations.outputs there, and its workspace). Compiled UNCOUNTED (counting.py): its body
+    neither allocates nor copies by slices."""
+    status, steps, _ = advance_to(constants, exact, implicit, run, end,
+                                  (motor_torque, load_torque), max_steps, None, 0)
     return status, steps
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def advance_to(system_arrays, mesh, settings, run, workspace, end, torques, max_steps, samples,
-               k):
+def advance_to(constants, exact, implicit, run, end, torques, max_steps, samples, k):
     """advance's body, and one stretch of advance_sampled's (`samples`: its Samples, the
     `k`-th the next to take; None in advance): the run integrated to `end`, or to where
     `stop_at` stops it first. Returns (the Status's value, accepted steps, the next sample's
     index)."""
-    system = unpack_system(system_arrays[0], system_arrays[1])
-    mesh, run, workspace = PeriodTable(*mesh), RunArrays(*run), Workspace(*workspace)
+    system, mesh, settings, run, workspace = unpack_records(constants, exact, implicit, run)
     begin_walk(workspace)
     status, steps, k = walk(system, mesh, settings, run, workspace, end, torques, max_steps,
                             samples, k)
@@ -1502,8 +1523,8 @@ def begin_walk(workspace):
 # --- a run sampled in one call ----------------------------------------------------------------
 
 @njit(**UNCOUNTED)
-def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, end, torques,
-                    max_steps):
+def advance_sampled(constants, exact, implicit, run, times, rows, end, motor_torque,
+                    load_torque, max_steps):
     """Integrate a run through its sample times to `end` (s) in one call, with the torques
     (motor, load; N·m) held, the outputs (equations.outputs, as the run's `outputs`) at each of
     `times` (s, rising, none past `end`) written into the row of `rows` of the same index.
@@ -1517,7 +1538,8 @@ def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, 
 
     The records come as `advance` takes them; `rows` is C-contiguous, a row as long as the
     run's outputs. Compiled UNCOUNTED, as `advance`."""
-    position, samples = RunArrays(*run), Samples(times, rows)
+    position, samples = RunArrays(*buffers.unpack_run(run)[:6]), Samples(times, rows)
+    torques = (motor_torque, load_torque)
     k, steps = 0, 0
     while True:
         while k < times.shape[0] and times[k] <= position.clock[0]:
@@ -1526,8 +1548,8 @@ def advance_sampled(system_arrays, mesh, settings, run, workspace, times, rows, 
         if position.clock[0] >= end:
             return Status.OK.value, steps, k
         first = k
-        status, taken, k = advance_to(system_arrays, mesh, settings, run, workspace, end,
-                                      torques, max_steps - steps, samples, k)
+        status, taken, k = advance_to(constants, exact, implicit, run, end, torques,
+                                      max_steps - steps, samples, k)
         steps += taken
         if status != Status.OK.value:
             failed_at_end = (status == Status.NOT_FINITE.value
