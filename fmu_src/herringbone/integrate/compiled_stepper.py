@@ -205,10 +205,10 @@ class Run:
     __slots__ = ("buffers", "implicit", "clock", "place", "state", "loaded", "first_steps",
                  "outputs", "workspace")
 
-    def __init__(self, buffers, implicit, exact):
-        self.buffers = buffers  # walk.pack_run's
+    def __init__(self, packed, implicit, exact):
+        self.buffers = packed  # walk.pack_run's (the parameter's name leaves the module's free)
         self.implicit = implicit  # walk.allocate_implicit's
-        arrays, self.workspace = walk.run_records(buffers, implicit, exact)
+        arrays, self.workspace = walk.run_records(packed, implicit, exact)
         (self.clock, self.place, self.state, self.loaded, self.first_steps,
          self.outputs) = arrays
 
