@@ -44,9 +44,9 @@ tightening DOP853's own error needs) the loop's own checks for a step's ends and
 cubic through values and slopes) see a point's approach cross, as for DOP853. Where the phase
 events are not sure (a torsional mode swinging the speed through zero near a switch), those
 checks do not see the pinion turn back across an end of its interval and return, and the step is
-shortened further (walk.TURN_BACK_FLOOR). A segment's opening step is aimed where the slow
-motion carries the pinion angle out of its interval (`slow_phase_event_ahead`), and where that
-is too loose an aim, it ends no later.
+shortened further (walk.TURN_BACK_FLOOR). The first step after a segment's entry or a call's
+start is aimed where the angle's modal solution leaves its interval (`modal_phase_event_ahead`),
+and where that cannot be found, where the slow motion carries it out, or no later.
 
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
@@ -98,12 +98,24 @@ TILT_FRACTION = 1e-3
 TILT_ROUNDING = 1e-13
 # A mode's largest cosine with the tilt rows above which the tilt sees it (unseen_by_tilt)
 TILT_SEEN = 1e-6
-# The phase event's time from the slow polynomial (slow_phase_event_ahead): Newton's
+# The phase event's time from the slow polynomial (modal_phase_event_ahead): Newton's
 # iterations, the relative change at which they stop, and the largest swing of the angle by
 # the fast modes, as a fraction of the way to go, at which the prediction is made
 PREDICTION_ITERATIONS = 8
 PREDICTION_PRECISION = 1e-9
 PREDICTION_SPREAD = 0.01
+# Newton's iterations on the whole modal solution of the pinion angle (_angle_crossing), and
+# the relative change at which they stop. The step is aimed past the crossing by the event
+# location's tolerance, some 1e-10 of the time to it (walk.first_estimate); Newton's error
+# squares at each iteration (on the reference scene 3e-2, 2e-5, 1e-11 of the time), so the
+# iteration after a change below 1e-10 is good to rounding, and a tighter stop only chases it
+CROSSING_ITERATIONS = 30
+CROSSING_PRECISION = 1e-10
+# What modal_phase_event_ahead's time is: where the modal solution crosses the interval's end
+# (CROSSING), near it (NEAR: the slow part's time with the fast swing no more than
+# PREDICTION_SPREAD of the way), or only a time by which it has surely crossed (BOUND)
+BOUND, NEAR, CROSSING = 0, 1, 2
+NO_AIM = -1  # (walk: no time predicted)
 # The slow block's series stops where a term falls below this fraction of the sum
 SERIES_FLOOR = 1e-18
 MAX_SERIES_TERMS = 40
@@ -147,7 +159,7 @@ class ExactTables(NamedTuple):
     start_fast: np.ndarray  # (F,) complex
     start_size: np.ndarray  # (F,)
     modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or the polynomial of
-    #                         slow_phase_event_ahead)
+    #                         modal_phase_event_ahead)
     modal_fast: np.ndarray  # (F,) complex
     series: np.ndarray  # (2, S): the slow block's series
 
@@ -718,28 +730,47 @@ def angle_inside(system, buffers, exact, h, at_start, at_end, length):
 
 
 @njit(**NUMBERS_ONLY)
-def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_torque, length):
-    """A time (s from `state`) by which the pinion angle has surely left its contact interval
-    of `length` (rad) in the segment of exact form `exact` with the torques (N·m) held: where
-    the slow part of its motion (a polynomial in t, no exponentials) reaches `length` plus the
-    fast modes' swing of the angle (moving forward), or minus it below zero (moving back),
-    by Newton's method; inf where it stands still or turns back first. Returns that time
-    and whether it is a tight aim: the swing no more than PREDICTION_SPREAD of the way (a
+def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_torque, length,
+                            horizon):
+    """When (s from `state`) the pinion angle leaves its contact interval of `length` (rad) in
+    the segment of exact form `exact` with the torques (N·m) held, and what kind of time that
+    is. First a time by which it has surely left: where the slow part of its motion (a
+    polynomial in t, no exponentials) reaches `length` plus the fast modes' swing of the
+    angle (moving forward), or minus it below zero (moving back), by Newton's method; inf
+    where it stands still or turns back first, or where it surely stays inside until
+    `horizon` (s: the call's end, which the step will not pass). From there Newton's method
+    on the angle's whole modal solution (_angle_crossing) finds the crossing itself
+    (CROSSING); where it does not converge, the time found first is returned as NEAR where
+    the swing is no more than PREDICTION_SPREAD of the way, else as a BOUND only (a
     torsional mode swinging the angle, as in torque_step, makes a step aimed there overshoot
-    the event by much, though it still bounds where the event can lie). The instantaneous
-    speed and acceleration, which walk.phase_event_ahead extrapolates, carry the fast modes'
-    ringing (a switch sets the pinion accelerating at 1e6 rad/s² and more), and the slow part
-    does not. `buffers`: the tables as pack_tables packs them."""
+    the event by much). The instantaneous speed and acceleration, which
+    walk.phase_event_ahead extrapolates, carry the fast modes' ringing (a switch sets the
+    pinion accelerating at 1e6 rad/s² and more), and neither the slow part nor the whole
+    solution is misled by it. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
     swing = _angle_swing(tables, exact)
     degree = _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
-    if terms[1] == 0.0:
-        return math.inf, True
-    target = length + swing if terms[1] > 0.0 else -swing
-    tight = swing <= PREDICTION_SPREAD * abs(target - terms[0])
+    reach = _polynomial_bound(terms, degree + 1, horizon)[0].drift + swing
+    if terms[1] == 0.0 or (reach < terms[0] < length - reach):
+        return math.inf, NEAR
+    forward = terms[1] > 0.0
+    target = length + swing if forward else -swing
+    near = NEAR if swing <= PREDICTION_SPREAD * abs(target - terms[0]) else BOUND
+    ahead = _polynomial_root(terms, degree, target)
+    if ahead == math.inf:
+        return ahead, near
+    crossing = _angle_crossing(tables, exact, pinion, degree, length if forward else 0.0,
+                               forward, ahead)
+    return (crossing, CROSSING) if crossing > 0.0 else (ahead, near)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _polynomial_root(terms, degree, target):
+    """Where the polynomial Σ terms[n]·t^n of `degree` first reaches `target`, by Newton's
+    method from its tangent at 0 (s); inf where it turns back before it gets there."""
     ahead = (target - terms[0]) / terms[1]
     for _ in range(PREDICTION_ITERATIONS):
         value, slope = terms[degree], 0.0
@@ -747,12 +778,65 @@ def slow_phase_event_ahead(system, buffers, exact, state, motor_torque, load_tor
             slope = slope * ahead + value
             value = value * ahead + terms[power]
         if ahead <= 0.0 or slope * terms[1] <= 0.0:  # turns back before it gets there
-            return math.inf, tight
+            return math.inf
         change = (value - target) / slope
         ahead -= change
         if abs(change) <= PREDICTION_PRECISION * ahead:
             break
-    return (ahead if ahead > 0.0 else math.inf), tight
+    return ahead if ahead > 0.0 else math.inf
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _angle_crossing(tables, exact, pinion, degree, end, forward, sure):
+    """Where the pinion angle's whole modal solution from the step's start (its slow
+    polynomial of `degree` in tables.modal_slow and its fast modes) reaches `end` (rad), moving
+    `forward` (or back), by Newton's method kept inside [0, `sure`] (s), the time by which it
+    has surely passed it, bisecting where a Newton step would leave that bracket; −1 where it
+    does not converge within CROSSING_ITERATIONS (the angle swung back and forth across
+    `end`). Each iteration is the angle's row of the modes alone, a few complex
+    exponentials. The result is a smooth function of the start to rounding (an angle found
+    on `end` to the bit is the root, not a bracket's end to bisect from): the period map's
+    forward differences read it at 1e-13 of the state's scales."""
+    low, high = 0.0, sure
+    ahead = sure
+    for _ in range(CROSSING_ITERATIONS):
+        value, slope = _angle_at(tables, exact, pinion, degree, ahead)
+        value -= end
+        if value == 0.0:
+            return ahead
+        if (value > 0.0) == forward:
+            high = ahead
+        else:
+            low = ahead
+        guess = ahead - value / slope if slope != 0.0 else low
+        if not low < guess < high:
+            guess = 0.5 * (low + high)
+        if abs(guess - ahead) <= CROSSING_PRECISION * guess:
+            return guess
+        ahead = guess
+    return -1.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _angle_at(tables, exact, pinion, degree, t):
+    """The pinion angle (rad) and its rate (rad/s) t s after the step's start, from its slow
+    polynomial (tables.modal_slow, of `degree`) and its fast modes."""
+    terms = tables.modal_slow
+    value, slope = terms[degree], 0.0
+    for power in range(degree - 1, -1, -1):
+        slope = slope * t + value
+        value = value * t + terms[power]
+    for k in range(tables.fast_count[exact]):
+        rate = tables.rates[exact, k]
+        exponent = rate.real * t
+        if exponent < UNDERFLOW_EXPONENT:
+            continue
+        decay, angle = math.exp(exponent), rate.imag * t
+        mode = (tables.fast_right[exact, pinion, k] * tables.start_fast[k]
+                * complex(decay * math.cos(angle), decay * math.sin(angle)))
+        value += mode.real
+        slope += (mode * rate).real
+    return value, slope
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -179,12 +179,12 @@ class Memory(IntEnum):
     """Entries of the workspace's `memory`: the loop's floats within one call of `advance`."""
 
     FACTORED_H = 0  # s: the step size Radau IIA's LU factors belong to; 0: none
-    # s: when the next phase event lies ahead of an exact segment's opening step, taken as the
-    # segment was entered (opening_ahead); −1: none
-    OPENING_AHEAD = 1
-    # s: the time by which it has surely happened, where OPENING_AHEAD is none because that
-    # time is too loose an aim; −1: none
-    OPENING_SURE = 2
+    # s: when the next phase event lies ahead of the next step, from the modal solution,
+    # taken where the run entered an exact segment (opening_ahead) or a call began in one
+    # (call_opening_ahead), until a step is accepted
+    MODAL_AHEAD = 1
+    # what kind of time MODAL_AHEAD is (exponential.CROSSING, NEAR, BOUND); −1: none
+    MODAL_AIM = 2
 
 
 class Workspace(NamedTuple):
@@ -280,6 +280,11 @@ MAX_PHASE_REVERSALS = 1000
 # than PREDICTION_FLOOR of the step ahead (a nearer one is crossed by the step as it is)
 PREDICTION_MARGIN = 1e-4
 PREDICTION_FLOOR = 1e-3
+# A call that begins inside an exact segment asks for the modal solution's phase event only
+# where φp, at its present speed, would leave its interval within this many times the call's
+# span (the ringing moves that speed by a tenth or so): at the FMU's finest steps the
+# prediction (0.6 µs and more) would otherwise be made at every call for an event far ahead
+CALL_REACH = 2.0
 # An exact step (exponential method) makes no error, so the step size serves the events only:
 # after a certified step the next may be this many times longer (but a step certified right
 # after a rejection keeps its size: control_exact_step), after a rejected one this fraction as
@@ -438,19 +443,21 @@ def _exact_monotone(workspace, segment, h):
         workspace.exact, segment.exact, h)
 
 
-def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
-    """exponential.slow_phase_event_ahead on the workspace's tables where it is the exponential
-    method's; (−1, False) (none) in the others'."""
+def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
+                      horizon):
+    """exponential.modal_phase_event_ahead on the workspace's tables where it is the exponential
+    method's; (−1, exponential.NO_AIM) in the others'."""
 
 
 @overload(exact_event_ahead, inline="always")
-def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length):
+def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
+                       horizon):
     if _lacks(workspace, "exact"):
-        return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
-                (-1.0, False))
-    return (lambda system, workspace, exact, state, motor_torque, load_torque, length:
-            exponential.slow_phase_event_ahead(system, workspace.exact, exact, state,
-                                               motor_torque, load_torque, length))
+        return (lambda system, workspace, exact, state, motor_torque, load_torque, length,
+                horizon: (-1.0, exponential.NO_AIM))
+    return (lambda system, workspace, exact, state, motor_torque, load_torque, length, horizon:
+            exponential.modal_phase_event_ahead(system, workspace.exact, exact, state,
+                                                motor_torque, load_torque, length, horizon))
 
 
 def stop_at(samples, k, end, exact):
@@ -579,19 +586,24 @@ def phase_event_ahead(system, state, rate, length):
 @njit(cache=True, error_model="numpy", inline="always")
 def event_ahead(system, segment, state, workspace, rate, explicit):
     """When (s from now) the next phase event is predicted, for the step to be aimed just
-    past it (plan_step): for an exact segment's opening step, the time opening_ahead took,
-    or where that was too loose an aim, the sooner of it and phase_event_ahead's; else from
-    φp's rate and acceleration `rate` (phase_event_ahead) for DOP853 and the exponential
-    method, and never for Radau IIA (plan_step says why)."""
-    if segment.exact >= 0 and workspace.counters[Counter.OPENING] >= 0:
-        ahead, sure = workspace.memory[Memory.OPENING_AHEAD], workspace.memory[Memory.OPENING_SURE]
-        if ahead >= 0.0:
-            return ahead
-        if sure >= 0.0:
+    past it (plan_step), and whether that is the modal solution's crossing itself: for the
+    first step in an exact segment after its entry or a call's start, the time opening_ahead
+    or call_opening_ahead took (remember_modal_aim), or where that is only a bound, the
+    sooner of it and phase_event_ahead's; else from φp's rate and acceleration `rate`
+    (phase_event_ahead) for DOP853 and the exponential method, and never for Radau IIA
+    (plan_step says why)."""
+    if segment.exact >= 0:
+        ahead, aim = workspace.memory[Memory.MODAL_AHEAD], workspace.memory[Memory.MODAL_AIM]
+        if aim == exponential.CROSSING:
+            return ahead, True
+        if aim == exponential.NEAR:
+            return ahead, False
+        if aim == exponential.BOUND:
             # (the ringing often sends phase_event_ahead to inf, which no step is aimed at:
             # an opening step grown to milliseconds then crossed the event early on)
-            return min(sure, phase_event_ahead(system, state, rate, segment.length))
-    return phase_event_ahead(system, state, rate, segment.length) if explicit else NEVER
+            return min(ahead, phase_event_ahead(system, state, rate, segment.length)), False
+    return (phase_event_ahead(system, state, rate, segment.length) if explicit else NEVER,
+            False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -821,22 +833,36 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
 # --- the steps of the loop --------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy", inline="always")
-def plan_step(max_step, time, end, h, ahead):
+def plan_step(max_step, time, end, h, ahead, crossing, settings):
     """The next step from `time` (s) with the controller's step size h (s): at most the
     settings' max step, stretched by a hair to land on `end` rather than leave a remainder of
     rounding size, or cut to end just past the phase event predicted `ahead` s from now
-    (phase_event_ahead; inf for none, and for Radau IIA, whose error stopped falling with the
-    step size in the order test when its steps were aimed). `max_step` (s): the settings'
+    (event_ahead; inf for none, and for Radau IIA, whose error stopped falling with the
+    step size in the order test when its steps were aimed): by PREDICTION_MARGIN of it, or
+    where that is the modal solution's `crossing` itself, by the event location's
+    tolerance, so that the location needs no trial step. `max_step` (s): the `settings`'
     for the segment's method. Returns the StepPlan."""
     h_wanted = min(h, max_step)
     landing = end - time <= h_wanted * (1.0 + 1e-7)
     h_step = end - time if landing else h_wanted
     # a step that would pass the next phase event ends just past it instead: the event is
-    # then located by a single trial step, and nothing of the step past it is thrown away
-    passing = (1.0 + PREDICTION_MARGIN) * ahead
+    # then located by a single trial step (or none), and nothing of the step past it is
+    # thrown away
+    passing = (ahead + location_tolerance(settings, ahead) if crossing
+               else (1.0 + PREDICTION_MARGIN) * ahead)
     if PREDICTION_FLOOR * h_step < passing < h_step:
         return StepPlan(passing, h_wanted, False, True)
     return StepPlan(h_step, h_wanted, landing, False)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def next_plan(system, segment, settings, state, workspace, rows, explicit, clock, target):
+    """The StepPlan from the run's `clock` (its time and step size, s) towards `target` (s):
+    plan_step with the segment's max step and the phase event event_ahead predicts."""
+    ahead, crossing = event_ahead(system, segment, state, workspace, rows.rate, explicit)
+    return plan_step(settings[Setting.EXACT_MAX_STEP if segment.exact >= 0
+                              else Setting.MAX_STEP], clock[0], target, clock[1], ahead,
+                     crossing, settings)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1040,18 +1066,24 @@ def location_estimate(trials, estimate, low, high):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def first_estimate(system, state, new_state, values, event, high, h_step):
+def first_estimate(system, state, new_state, values, event, high, h_step, tolerance):
     """Where (s from the step's start) `event` crosses zero inside a whole step of h_step (s)
     that crossed it (`high` == h_step: NEW_STATE and the AFTER values at its end), from its
-    values and slopes at both ends: the zero of the cubic through them (hermite_root), fifty
-    times closer than the chord's. A phase event's slope is φp's rate, in the state; a
-    point's, its approach rate, which the grazing check took at both ends (the SLOPES rows,
-    marked not taken by a NaN first entry). −1 where there is none."""
+    values and slopes at both ends: for a phase event that the step passed by no more than
+    twice the location `tolerance` (s) by its tangent at the end (a step aimed past the
+    modal solution's crossing, plan_step), that tangent's zero, which ends the location
+    without a trial; else the zero of the cubic through them (hermite_root), fifty times
+    closer than the chord's. A phase event's slope is φp's rate, in the state; a point's, its
+    approach rate, which the grazing check took at both ends (the SLOPES rows, marked not
+    taken by a NaN first entry). −1 where there is none."""
     if high != h_step:
         return -1.0
     if event < Event.CONTACT:
         pinion_rate = state.shape[0] // 2 + system.pinion
         slope_before, slope_after = state[pinion_rate], new_state[pinion_rate]
+        past = values[Values.AFTER, event] / slope_after
+        if 0.0 <= past <= 2.0 * tolerance:
+            return high - past
     else:
         before, after = values[Values.SLOPES_BEFORE], values[Values.SLOPES_AFTER]
         if math.isnan(before[0]) or math.isnan(after[0]):
@@ -1092,7 +1124,7 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     newer_slope = (values[Values.SLOPES_AFTER, event - Event.CONTACT] if event >= Event.CONTACT
                    else event_slope(system, segment, new_state, workspace, event))
     tolerance = location_tolerance(settings, h_step)
-    estimate = first_estimate(system, state, new_state, values, event, high, h_step)
+    estimate = first_estimate(system, state, new_state, values, event, high, h_step, tolerance)
     for trials in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
         # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
@@ -1187,23 +1219,60 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def opening_ahead(system, mesh, run, workspace, segment):
+def opening_ahead(system, mesh, run, workspace, segment, horizon):
     """Where the run has just entered an exact segment forward (end_segment; the torques
     those of `segment`, the one it left): when the next phase event lies ahead
-    (exponential.slow_phase_event_ahead, from the slow part of the motion), for the opening step
-    to be aimed at, and whether that is a tight aim; (−1, False) elsewhere. φp's
+    (exponential.modal_phase_event_ahead, from the modal solution), for the opening step to be
+    aimed at, and what kind of time that is (inf where the angle surely stays inside its
+    interval until `horizon`, s: where the call stops); (−1, exponential.NO_AIM) elsewhere. φp's
     acceleration just after a switch is the fast modes' (1e6 rad/s² and more), so
     phase_event_ahead's extrapolation lands the opening step halfway. Taken here, once an
     event, where it was measured to cost least (docs/exponential-integrator.md, "An opening
     step aimed by the slow motion")."""
     if workspace.counters[Counter.OPENING] < 0:
-        return -1.0, False
+        return -1.0, exponential.NO_AIM
     interval = run.place[0]
     exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     if exact < 0:
-        return -1.0, False
+        return -1.0, exponential.NO_AIM
     return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
-                             segment.load_torque, mesh.lengths[interval])
+                             segment.load_torque, mesh.lengths[interval], horizon)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def call_opening_ahead(system, mesh, run, workspace, segment, horizon):
+    """Where a call of `advance` begins inside an exact segment (`segment`, begun at the run's
+    state): when the next phase event lies ahead, and what kind of time that is, as
+    opening_ahead gives them at a segment's entry (`horizon`, s: how far the call goes);
+    (−1, exponential.NO_AIM) elsewhere, and where the event is far beyond the horizon
+    (CALL_REACH). The FMU's calls begin mid-segment, where φp's acceleration still carries
+    the fast modes' ringing: aimed by phase_event_ahead, a quarter of the reference scene's
+    1 ms calls took four steps for their one event. The modal coordinates it makes are the
+    ones the call's first step starts from (exponential._start_from)."""
+    state, pinion = run.state, system.pinion
+    speed, length = state[state.shape[0] // 2 + pinion], mesh.lengths[run.place[0]]
+    way = length - state[pinion] if speed > 0.0 else state[pinion]
+    if segment.exact < 0 or way > CALL_REACH * abs(speed) * horizon:
+        return -1.0, exponential.NO_AIM
+    return exact_event_ahead(system, workspace, segment.exact, run.state, segment.motor_torque,
+                             segment.load_torque, length, horizon)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def aim_first_step(system, mesh, run, workspace, segment, samples, k, end):
+    """At a call's start: call_opening_ahead's aim for its first step, to where the call
+    stops (stop_at: `end`, s, or the `k`-th of `samples`), remembered (remember_modal_aim)."""
+    horizon = stop_at(samples, k, end, segment.exact) - run.clock[0]
+    ahead, aim = call_opening_ahead(system, mesh, run, workspace, segment, horizon)
+    remember_modal_aim(workspace, ahead, aim)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def remember_modal_aim(workspace, ahead, aim):
+    """Keep the modal solution's aim for the next step (event_ahead): `ahead` (s) and what
+    kind of time it is, `aim` (exponential.CROSSING, NEAR, BOUND; −1: none)."""
+    workspace.memory[Memory.MODAL_AHEAD] = ahead
+    workspace.memory[Memory.MODAL_AIM] = aim
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1333,15 +1402,14 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit = is_explicit(workspace)
     segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques, workspace)
+    aim_first_step(system, mesh, run, workspace, segment, samples, k, end)
     steps, status, controller, h = 0, Status.OK, Controller(1e-4, False), clock[1]
     while status == Status.OK:
         target = stop_at(samples, k, end, segment.exact)
         if clock[0] >= target:
             break
         time, h = clock[0], clock[1]
-        ahead = event_ahead(system, segment, state, workspace, rows.rate, explicit)
-        plan = plan_step(settings[Setting.EXACT_MAX_STEP if segment.exact >= 0
-                                  else Setting.MAX_STEP], time, target, h, ahead)
+        plan = next_plan(system, segment, settings, state, workspace, rows, explicit, clock, target)
         status = step_allowed(steps, max_steps, time, plan)
         if status != Status.OK:
             break
@@ -1362,6 +1430,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         if counters[Counter.OPENING] >= 0 and not (plan.landing or plan.aimed):
             first_steps[counters[Counter.OPENING]] = clock[1]
         counters[Counter.OPENING] = -1
+        workspace.memory[Memory.MODAL_AIM] = -1.0
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
         rate_after_step(system, segment, explicit, rows)
         if system.contact_loss:
@@ -1494,9 +1563,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
         end_segment(system, mesh, run, workspace, event)
         if event >= Event.CONTACT and segment.exact >= 0:
             run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
-        ahead, tight = opening_ahead(system, mesh, run, workspace, segment)
-        workspace.memory[Memory.OPENING_AHEAD] = ahead if tight else -1.0
-        workspace.memory[Memory.OPENING_SURE] = -1.0 if tight else ahead
+        ahead, aim = opening_ahead(system, mesh, run, workspace, segment, end - run.clock[0])
+        remember_modal_aim(workspace, ahead, aim)
     return status, k
 
 
@@ -1517,7 +1585,7 @@ def begin_walk(workspace):
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
     workspace.memory[Memory.FACTORED_H] = 0.0
-    workspace.memory[Memory.OPENING_AHEAD] = workspace.memory[Memory.OPENING_SURE] = -1.0
+    workspace.memory[Memory.MODAL_AIM] = -1.0
 
 
 # --- a run sampled in one call ----------------------------------------------------------------
