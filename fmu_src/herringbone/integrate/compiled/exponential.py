@@ -773,10 +773,7 @@ def _polynomial_root(terms, degree, target):
     method from its tangent at 0 (s); inf where it turns back before it gets there."""
     ahead = (target - terms[0]) / terms[1]
     for _ in range(PREDICTION_ITERATIONS):
-        value, slope = terms[degree], 0.0
-        for power in range(degree - 1, -1, -1):
-            slope = slope * ahead + value
-            value = value * ahead + terms[power]
+        value, slope = _polynomial_at(terms, degree, ahead)
         if ahead <= 0.0 or slope * terms[1] <= 0.0:  # turns back before it gets there
             return math.inf
         change = (value - target) / slope
@@ -784,6 +781,16 @@ def _polynomial_root(terms, degree, target):
         if abs(change) <= PREDICTION_PRECISION * ahead:
             break
     return ahead if ahead > 0.0 else math.inf
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _polynomial_at(terms, degree, t):
+    """The polynomial Σ terms[n]·t^n of `degree` and its derivative in t, by Horner's rule."""
+    value, slope = terms[degree], 0.0
+    for power in range(degree - 1, -1, -1):
+        slope = slope * t + value
+        value = value * t + terms[power]
+    return value, slope
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -821,11 +828,7 @@ def _angle_crossing(tables, exact, pinion, degree, end, forward, sure):
 def _angle_at(tables, exact, pinion, degree, t):
     """The pinion angle (rad) and its rate (rad/s) t s after the step's start, from its slow
     polynomial (tables.modal_slow, of `degree`) and its fast modes."""
-    terms = tables.modal_slow
-    value, slope = terms[degree], 0.0
-    for power in range(degree - 1, -1, -1):
-        slope = slope * t + value
-        value = value * t + terms[power]
+    value, slope = _polynomial_at(tables.modal_slow, degree, t)
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
         exponent = rate.real * t
