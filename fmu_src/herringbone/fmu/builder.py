@@ -120,7 +120,8 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     depends on no input directly: in co-simulation the outputs at a communication point follow
     from the state, so `dependencies=""`), adds a `<UnitDefinitions>` entry for every
     `unit`/`displayUnit` used by a variable (a slave sets them on the `<Real>` element, see
-    examples/), drops generationDateAndTime and sets the GUID to a hash of the FMU's content.
+    examples/), drops generationDateAndTime and sets the GUID to a hash of the FMU's content
+    (_content_guid).
     The zip is rewritten in name order with fixed timestamps and permissions, so that the same
     content makes the same bytes.  Idempotent; all other entries' contents are unchanged.
     """
@@ -158,9 +159,16 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
 
 def _content_guid(contents: dict[str, bytes]) -> str:
     """A GUID (8-4-4-4-12 hex digits) from the SHA-256 of every entry's name and content (the
-    model description with an empty guid): identical FMUs share it, any change moves it."""
+    model description with an empty guid) but the compiled code carried for a first start
+    (resources/numba_cache): FMUs of the same model, code and scene share it, any change to
+    those moves it. The carried code is a cache, whatever the build machine's numba cache held
+    (carry_compiled_integrator); it grows as other work compiles other variants, and the
+    FMI's GUID is the fingerprint of the model description and the model it belongs to."""
+    from ..integrate.first_start import CARRIED_FOLDER
+
+    cache = f"resources/{CARRIED_FOLDER}/"
     digest = hashlib.sha256()
-    for name in sorted(contents):
+    for name in sorted(name for name in contents if not name.startswith(cache)):
         for part in (name.encode(), contents[name]):
             digest.update(len(part).to_bytes(8, "little") + part)
     hex_digits = digest.hexdigest()[:32]
