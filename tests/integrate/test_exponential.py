@@ -511,6 +511,18 @@ def interval_left(stepper, position, torques, by, halvings=30):
     return high
 
 
+def states_inside_intervals(stepper, torques):
+    """From four times of a run from the scene's start with the torques held: its Position,
+    the exact form of its contact set with every point loaded, and that set's interval length
+    (rad)."""
+    model = stepper.model
+    for time in (0.0037, 0.0052, 0.0101, 0.0133):
+        position = stepper.advance(start_position(model, torques[0]), time, torques)
+        interval = position.segment.contact_set.index
+        yield (position, interval * exponential.VARIANTS + exponential.ALL_LOADED,
+               stepper.lengths[interval])
+
+
 def test_the_modal_solution_gives_the_phase_event_to_rounding(reference_model):
     """exponential.modal_phase_event_ahead, from four states inside a contact interval of the
     reference scene: the time at which the angle's modal solution leaves the interval
@@ -520,12 +532,9 @@ def test_the_modal_solution_gives_the_phase_event_to_rounding(reference_model):
     foresees no event there."""
     model, torques = reference_model, (500.0, 1800.0)
     stepper = CompiledStepper(model, 1e-7, "exponential")
-    for time in (0.0037, 0.0052, 0.0101, 0.0133):
-        position = stepper.advance(start_position(model, torques[0]), time, torques)
-        interval = position.segment.contact_set.index
-        arguments = (model.system, stepper.exact_buffers,
-                     interval * exponential.VARIANTS + exponential.ALL_LOADED, position.state,
-                     *torques, stepper.lengths[interval])
+    for position, exact, length in states_inside_intervals(stepper, torques):
+        arguments = (model.system, stepper.exact_buffers, exact, position.state, *torques,
+                     length)
         ahead, aim = exponential.modal_phase_event_ahead(*arguments, 1.0)
         crossing = interval_left(stepper, position, torques, 1.01 * ahead, halvings=48)
         assert aim == exponential.CROSSING
@@ -544,14 +553,11 @@ def test_the_modal_phase_event_is_a_smooth_function_of_the_state(name):
     scene = herringbone.load_scene(MODELS / f"{name}.toml")
     model, torques = GearTrainModel(scene), scene.inputs.at(0.0)
     stepper = CompiledStepper(model, 1e-7, "exponential")
-    for time in (0.0037, 0.0052, 0.0101, 0.0133):
-        position = stepper.advance(start_position(model, torques[0]), time, torques)
-        interval = position.segment.contact_set.index
-        exact = interval * exponential.VARIANTS + exponential.ALL_LOADED
+    for position, exact, length in states_inside_intervals(stepper, torques):
         ahead = np.array([exponential.modal_phase_event_ahead(
             model.system, stepper.exact_buffers, exact,
-            position.state + k * 1e-12 * model.state_scales(), *torques,
-            stepper.lengths[interval], 1.0)[0] for k in range(-20, 21)])
+            position.state + k * 1e-12 * model.state_scales(), *torques, length, 1.0)[0]
+            for k in range(-20, 21)])
         assert np.all(np.isfinite(ahead))
         assert np.abs(np.diff(ahead, 2)).max() <= 1e-13 * ahead[20]
 

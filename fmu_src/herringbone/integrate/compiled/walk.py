@@ -183,7 +183,7 @@ class Memory(IntEnum):
     # taken where the run entered an exact segment (opening_ahead) or a call began in one
     # (call_opening_ahead), until a step is accepted
     MODAL_AHEAD = 1
-    # what kind of time MODAL_AHEAD is (exponential.CROSSING, NEAR, BOUND); −1: none
+    # what kind of time MODAL_AHEAD is (exponential.CROSSING, NEAR, BOUND, or NO_AIM: none)
     MODAL_AIM = 2
 
 
@@ -1270,7 +1270,7 @@ def aim_first_step(system, mesh, run, workspace, segment, samples, k, end):
 @njit(cache=True, error_model="numpy", inline="always")
 def remember_modal_aim(workspace, ahead, aim):
     """Keep the modal solution's aim for the next step (event_ahead): `ahead` (s) and what
-    kind of time it is, `aim` (exponential.CROSSING, NEAR, BOUND; −1: none)."""
+    kind of time it is, `aim` (exponential.CROSSING, NEAR, BOUND, or NO_AIM: none)."""
     workspace.memory[Memory.MODAL_AHEAD] = ahead
     workspace.memory[Memory.MODAL_AIM] = aim
 
@@ -1430,7 +1430,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         if counters[Counter.OPENING] >= 0 and not (plan.landing or plan.aimed):
             first_steps[counters[Counter.OPENING]] = clock[1]
         counters[Counter.OPENING] = -1
-        workspace.memory[Memory.MODAL_AIM] = -1.0
+        workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
         rate_after_step(system, segment, explicit, rows)
         if system.contact_loss:
@@ -1585,7 +1585,7 @@ def begin_walk(workspace):
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
     workspace.memory[Memory.FACTORED_H] = 0.0
-    workspace.memory[Memory.MODAL_AIM] = -1.0
+    workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
 
 
 # --- a run sampled in one call ----------------------------------------------------------------
