@@ -161,6 +161,7 @@ class ExactTables(NamedTuple):
     modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or the polynomial of
     #                         modal_phase_event_ahead)
     modal_fast: np.ndarray  # (F,) complex
+    grid_fast: np.ndarray  # (F,) complex: e^{λ·t} at a point of inside_on_grid's grid
     series: np.ndarray  # (2, S): the slow block's series
 
 
@@ -375,7 +376,7 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
         inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
         start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
         modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
-        series=np.zeros((2, slow_width)))
+        grid_fast=np.zeros(fast_width, dtype=complex), series=np.zeros((2, slow_width)))
 
 
 def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defective: bool):
@@ -467,7 +468,7 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
 
 # pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
 COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "speed_fast", "approach_fast",
-                  "start_fast", "modal_fast")
+                  "start_fast", "modal_fast", "grid_fast")
 FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "tilt_rows", "speed_slow", "approach_slow",
                 "speed_size", "approach_size", "angle_size", "start", "start_slow", "start_size",
                 "modal_slow", "series")
@@ -509,6 +510,7 @@ def unpack_tables(buffers):
     rows_of_fast_complex = _cube(complexes, at, 2, places, fast)
     at += 2 * places * fast
     start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
+    grid_fast = complexes[at + 2 * fast:at + 3 * fast]
     slow_left = _cube(floats, 0, places, slow, width)
     at = places * slow * width
     slow_right = _cube(floats, at, places, size, slow)
@@ -535,7 +537,7 @@ def unpack_tables(buffers):
         fast_left, fast_right, rates, rows, rows_of_slow[0], rows_of_slow[1], rows_of_fast[0],
         rows_of_fast[1], rows_of_fast[2], rows_of_fast_complex[0], rows_of_fast_complex[1],
         floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
-        start_slow, start_fast, start_size, modal_slow, modal_fast, series)
+        start_slow, start_fast, start_size, modal_slow, modal_fast, grid_fast, series)
 
 
 @njit(cache=True, error_model="numpy")
@@ -714,19 +716,119 @@ def _phase_sure(system, buffers, tables, exact, h, state, out, speed_slow, speed
 def angle_inside(system, buffers, exact, h, at_start, at_end, length):
     """Whether over the step of h (s) just taken (the tables' start and its modal state at
     the end) the pinion angle, `at_start` and `at_end` (rad) at its ends, stays above 0 and
-    below `length` (rad): keeps_sign's bounds for φp and for φp − length. `buffers`: the
+    below `length` (rad): keeps_sign's bounds for φp and for φp − length, or where they
+    cannot tell, the finer bounds of a grid over the step (inside_on_grid). `buffers`: the
     tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     pinion = system.pinion
     swing = _angle_swing(tables, exact)
     slow = _angle_bound(tables, exact, h, pinion)
     rows = tables.fast_right[:, pinion, :]
-    if not keeps_sign(tables, exact, h, tables.angle_size, rows, slow, swing, 1.0, at_start,
-                      at_end):
-        return False
     to_end = SlowBound(slow.start - length, slow.drift, slow.curve)
-    return keeps_sign(tables, exact, h, tables.angle_size, rows, to_end, swing, -1.0,
-                      at_start - length, at_end - length)
+    if keeps_sign(tables, exact, h, tables.angle_size, rows, slow, swing, 1.0, at_start,
+                  at_end) and keeps_sign(tables, exact, h, tables.angle_size, rows, to_end,
+                                         swing, -1.0, at_start - length, at_end - length):
+        return True
+    return inside_on_grid(buffers, exact, h, pinion, length)
+
+
+# angle_inside's grid: its first interval turns the fastest mode by at most this (|λ|·δ),
+# and it halves the step at most this many times (each halving squares e^{λ·t} once more on
+# the way back out, doubling its rounding: 2^16 of it is 1e-11 of a mode's magnitude)
+GRID_FIRST_TURN = 1.0
+GRID_LEVELS = 16
+
+
+# a call of its own, not inlined into angle_inside: inlined, its code cost high_speed and the
+# reference scene 10 to 16 % of their time, though it never runs there
+@njit(**NUMBERS_ONLY)
+def inside_on_grid(buffers, exact, h, pinion, length):
+    """Whether the pinion angle stays above 0 and below `length` (rad) over the step of h (s)
+    just taken, judged on the grid 0, δ, 2δ, 4δ, ..., h (δ = h/2^K, K the fewest halvings
+    that bring |λ|max·δ to GRID_FIRST_TURN): on each interval, from the angle's values and
+    rates at its ends (the modes' phases, not only their magnitudes), by
+    _interval_low. Right after a switch the angle starts at its interval's start and the
+    fast modes may swing the speed through zero: the fine intervals near the start see the
+    speed carry the angle in before the modes turn; the coarse ones further on need only
+    the angle's margin to exceed what the modes can swing. (tables.modal_slow holds the
+    angle's slow polynomial: _angle_bound.) `buffers`: the tables as pack_tables packs
+    them."""
+    tables = unpack_tables(buffers)
+    count = tables.fast_count[exact]
+    fastest = 0.0
+    for k in range(count):
+        fastest = max(fastest, abs(tables.rates[exact, k]))
+    first, levels = h, 0
+    while first * fastest > GRID_FIRST_TURN and levels < GRID_LEVELS:
+        first *= 0.5
+        levels += 1
+    grid = tables.grid_fast
+    for k in range(count):
+        grid[k] = 1.0
+    start, end = 0.0, first
+    for _ in range(levels + 1):
+        if not _interval_inside(tables, exact, pinion, length, start, end, grid):
+            return False
+        start, end = end, 2.0 * end
+    return True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _interval_inside(tables, exact, pinion, length, start, end, grid):
+    """inside_on_grid on one interval [start, end] (s) of it: whether the angle stays above
+    0 and below `length` there. `grid` holds each mode's e^{λ·start} and is moved on to
+    e^{λ·end} (its square where end = 2·start). A mode that turns through much of a period
+    within the interval (|λ|·δ ≥ √8) is taken out of the ends' values and rates and counted
+    at its magnitude; the others and the slow polynomial bound the curvature."""
+    width = end - start
+    polynomial, degree = tables.modal_slow, tables.slow_count[exact] - 1
+    value0, rate0 = _polynomial_at(polynomial, degree, start)
+    value1, rate1 = _polynomial_at(polynomial, degree, end)
+    curve = 0.0
+    power = 1.0
+    for order in range(2, degree + 1):
+        curve += order * (order - 1) * abs(polynomial[order]) * power
+        power *= end
+    swing = 0.0
+    for k in range(tables.fast_count[exact]):
+        rate = tables.rates[exact, k]
+        at_start = grid[k]
+        if end == 2.0 * start:
+            at_end = at_start * at_start
+        else:
+            exponent, angle = rate.real * end, rate.imag * end
+            decay = math.exp(exponent) if exponent >= UNDERFLOW_EXPONENT else 0.0
+            at_end = complex(decay * math.cos(angle), decay * math.sin(angle))
+        grid[k] = at_end
+        largest = tables.angle_size[exact, k] * tables.start_size[k] * math.sqrt(max(
+            at_start.real * at_start.real + at_start.imag * at_start.imag,
+            at_end.real * at_end.real + at_end.imag * at_end.imag))
+        if (rate.real * rate.real + rate.imag * rate.imag) * width * width >= 8.0:
+            swing += largest
+            continue
+        curve += largest * (rate.real * rate.real + rate.imag * rate.imag)
+        coefficient = tables.fast_right[exact, pinion, k] * tables.start_fast[k]
+        term0, term1 = coefficient * at_start, coefficient * at_end
+        value0, value1 = value0 + term0.real, value1 + term1.real
+        rate0, rate1 = rate0 + (term0 * rate).real, rate1 + (term1 * rate).real
+    return (_interval_low(value0, rate0, value1, rate1, curve, width) > swing
+            and _interval_low(length - value0, -rate0, length - value1, -rate1, curve,
+                              width) > swing)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _interval_low(value0, rate0, value1, rate1, curve, width):
+    """The least a function can be over an interval of `width` with these values and rates
+    at its ends and |f''| ≤ `curve` there: it lies above both parabolas f(a) + f'(a)·s −
+    curve·s²/2 and f(b) − f'(b)·(width − s) − curve·(width − s)²/2, whose difference is linear
+    in s, so the larger of the two is least at an end or where they cross."""
+    lowest = min(value0, value1)
+    slope = rate0 - rate1 - curve * width
+    if slope != 0.0:
+        crossing = -(value0 - value1 + rate1 * width + 0.5 * curve * width * width) / slope
+        if 0.0 < crossing < width:
+            lowest = min(lowest, value0 + (rate0 - 0.5 * curve * crossing) * crossing)
+    return lowest
 
 
 @njit(**NUMBERS_ONLY)
