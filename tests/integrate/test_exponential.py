@@ -470,8 +470,9 @@ def test_the_angle_is_certified_inside_as_far_as_it_stays_there_after_a_switch()
     magnitudes alone (keeps_sign) certified steps of 6 µs to 63 µs where the angle stays
     inside for 13 µs to 2 ms. On the grid of exponential.inside_on_grid, from the angle's
     values and rates (the modes' phases), angle_inside certifies a step exactly where the
-    angle sampled at 201 times stays inside, on 13 lengths from 1 µs to 2 ms after each
-    switch (measured: on every one of 21 such states, 41 lengths and 600 samples each)."""
+    angle sampled at 201 times stays inside, on 13 lengths from 1 µs to 2 ms after each of
+    six switches (measured also on the 21 states of the steps torque_step rejected by 30 ms,
+    41 lengths from 0.2 µs to 2 ms and 600 samples each)."""
     model, scene, stepper, run = shipped_drive("torque_step", "exponential", 0.02, 1e-3)
     torques, states = scene.inputs.at(0.02), 0
     while run.time < 0.03 and states < 6:
