@@ -646,6 +646,17 @@ def _momentum(system, state):
 UNDERFLOW_EXPONENT = -700.0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _exponential(rate, t):
+    """e^{rate·t} of a mode of complex `rate` (1/s) after t (s); 0 where its decay exponent
+    is below UNDERFLOW_EXPONENT."""
+    exponent = rate.real * t
+    if exponent < UNDERFLOW_EXPONENT:
+        return complex(0.0, 0.0)
+    decay, angle = math.exp(exponent), rate.imag * t
+    return complex(decay * math.cos(angle), decay * math.sin(angle))
+
+
 # What an exact step's certificate says (`step`; walk.control_exact_step acts on it)
 CERTIFIED = 0  # no event function can cross zero inside the step unseen by its ends
 PHASE_SURE = 1  # no phase event function can; a point's approach may (a landing, a lift-off)
@@ -793,20 +804,16 @@ def _interval_inside(tables, exact, pinion, length, start, end, grid):
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
         at_start = grid[k]
-        if end == 2.0 * start:
-            at_end = at_start * at_start
-        else:
-            exponent, angle = rate.real * end, rate.imag * end
-            decay = math.exp(exponent) if exponent >= UNDERFLOW_EXPONENT else 0.0
-            at_end = complex(decay * math.cos(angle), decay * math.sin(angle))
+        at_end = at_start * at_start if end == 2.0 * start else _exponential(rate, end)
         grid[k] = at_end
         largest = tables.angle_size[exact, k] * tables.start_size[k] * math.sqrt(max(
             at_start.real * at_start.real + at_start.imag * at_start.imag,
             at_end.real * at_end.real + at_end.imag * at_end.imag))
-        if (rate.real * rate.real + rate.imag * rate.imag) * width * width >= 8.0:
+        size_squared = rate.real * rate.real + rate.imag * rate.imag
+        if size_squared * width * width >= 8.0:
             swing += largest
             continue
-        curve += largest * (rate.real * rate.real + rate.imag * rate.imag)
+        curve += largest * size_squared
         coefficient = tables.fast_right[exact, pinion, k] * tables.start_fast[k]
         term0, term1 = coefficient * at_start, coefficient * at_end
         value0, value1 = value0 + term0.real, value1 + term1.real
@@ -933,12 +940,8 @@ def _angle_at(tables, exact, pinion, degree, t):
     value, slope = _polynomial_at(tables.modal_slow, degree, t)
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
-        exponent = rate.real * t
-        if exponent < UNDERFLOW_EXPONENT:
-            continue
-        decay, angle = math.exp(exponent), rate.imag * t
         mode = (tables.fast_right[exact, pinion, k] * tables.start_fast[k]
-                * complex(decay * math.cos(angle), decay * math.sin(angle)))
+                * _exponential(rate, t))
         value += mode.real
         slope += (mode * rate).real
     return value, slope
@@ -1087,14 +1090,7 @@ def _fast_modes(tables, exact, h):
         size = tables.start_size[k]
         speed_swing += tables.speed_size[exact, k] * size
         approach_swing += tables.approach_size[exact, k] * size
-        rate = rates[exact, k]
-        exponent = rate.real * h
-        if exponent < UNDERFLOW_EXPONENT:
-            modal_fast[k] = 0.0
-        else:
-            decay, angle = math.exp(exponent), rate.imag * h
-            modal_fast[k] = start_fast[k] * complex(decay * math.cos(angle),
-                                                    decay * math.sin(angle))
+        modal_fast[k] = start_fast[k] * _exponential(rates[exact, k], h)
     return speed_swing, approach_swing
 
 
