@@ -37,7 +37,7 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
 
 
 def simulate_with_progress(scene, stop_time=None, output_interval=None, tolerance=None,
-                           reference=False, progress=True) -> dict:
+                           reference=False, progress=True, on_ready=None) -> dict:
     """herringbone.simulate (or with `reference` reference_simulate) with a progress bar on
     stderr, and a note there before the integrator is compiled (once per machine).
 
@@ -53,6 +53,10 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         Run the scipy reference instead of the compiled integrator.
     progress : bool
         Show the bar.
+    on_ready : callable or None
+        Called with no arguments once the integrator is ready to step: for the compiled one,
+        the model's tables built and its compiled loop loaded (compiled the first time), so
+        that a caller can tell that start from the stepping.
 
     Returns
     -------
@@ -66,16 +70,23 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     if reference:
         tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
         check_reference_run(scene, stop_time, output_interval, tolerance)
+        if on_ready is not None:
+            on_ready()
         with progress_bar(stop, f"run {scene.name}", progress) as bar:
             return checked_reference_run(scene, stop_time, output_interval, tolerance,
                                          wrap=lambda stepper: _watched(stepper, bar, scene))[0]
-    from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+    from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up_sampled
+    from ..integrate.contract import start_position
     from ..integrate.first_start import announce_compiles
 
     tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
     check_compiled_run(scene, stop_time, output_interval, tolerance)
     announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
-    stepper = CompiledStepper(GearTrainModel(scene), tolerance)
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, tolerance)
+    if on_ready is not None:
+        warm_up_sampled(stepper, start_position(model, scene.inputs.at(0.0)[0]))
+        on_ready()
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         return simulate_with(ProgressStepper(stepper, bar), scene, stop_time, output_interval)
 

@@ -440,6 +440,16 @@ def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
     return time.perf_counter() - started if compiled else None
 
 
+def warm_up_sampled(stepper: CompiledStepper, position: Position) -> None:
+    """Load the compiled loop that herringbone.simulate runs (CompiledStepper.sample, through
+    `advance`), as warm_up loads run_to's: by a run of a nanosecond from `position`, whose
+    steps the stepper does not count."""
+    steps = stepper.accepted_steps
+    stepper.advance(position, position.time + 1e-9, (0.0, 0.0), [position.time],
+                    lambda t, outputs: None)
+    stepper.accepted_steps = steps
+
+
 def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
              method="auto", max_step=math.inf):
     """Simulate a scene with the compiled integrator, what the FMU runs (reference_simulate's
