@@ -55,8 +55,9 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         Show the bar.
     on_ready : callable or None
         Called with no arguments once the integrator is ready to step: for the compiled one,
-        the model's tables built and its compiled loop loaded (compiled the first time), so
-        that a caller can tell that start from the stepping.
+        the model's tables built and its compiled loop loaded (compiled the first time), and
+        the bar up (importing tqdm takes milliseconds), so that a caller can tell that start
+        from the stepping.
 
     Returns
     -------
@@ -70,9 +71,9 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     if reference:
         tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
         check_reference_run(scene, stop_time, output_interval, tolerance)
-        if on_ready is not None:
-            on_ready()
         with progress_bar(stop, f"run {scene.name}", progress) as bar:
+            if on_ready is not None:
+                on_ready()
             return checked_reference_run(scene, stop_time, output_interval, tolerance,
                                          wrap=lambda stepper: _watched(stepper, bar, scene))[0]
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up_sampled
@@ -86,8 +87,9 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     stepper = CompiledStepper(model, tolerance)
     if on_ready is not None:
         warm_up_sampled(stepper, start_position(model, scene.inputs.at(0.0)[0]))
-        on_ready()
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
+        if on_ready is not None:
+            on_ready()
         return simulate_with(ProgressStepper(stepper, bar), scene, stop_time, output_interval)
 
 
