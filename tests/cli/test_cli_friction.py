@@ -229,6 +229,25 @@ def test_the_compiled_run_shows_progress_and_keeps_its_numbers(capsys):
     assert "s simulated" in capsys.readouterr().err
 
 
+def test_the_run_with_its_bar_samples_into_an_array_as_simulate_does(monkeypatch, capsys):
+    """simulate_with_progress takes herringbone.simulate's way, the samples written into an
+    array by the compiled calls, not handed one by one to a callback as dicts (3.3 µs a
+    sample more: a simulated second of the reference scene took 0.047 s that way, 0.014 s
+    this way): with CompiledStepper.advance, the callback's way, refused, it still runs,
+    and its bar reaches the end."""
+    from herringbone.analysis.run_progress import simulate_with_progress
+    from herringbone.integrate.compiled_stepper import CompiledStepper
+
+    def refused(*arguments, **keywords):
+        raise AssertionError("the samples went the callback's way")
+
+    monkeypatch.setattr(CompiledStepper, "advance", refused)
+    scene = herringbone.load_scene("reference")
+    result = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4)
+    assert len(result["time"]) == 21
+    assert "0.002/0.002 s simulated" in capsys.readouterr().err
+
+
 def test_run_tells_its_start_from_its_stepping(tmp_path, capsys):
     """A short run's wall time is mostly its start (the model's tables, the compiled code
     loaded: 0.2 s on the project's machine), which a rate over the whole would charge to the

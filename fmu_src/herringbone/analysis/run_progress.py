@@ -1,7 +1,9 @@
 """A progress bar (progress_bar.py: simulated seconds done, time left) over any stepper's run.
 
 `ProgressStepper` wraps a stepper (stepping.ScipyStepper, compiled_stepper.CompiledStepper) and only
-watches the samples it hands out, so a run with it gives the same numbers to the bit.
+watches the samples it hands out, so a run with it gives the same numbers to the bit;
+`SampledProgressStepper` wraps the compiled one on herringbone.simulate's own way, samples into
+an array, the bar moved after each compiled call.
 """
 from __future__ import annotations
 
@@ -27,6 +29,20 @@ class ProgressStepper:
             self._bar.update(t - self._bar.n)
 
         return self._stepper.advance(position, end, torques, sample_times, watched)
+
+
+class SampledProgressStepper(ProgressStepper):
+    """A ProgressStepper over compiled_stepper.CompiledStepper that also samples into an array,
+    so that simulate_with takes herringbone.simulate's way (the same numbers to the bit), the
+    bar moved after each compiled call of SAMPLES_PER_CALL samples. Handing every sample to a
+    callback as a dict cost 3.3 µs a sample: a simulated second of the reference scene at its
+    output interval of 0.1 ms took 0.047 s that way, 0.014 s this way."""
+
+    def advance_sampled(self, position, end, torques, times, rows):
+        """The wrapped stepper's advance_sampled, the bar moved on after each compiled call."""
+        return self._stepper.advance_sampled(position, end, torques, times, rows,
+                                             on_progress=lambda t: self._bar.update(
+                                                 t - self._bar.n))
 
 
 def reference_simulate_with_progress(scene, stop_time=None, output_interval=None,
@@ -90,7 +106,8 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready()
-        return simulate_with(ProgressStepper(stepper, bar), scene, stop_time, output_interval)
+        return simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
+                             output_interval)
 
 
 def _watched(stepper, bar, scene) -> ProgressStepper:

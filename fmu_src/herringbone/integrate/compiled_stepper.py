@@ -407,25 +407,29 @@ class CompiledStepper:
         return self.position(run)
 
     def advance_sampled(self, position: Position, end: float, torques: tuple[float, float],
-                        times: np.ndarray, rows: np.ndarray) -> Position:
+                        times: np.ndarray, rows: np.ndarray, on_progress=None) -> Position:
         """Integrate to `end`; rows[k] gets the outputs (model.output_layout) at times[k]
         (rising, in [position.time, end)), SAMPLES_PER_CALL at a time in one compiled call
-        (`sample`)."""
+        (`sample`); on_progress(t), if given, after each call with the time it reached (s)."""
         run = self.start(position)
-        self._sample_in_calls(run, times, rows, end, torques)
+        self._sample_in_calls(run, times, rows, end, torques, on_progress=on_progress)
         return self.position(run)
 
     def _sample_in_calls(self, run: Run, times: np.ndarray, rows: np.ndarray | None,
-                         end: float, torques: tuple[float, float], on_sample=None) -> None:
+                         end: float, torques: tuple[float, float], on_sample=None,
+                         on_progress=None) -> None:
         """`sample` over SAMPLES_PER_CALL times at a time, each call ending at the next one's
         first time (so that a run sampled with a callback and one sampled into an array take
-        the same steps): into `rows`, or where None, into rows of scratch."""
+        the same steps): into `rows`, or where None, into rows of scratch; on_progress(t), if
+        given, after each call."""
         scratch = np.empty((min(len(times), SAMPLES_PER_CALL), len(run.outputs)))
         for first in range(0, max(len(times), 1), SAMPLES_PER_CALL):
             chunk, after = times[first:first + SAMPLES_PER_CALL], first + SAMPLES_PER_CALL
             self.sample(run, chunk, scratch[:len(chunk)] if rows is None else rows[first:after],
                         times[after] if after < len(times) else end, torques,
                         on_sample=on_sample)
+            if on_progress is not None:
+                on_progress(run.time)
 
 
 def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
