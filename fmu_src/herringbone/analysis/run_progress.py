@@ -92,7 +92,7 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
                 on_ready()
             return checked_reference_run(scene, stop_time, output_interval, tolerance,
                                          wrap=lambda stepper: _watched(stepper, bar, scene))[0]
-    from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up_sampled
+    from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..integrate.contract import start_position
     from ..integrate.first_start import announce_compiles
 
@@ -102,7 +102,7 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, tolerance)
     if on_ready is not None:
-        warm_up_sampled(stepper, start_position(model, scene.inputs.at(0.0)[0]))
+        warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready()

@@ -77,17 +77,20 @@ def execute(args, parser) -> int:
                             SUFFIXES)
     if args.plot:
         require("matplotlib", "--plot")
-    started, ready = time.perf_counter(), []
+    started, start_time = time.perf_counter(), []
+
+    def ready():
+        start_time.append(time.perf_counter() - started)
+
+    # (the scipy reference has no compiled code to load: its start is not told apart)
     results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
                                      tolerance=tolerance, reference=args.reference,
                                      progress=not args.no_progress,
-                                     on_ready=lambda: ready.append(time.perf_counter()))
+                                     on_ready=None if args.reference else ready)
     wall = time.perf_counter() - started
     write_csv(results, output)
     integrator = "the scipy reference" if args.reference else "the compiled integrator"
-    # (the scipy reference has no compiled code to load: its start is the model alone)
-    start = None if args.reference else ready[0] - started
-    print(summary(scene, results, wall, integrator, start))
+    print(summary(scene, results, wall, integrator, start_time[0] if start_time else None))
     print(f"outputs written to {output}")
     if args.plot:
         from ..analysis.run_report import plot_run

@@ -432,26 +432,24 @@ class CompiledStepper:
                 on_progress(run.time)
 
 
-def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
-    """Load the compiled loop before the first step (from the cache, or by compiling it the
-    first time); returns the seconds spent compiling, or None if it came from the cache."""
+def warm_up(stepper: CompiledStepper, position: Position, sampled: bool = False
+            ) -> float | None:
+    """Load a compiled loop before the first step (from the cache, or by compiling it the
+    first time): run_to's, the one the FMU and the sweeps run (an FMU never runs the sampled
+    one), or with `sampled` the one herringbone.simulate runs (CompiledStepper.sample), by a
+    run of a nanosecond from `position` whose steps the stepper does not count; returns the
+    seconds spent compiling, or None if it came from the cache."""
     started = time.perf_counter()
     steps = stepper.accepted_steps
-    # run_to's kernel, the one the FMU and the sweeps run (an FMU never runs the sampled one)
-    stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
+    if sampled:
+        stepper.advance(position, position.time + 1e-9, (0.0, 0.0), [position.time],
+                        lambda t, outputs: None)
+    else:
+        stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
     stepper.accepted_steps = steps
-    compiled = any(walk.advance.stats.cache_misses.values())
+    loop = walk.advance_sampled if sampled else walk.advance
+    compiled = any(loop.stats.cache_misses.values())
     return time.perf_counter() - started if compiled else None
-
-
-def warm_up_sampled(stepper: CompiledStepper, position: Position) -> None:
-    """Load the compiled loop that herringbone.simulate runs (CompiledStepper.sample, through
-    `advance`), as warm_up loads run_to's: by a run of a nanosecond from `position`, whose
-    steps the stepper does not count."""
-    steps = stepper.accepted_steps
-    stepper.advance(position, position.time + 1e-9, (0.0, 0.0), [position.time],
-                    lambda t, outputs: None)
-    stepper.accepted_steps = steps
 
 
 def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLERANCE,
