@@ -618,42 +618,6 @@ def test_the_modal_solution_gives_the_phase_event_to_rounding(reference_model):
         assert exponential.modal_phase_event_ahead(*arguments, 1e-3 * ahead)[0] == np.inf
 
 
-def test_the_approach_rate_of_the_modal_solution_is_the_equations(reference_model):
-    """exponential.approach_rate_after, which the event location's Newton estimates take in
-    an exact segment: after exact evaluations of 0.01 to 1 ms from four states of the
-    reference scene, in their contact set with every point loaded and with none (the gears
-    then drift apart, the slow part of the motion), the rate of the approach's modal solution
-    at the evaluation's end is every point's approach rate from the equations there
-    (equations.approach_rates of `derivative`; 5.7e-5 to 3.2 m/s) within 1e-11 of the
-    largest and 1e-12 m/s (measured 2.9e-14 m/s; loaded, the points differ by their lever
-    arms times the tilt, zero to rounding in an exact segment)."""
-    from herringbone.integrate.compiled import equations
-
-    model, torques = reference_model, (500.0, 1800.0)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
-    size = len(start_position(model, torques[0]).state)
-    end, rate = np.empty(size), np.empty(size)
-    expected = np.empty(stepper.tables.shape[2])
-    compared = 0
-    for position, loaded_form, _ in states_inside_intervals(stepper, torques):
-        interval = position.segment.contact_set.index
-        points, count = stepper.tables[interval], int(stepper.counts[interval])
-        for variant, load in ((exponential.ALL_LOADED, 1.0), (exponential.NONE_LOADED, 0.0)):
-            exact = loaded_form - exponential.ALL_LOADED + variant
-            for h in (1e-5, 1e-4, 1e-3):
-                exponential.state_after(model.system, stepper.exact_buffers, exact,
-                                        position.state, *torques, h, end)
-                modal = exponential.approach_rate_after(stepper.exact_buffers, exact)
-                equations.derivative(model.system, points, count, np.full(count, load),
-                                     *torques, end, rate)
-                equations.approach_rates(model.system, points, count, end, rate, expected)
-                largest = np.abs(expected[:count]).max()
-                assert np.abs(expected[:count]).min() > 1e-5
-                assert np.abs(expected[:count] - modal).max() <= max(1e-11 * largest, 1e-12)
-                compared += 1
-    assert compared == 24
-
-
 @pytest.mark.parametrize("name", ["reference", "jump_resonance"])
 def test_the_modal_phase_event_is_a_smooth_function_of_the_state(name):
     """Along a line of states (steps of 1e-12 of the state scales) from four states of a run,

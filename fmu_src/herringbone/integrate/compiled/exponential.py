@@ -1080,28 +1080,6 @@ def approach_monotone(buffers, exact, h):
                        swing, sign, at_start, at_end, True)
 
 
-@njit(**NUMBERS_ONLY)
-def approach_rate_after(buffers, exact):
-    """The rate (m/s) of a point's approach at the end of the exact evaluation just made
-    (`step` or `state_after`: the tables' modal state at its end): the fast modes' rows times
-    their eigenvalues, and the slow block applied to the slow coordinates. In an exact
-    segment every point's approach is this one function to the tilt's rounding (_approach),
-    so the event location's Newton estimates take it instead of the equations' rate.
-    `buffers`: the tables as pack_tables packs them."""
-    tables = unpack_tables(buffers)
-    rate = 0.0
-    for k in range(tables.fast_count[exact]):
-        rate += (tables.approach_fast[exact, k] * tables.rates[exact, k]
-                 * tables.modal_fast[k]).real
-    slow_count = tables.slow_count[exact]
-    for i in range(slow_count):
-        total = 0.0
-        for j in range(slow_count):
-            total += tables.slow[exact, i, j] * tables.modal_slow[j]
-        rate += tables.approach_slow[exact, i] * total
-    return rate
-
-
 @njit(cache=True, error_model="numpy", inline="always")
 def _fast_modes(tables, exact, h):
     """Propagate the fast coordinates of the step's start over h into tables.modal_fast.

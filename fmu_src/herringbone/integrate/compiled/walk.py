@@ -443,19 +443,6 @@ def _exact_monotone(workspace, segment, h):
         workspace.exact, segment.exact, h)
 
 
-def exact_approach_rate(workspace, segment):
-    """exponential.approach_rate_after on the workspace's tables where it is the exponential
-    method's (the segment exact); never called in the others'."""
-
-
-@overload(exact_approach_rate, inline="always")
-def _exact_approach_rate(workspace, segment):
-    if _lacks(workspace, "exact"):
-        return lambda workspace, segment: math.nan
-    return lambda workspace, segment: exponential.approach_rate_after(workspace.exact,
-                                                                      segment.exact)
-
-
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
                       horizon):
     """exponential.modal_phase_event_ahead on the workspace's tables where it is the exponential
@@ -597,15 +584,6 @@ def phase_event_ahead(system, state, rate, length):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def rate_at_start(system, segment, state, rate):
-    """The rate at the step's start `state` into `rate`, where begin_segment left it not
-    taken (NaN)."""
-    if math.isnan(rate[0]):
-        derivative(system, segment.points, segment.point_count, segment.loaded,
-                   segment.motor_torque, segment.load_torque, state, rate)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def event_ahead(system, segment, state, workspace, rate, explicit):
     """When (s from now) the next phase event is predicted, for the step to be aimed just
     past it (plan_step), and whether that is the modal solution's crossing itself: for the
@@ -620,7 +598,6 @@ def event_ahead(system, segment, state, workspace, rate, explicit):
             return ahead, True
         if aim == exponential.NEAR:
             return ahead, False
-        rate_at_start(system, segment, state, rate)
         if aim == exponential.BOUND:
             # (the ringing often sends phase_event_ahead to inf, which no step is aimed at:
             # an opening step grown to milliseconds then crossed the event early on)
@@ -1046,18 +1023,12 @@ def finish_step(state, workspace):
 def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
     """The CompiledSegment of contact interval `interval` (segment_of), with the rate, event
     values and (where contact can be lost) approach slopes at `state`, its start, in the
-    workspace. In an exact segment where contact cannot be lost only a phase event's
-    prediction from φp's acceleration reads the rate (event_ahead), and a step aimed at the
-    modal solution's crossing needs none: there it is marked not taken (NaN), for
-    rate_at_start to take where it is read."""
+    workspace."""
     segment = segment_of(system, mesh, interval, loaded, torques,
                          exact_form(workspace, interval, mesh.counts[interval], loaded, state))
     rate, values = workspace.vectors[Vector.RATE], workspace.values
-    if segment.exact >= 0 and not system.contact_loss:
-        rate[0] = math.nan
-    else:
-        derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1],
-                   state, rate)
+    derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
+               rate)
     event_values(system, segment, state, values[Values.APPROACH], values[Values.BEFORE])
     if system.contact_loss:
         approach_rates(system, segment.points, segment.point_count, state, rate,
@@ -1193,15 +1164,10 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
 @njit(cache=True, error_model="numpy", inline="always")
 def event_slope(system, segment, state, workspace, event):
     """The rate of event function `event` at `state`: φp's (in the state) for a phase event,
-    the point's approach rate (equations.approach_rates; m/s) for a contact; in an exact
-    segment, where `state` is the end of the exact evaluation just made (a trial step), the
-    rate of the approach's modal solution (exponential.approach_rate_after), without the
-    equations. The workspace's RATE_AFTER and APPROACH rows serve as scratch: the location
-    needs neither."""
+    the point's approach rate (equations.approach_rates; m/s) for a contact. The workspace's
+    RATE_AFTER and APPROACH rows serve as scratch: the location needs neither."""
     if event < Event.CONTACT:
         return state[state.shape[0] // 2 + system.pinion]
-    if segment.exact >= 0:
-        return exact_approach_rate(workspace, segment)
     rate, slopes = workspace.vectors[Vector.RATE_AFTER], workspace.values[Values.APPROACH]
     derivative(system, segment.points, segment.point_count, segment.loaded,
                segment.motor_torque, segment.load_torque, state, rate)
@@ -1466,7 +1432,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         counters[Counter.OPENING] = -1
         workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
-        rate_after_step(system, segment, explicit, rows, event, certified)
+        rate_after_step(system, segment, explicit, rows)
         if system.contact_loss:
             event, high = grazing_probe(system, segment, settings, state, workspace,
                                         plan.h_step, event, certified)
@@ -1532,17 +1498,12 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def rate_after_step(system, segment, explicit, rows, event, certified):
+def rate_after_step(system, segment, explicit, rows):
     """The rate at an accepted step's end (NEW_STATE) into RATE_AFTER: DOP853's last stage
-    where it took the step, else the equations there. Not taken after an exact step that
-    crossed `event` (−1: none) where nothing reads it: the location's trials start from the
-    step's start, the next segment takes its own rate (begin_segment), and only where contact
-    can be lost do the grazing check of a step not `certified` and a contact event's slopes
-    use it (grazing_probe). One evaluation of the equations an event on high_speed."""
+    where it took the step, else the equations there."""
     if explicit and segment.exact < 0:
         copy_into(rows.rate_after, rows.last_stage)
-    elif segment.exact < 0 or event < 0 or (
-            system.contact_loss and not (certified and event < Event.CONTACT)):
+    else:
         derivative(system, segment.points, segment.point_count, segment.loaded,
                    segment.motor_torque, segment.load_torque, rows.new_state, rows.rate_after)
 
