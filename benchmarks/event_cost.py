@@ -7,10 +7,10 @@ printed are its located events per simulated second, its CPU µs per event and e
 evaluations (accepted, rejected and trial steps) per event, and the µs per event that the
 bar of issue 24 (0.01 CPU s per simulated s) allows. Beside them, in compiled loops from a
 state inside an exact segment of that run (its points loaded or not, as the last column
-says; each call from a new start: the product by L again), the CPU µs of
+says), the CPU µs of
 
-- the opening aim (exponential.modal_phase_event_ahead: where the angle's modal solution
-  leaves the contact interval, by Newton's method),
+- the opening aim from a new start (exponential.modal_phase_event_ahead: the product by L,
+  and where the angle's modal solution leaves the contact interval, by Newton's method),
 - the aim and the exact step just past the crossing it finds (exponential.step): the two
   computations an event of a phase switch cannot do without,
 - an exact step from a start whose modal coordinates are kept (an event location's trial),
@@ -57,8 +57,8 @@ def loop_cost(scene, stepper, span, repeats):
 
 
 def exact_state_inside(scene, stepper, span):
-    """(state, exact form's index, interval length in rad, loaded sign) of the run at the
-    first of a few times in `span` where its segment is exact."""
+    """(state, exact form's index, interval length in rad, loaded sign: +1 or −1, contact
+    interval) of the run at the first of a few times in `span` where its segment is exact."""
     from herringbone.integrate.compiled import exponential
     from herringbone.integrate.contract import start_position
 
@@ -84,13 +84,12 @@ def call_costs(scene, stepper, span, calls):
     points, count = stepper.tables[interval], int(stepper.counts[interval])
     loaded = np.full(count, 1.0 if sign > 0.0 else 0.0)
     out, rate, slopes = np.empty_like(state), np.empty_like(state), np.empty(points.shape[1])
-    aim, aim_and_step, kept_step, rates = _kernels()
-    contact_loss = bool(system.contact_loss)
+    aim, exact_steps, rates = _kernels()
+    stepping = (system, buffers, exact, state, motor, load, length, bool(system.contact_loss),
+                sign, out)
     cases = {"aim": (aim, (system, buffers, exact, state, motor, load, length)),
-             "aim and step": (aim_and_step, (system, buffers, exact, state, motor, load, length,
-                                             contact_loss, sign, out)),
-             "step, kept start": (kept_step, (system, buffers, exact, state, motor, load,
-                                              length, contact_loss, sign, out)),
+             "aim and step": (exact_steps, (*stepping, True)),
+             "step, kept start": (exact_steps, (*stepping, False)),
              "rate": (rates, (system, points, count, loaded, motor, load, state, rate, slopes,
                               False)),
              "rate and approach rates": (rates, (system, points, count, loaded, motor, load,
@@ -123,24 +122,17 @@ def _kernels():
         return total
 
     @njit
-    def aim_and_step(system, buffers, exact, state, motor, load, length, contact_loss, sign,
-                     out, count):
-        total = 0.0
-        for _ in range(count):
-            state[0] += 1e-15
-            ahead = exponential.modal_phase_event_ahead(system, buffers, exact, state, motor,
-                                                        load, length, 1.0)[0]
-            h = ahead * (1.0 + 1e-12) if math.isfinite(ahead) else 1e-5
-            total += exponential.step(system, buffers, exact, state, motor, load, h,
-                                      contact_loss, sign, length, out) + out[0]
-        return total
-
-    @njit
-    def kept_step(system, buffers, exact, state, motor, load, length, contact_loss, sign, out,
-                  count):
+    def exact_steps(system, buffers, exact, state, motor, load, length, contact_loss, sign,
+                    out, aimed, count):
         total = 0.0
         for k in range(count):
-            h = 1e-5 * (1.0 + 1e-3 * (k & 7))  # the start kept, the time new
+            if aimed:  # from a new start, aimed just past the crossing
+                state[0] += 1e-15
+                ahead = exponential.modal_phase_event_ahead(system, buffers, exact, state,
+                                                            motor, load, length, 1.0)[0]
+                h = ahead * (1.0 + 1e-12) if math.isfinite(ahead) else 1e-5
+            else:  # the start kept, the time new
+                h = 1e-5 * (1.0 + 1e-3 * (k & 7))
             total += exponential.step(system, buffers, exact, state, motor, load, h,
                                       contact_loss, sign, length, out) + out[0]
         return total
@@ -157,7 +149,7 @@ def _kernels():
             total += rate[1] + slopes[0]
         return total
 
-    return aim, aim_and_step, kept_step, rates
+    return aim, exact_steps, rates
 
 
 def main(argv=None) -> int:
