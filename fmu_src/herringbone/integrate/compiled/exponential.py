@@ -104,7 +104,7 @@ TILT_SEEN = 1e-6
 PREDICTION_ITERATIONS = 8
 PREDICTION_PRECISION = 1e-9
 PREDICTION_SPREAD = 0.01
-# Newton's iterations on the whole modal solution of the pinion angle (_angle_crossing), and
+# Newton's iterations on the whole modal solution of the pinion angle (_modal_crossing), and
 # the relative change at which they stop. The step is aimed past the crossing by the event
 # location's tolerance, some 1e-10 of the time to it (walk.first_estimate); Newton's error
 # squares at each iteration (on the reference scene 3e-2, 2e-5, 1e-11 of the time), so the
@@ -848,7 +848,7 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     angle (moving forward), or minus it below zero (moving back), by Newton's method; inf
     where it stands still or turns back first, or where it surely stays inside until
     `horizon` (s: the call's end, which the step will not pass). From there Newton's method
-    on the angle's whole modal solution (_angle_crossing) finds the crossing itself
+    on the angle's whole modal solution (_modal_crossing) finds the crossing itself
     (CROSSING); where it does not converge, the time found first is returned as NEAR where
     the swing is no more than PREDICTION_SPREAD of the way, else as a BOUND only (a
     torsional mode swinging the angle, as in torque_step, makes a step aimed there overshoot
@@ -871,9 +871,27 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     ahead = _polynomial_root(terms, degree, target)
     if ahead == math.inf:
         return ahead, near
-    crossing = _angle_crossing(tables, exact, pinion, degree, length if forward else 0.0,
-                               forward, ahead)
+    crossing = _modal_crossing(tables, exact, tables.fast_right[exact, pinion], degree,
+                               length if forward else 0.0, forward, ahead, ahead)
     return (crossing, CROSSING) if crossing > 0.0 else (ahead, near)
+
+
+@njit(**NUMBERS_ONLY)
+def approach_crossing(system, buffers, exact, state, motor_torque, load_torque, high, rising,
+                      guess):
+    """Where (s from `state`) a point's approach crosses zero, `rising` (a landing) or falling
+    (a lift-off), inside a step to `high` (s) that crossed it, in the segment of exact form
+    `exact` with the torques (N·m) held: Newton's method on the approach's whole modal
+    solution (_modal_crossing) from `guess` (s; from `high` where it lies outside the
+    bracket), a few complex exponentials an iteration where a trial step of the location
+    costs the whole state; −1 where it does not converge. The event location's first
+    estimate (walk.locate_event): its first trial then ends the bracket just past the
+    crossing. `buffers`: the tables as pack_tables packs them."""
+    tables = unpack_tables(buffers)
+    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    degree = _slow_polynomial(tables, exact, tables.approach_slow[exact])
+    return _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0, rising,
+                           high, guess if 0.0 < guess < high else high)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -903,20 +921,21 @@ def _polynomial_at(terms, degree, t):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _angle_crossing(tables, exact, pinion, degree, end, forward, sure):
-    """Where the pinion angle's whole modal solution from the step's start (its slow
-    polynomial of `degree` in tables.modal_slow and its fast modes) reaches `end` (rad), moving
-    `forward` (or back), by Newton's method kept inside [0, `sure`] (s), the time by which it
-    has surely passed it, bisecting where a Newton step would leave that bracket; −1 where it
-    does not converge within CROSSING_ITERATIONS (the angle swung back and forth across
-    `end`). Each iteration is the angle's row of the modes alone, a few complex
-    exponentials. The result is a smooth function of the start to rounding (an angle found
-    on `end` to the bit is the root, not a bracket's end to bisect from): the period map's
-    forward differences read it at 1e-13 of the state's scales."""
+def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess):
+    """Where a function of the state's whole modal solution from the step's start (its slow
+    polynomial of `degree` in tables.modal_slow, its row of the fast modes `rows`: the pinion
+    angle's, a point's approach's) reaches `end`, rising (`forward`) or falling, by Newton's
+    method from `guess` (s) kept inside [0, `sure`] (s), the time by which it has surely
+    passed it, bisecting where a Newton step would leave that bracket; −1 where it does not
+    converge within CROSSING_ITERATIONS (the function swung back and forth across `end`).
+    Each iteration is the function's row of the modes alone, a few complex exponentials.
+    The result is a smooth function of the start to rounding (a value found on `end` to the
+    bit is the root, not a bracket's end to bisect from): the period map's forward
+    differences read the angle's at 1e-13 of the state's scales."""
     low, high = 0.0, sure
-    ahead = sure
+    ahead = guess
     for _ in range(CROSSING_ITERATIONS):
-        value, slope = _angle_at(tables, exact, pinion, degree, ahead)
+        value, slope = _modal_at(tables, exact, rows, degree, ahead)
         value -= end
         if value == 0.0:
             return ahead
@@ -934,14 +953,13 @@ def _angle_crossing(tables, exact, pinion, degree, end, forward, sure):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _angle_at(tables, exact, pinion, degree, t):
-    """The pinion angle (rad) and its rate (rad/s) t s after the step's start, from its slow
-    polynomial (tables.modal_slow, of `degree`) and its fast modes."""
+def _modal_at(tables, exact, rows, degree, t):
+    """A function of the state and its rate (per s) t s after the step's start, from its slow
+    polynomial (tables.modal_slow, of `degree`) and its row of the fast modes `rows`."""
     value, slope = _polynomial_at(tables.modal_slow, degree, t)
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
-        mode = (tables.fast_right[exact, pinion, k] * tables.start_fast[k]
-                * _exponential(rate, t))
+        mode = rows[k] * tables.start_fast[k] * _exponential(rate, t)
         value += mode.real
         slope += (mode * rate).real
     return value, slope

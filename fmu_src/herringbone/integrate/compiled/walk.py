@@ -22,7 +22,8 @@ caller keeps that to a hundredth of the relative tolerance. Every segment theref
 true step of the method, which keeps its order (a step across a switch would drop it to first
 order). Where several events cross inside one step, the earliest is located (trials are judged
 against the bracket's low end, where nothing has crossed yet, and a last trial just before the
-located crossing makes sure no other came first). A point that lifts off and lands again inside
+located crossing makes sure no other came first, but where the points of an exact set cross
+together). A point that lifts off and lands again inside
 one step (or touches and leaves) is caught from the cubic through its approach and approach
 rate at the step's ends (`grazing_suspect`), and looked for by trial steps inside the step
 (`probe_inside`).
@@ -441,6 +442,33 @@ def _exact_monotone(workspace, segment, h):
         return lambda workspace, segment, h: False
     return lambda workspace, segment, h: exponential.approach_monotone(
         workspace.exact, segment.exact, h)
+
+
+def exact_crossing(system, segment, state, workspace, high, estimate):
+    """In an exact segment where the workspace's tables are the exponential method's, where
+    a point's approach crosses zero inside the bracket [0, high] (s) from `state`, from its
+    modal solution (exponential.approach_crossing, from `estimate`); elsewhere, or where
+    that does not converge, `estimate`."""
+
+
+@overload(exact_crossing, inline="always")
+def _exact_crossing(system, segment, state, workspace, high, estimate):
+    if _lacks(workspace, "exact"):
+        return lambda system, segment, state, workspace, high, estimate: estimate
+    return lambda system, segment, state, workspace, high, estimate: modal_crossing_or(
+        system, segment, state, workspace, high, estimate)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def modal_crossing_or(system, segment, state, workspace, high, estimate):
+    """exact_crossing with the exponential method's tables."""
+    if segment.exact < 0:
+        return estimate
+    crossing = exponential.approach_crossing(
+        system, workspace.exact, segment.exact, state, segment.motor_torque,
+        segment.load_torque, high,
+        segment.exact % exponential.VARIANTS == exponential.NONE_LOADED, estimate)
+    return crossing if crossing > 0.0 else estimate
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
@@ -1101,15 +1129,29 @@ def location_tolerance(settings, h_step):
     return max(settings[Setting.EVENT_TIME_TOLERANCE], 1e-14 * h_step)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def points_together(segment, event, before, after):
+    """Whether the crossings from `before` to `after` (event values) are all points' and
+    `event` one of them, in an exact segment: its points' approaches are one function there
+    (to the tilt's rounding; exponential._approach), so they cross together, and no trial
+    just before the located crossing is needed to tell which came first."""
+    return (segment.exact >= 0 and event >= Event.CONTACT
+            and not crosses(before, after, Event.PHASE_END, segment.loaded)
+            and not crosses(before, after, Event.PHASE_START, segment.loaded))
+
+
 @njit(**NUMBERS_ONLY)
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
     by trial steps of the method, to the event time tolerance. The first estimate is the zero
-    of the cubic through the event's values and slopes at the step's ends (first_estimate);
+    of the cubic through the event's values and slopes at the step's ends (first_estimate),
+    for a contact in an exact segment the crossing of the approach's modal solution from
+    there (exact_crossing: its first trial then ends the bracket just past the crossing);
     the next ones Newton's from the latest trial (its slope: event_slope), until a bisection
     takes over (location_estimate). Trials are judged against the bracket's low end, so that
-    of several events crossed the earliest is taken.
+    of several events crossed the earliest is taken (a trial just before the located
+    crossing tells, unless they are points of an exact set: points_together).
     Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
@@ -1125,6 +1167,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
                    else event_slope(system, segment, new_state, workspace, event))
     tolerance = location_tolerance(settings, h_step)
     estimate = first_estimate(system, state, new_state, values, event, high, h_step, tolerance)
+    if event >= Event.CONTACT:
+        estimate = exact_crossing(system, segment, state, workspace, high, estimate)
     for trials in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
         # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
@@ -1137,7 +1181,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
         if high - estimate <= 2.0 * tolerance:
             # located, unless another event that had also crossed by `high` crossed
             # earlier: then a trial just before this crossing says which
-            if crossings(low_values, high_values, segment.events, segment.loaded) == 1:
+            if crossings(low_values, high_values, segment.events, segment.loaded) == 1 or \
+                    points_together(segment, event, low_values, high_values):
                 break
             trial_h = high - 2.0 * tolerance
         else:
