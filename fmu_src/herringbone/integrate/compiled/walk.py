@@ -1130,6 +1130,20 @@ def location_tolerance(settings, h_step):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def location_start(system, segment, state, workspace, event, high, h_step, tolerance):
+    """The first estimate of where `event` crosses inside a step of h_step (s) that crossed
+    it by `high` (s): the zero of the cubic through its values and slopes at the step's ends
+    (first_estimate), and for a contact in an exact segment the crossing of the approach's
+    modal solution from there (exact_crossing: the location's first trial then ends the
+    bracket just past the crossing)."""
+    estimate = first_estimate(system, state, workspace.vectors[Vector.NEW_STATE],
+                              workspace.values, event, high, h_step, tolerance)
+    if event >= Event.CONTACT:
+        return exact_crossing(system, segment, state, workspace, high, estimate)
+    return estimate
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def points_together(segment, event, before, after):
     """Whether the crossings from `before` to `after` (event values) are all points' and
     `event` one of them, in an exact segment: its points' approaches are one function there
@@ -1144,14 +1158,12 @@ def points_together(segment, event, before, after):
 def locate_event(system, segment, settings, state, workspace, event, high, h_step):
     """Locate the crossing of `event` inside the bracket [0, high] of step sizes (s) from
     `state` (NEW_STATE and the AFTER row of values hold the state and event values at `high`),
-    by trial steps of the method, to the event time tolerance. The first estimate is the zero
-    of the cubic through the event's values and slopes at the step's ends (first_estimate),
-    for a contact in an exact segment the crossing of the approach's modal solution from
-    there (exact_crossing: its first trial then ends the bracket just past the crossing);
-    the next ones Newton's from the latest trial (its slope: event_slope), until a bisection
-    takes over (location_estimate). Trials are judged against the bracket's low end, so that
-    of several events crossed the earliest is taken (a trial just before the located
-    crossing tells, unless they are points of an exact set: points_together).
+    by trial steps of the method, to the event time tolerance. The first estimate is
+    location_start's; the next ones Newton's from the latest trial (its slope: event_slope),
+    until a bisection takes over (location_estimate). Trials are judged against the
+    bracket's low end, so that of several events crossed the earliest is taken (a trial just
+    before the located crossing tells, unless they are points of an exact set:
+    points_together).
     Returns (the event; the bracket's high end, s, its state in NEW_STATE)."""
     vectors, values = workspace.vectors, workspace.values
     new_state, trial = vectors[Vector.NEW_STATE], vectors[Vector.TRIAL]
@@ -1166,9 +1178,8 @@ def locate_event(system, segment, settings, state, workspace, event, high, h_ste
     newer_slope = (values[Values.SLOPES_AFTER, event - Event.CONTACT] if event >= Event.CONTACT
                    else event_slope(system, segment, new_state, workspace, event))
     tolerance = location_tolerance(settings, h_step)
-    estimate = first_estimate(system, state, new_state, values, event, high, h_step, tolerance)
-    if event >= Event.CONTACT:
-        estimate = exact_crossing(system, segment, state, workspace, high, estimate)
+    estimate = location_start(system, segment, state, workspace, event, high, h_step,
+                              tolerance)
     for trials in range(MAX_LOCATION_TRIALS):
         # whatever crossed in between crossed together, to the tolerance (written as the
         # trial just before a crossing is placed, high − 2·tolerance, so that one ends it)
