@@ -23,10 +23,9 @@ true step of the method, which keeps its order (a step across a switch would dro
 order). Where several events cross inside one step, the earliest is located (trials are judged
 against the bracket's low end, where nothing has crossed yet, and a last trial just before the
 located crossing makes sure no other came first, but where the points of an exact set cross
-together). A point that lifts off and lands again inside
-one step (or touches and leaves) is caught from the cubic through its approach and approach
-rate at the step's ends (`grazing_suspect`), and looked for by trial steps inside the step
-(`probe_inside`).
+together). A point that lifts off and lands again inside one step (or touches and leaves) is
+caught from the cubic through its approach and approach rate at the step's ends
+(`grazing_suspect`), and looked for by trial steps inside the step (`probe_inside`).
 
 What follows an event (`next_segment`): the loaded points of the segment are decided by the
 sign of their approach, all of them, whatever the event was. So a point that crossed in the
