@@ -573,10 +573,13 @@ def test_the_host_s_communication_step_does_not_change_the_run(name):
                        model) <= 1e-6
 
 
-def interval_left(stepper, position, torques, by, halvings=30):
-    """When (s after `position`) the run leaves its contact interval, found by bisection on
-    exact runs to 2^-`halvings` of `by` (s), by which it must have left it."""
+def interval_left(stepper, position, torques, by, halvings=30, changed=None):
+    """When (s after `position`) the run leaves its contact interval (or, given, when
+    changed(stepper, position, torques, h) first holds), found by bisection on exact runs to
+    2^-`halvings` of `by` (s), by which it must have happened."""
     def left(h):
+        if changed is not None:
+            return changed(stepper, position, torques, h)
         moved = stepper.advance(position, position.time + h, torques)
         return moved.segment.contact_set.index != position.segment.contact_set.index
     low, high = 0.0, by
@@ -639,13 +642,11 @@ def test_the_modal_solution_gives_a_lift_off_and_a_landing_to_rounding():
     stepper = CompiledStepper(model, 1e-7, "exponential")
     position, checked = stepper.advance(start_position(model, torques[0]), 0.01, torques), 0
     while checked < 6:
-        low, high = 0.0, 2e-5  # the next event, by doubling then bisection
-        while not contact_changed(stepper, position, torques, high):
-            low, high = high, 2.0 * high
-        for _ in range(45):
-            middle = 0.5 * (low + high)
-            low, high = (low, middle) if contact_changed(stepper, position, torques,
-                                                          middle) else (middle, high)
+        by = 2e-5  # the next event, by doubling then bisection
+        while not contact_changed(stepper, position, torques, by):
+            by *= 2.0
+        high = interval_left(stepper, position, torques, by, halvings=46,
+                             changed=contact_changed)
         after = stepper.advance(position, position.time + high, torques)
         if after.segment.contact_set.index == position.segment.contact_set.index:
             interval = position.segment.contact_set.index

@@ -159,7 +159,7 @@ class ExactTables(NamedTuple):
     start_fast: np.ndarray  # (F,) complex
     start_size: np.ndarray  # (F,)
     modal_slow: np.ndarray  # (S,): the coordinates at the step's end (or the polynomial of
-    #                         modal_phase_event_ahead)
+    #                         modal_phase_event_ahead, approach_crossing)
     modal_fast: np.ndarray  # (F,) complex
     grid_fast: np.ndarray  # (F,) complex: e^{λ·t} at a point of inside_on_grid's grid
     series: np.ndarray  # (2, S): the slow block's series

@@ -443,31 +443,21 @@ def _exact_monotone(workspace, segment, h):
         workspace.exact, segment.exact, h)
 
 
-def exact_crossing(system, segment, state, workspace, high, estimate):
-    """In an exact segment where the workspace's tables are the exponential method's, where
-    a point's approach crosses zero inside the bracket [0, high] (s) from `state`, from its
-    modal solution (exponential.approach_crossing, from `estimate`); elsewhere, or where
-    that does not converge, `estimate`."""
+def exact_crossing(system, segment, state, workspace, high, guess):
+    """exponential.approach_crossing on the workspace's tables where it is the exponential
+    method's (the segment exact): where a point's approach crosses zero inside the bracket
+    [0, high] (s) from `state`, by Newton's method from `guess` (s); −1 where that does not
+    converge, and in the others'."""
 
 
 @overload(exact_crossing, inline="always")
-def _exact_crossing(system, segment, state, workspace, high, estimate):
+def _exact_crossing(system, segment, state, workspace, high, guess):
     if _lacks(workspace, "exact"):
-        return lambda system, segment, state, workspace, high, estimate: estimate
-    return lambda system, segment, state, workspace, high, estimate: modal_crossing_or(
-        system, segment, state, workspace, high, estimate)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def modal_crossing_or(system, segment, state, workspace, high, estimate):
-    """exact_crossing with the exponential method's tables."""
-    if segment.exact < 0:
-        return estimate
-    crossing = exponential.approach_crossing(
+        return lambda system, segment, state, workspace, high, guess: -1.0
+    return lambda system, segment, state, workspace, high, guess: exponential.approach_crossing(
         system, workspace.exact, segment.exact, state, segment.motor_torque,
         segment.load_torque, high,
-        segment.exact % exponential.VARIANTS == exponential.NONE_LOADED, estimate)
-    return crossing if crossing > 0.0 else estimate
+        segment.exact % exponential.VARIANTS == exponential.NONE_LOADED, guess)
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
@@ -1134,12 +1124,13 @@ def location_start(system, segment, state, workspace, event, high, h_step, toler
     it by `high` (s): the zero of the cubic through its values and slopes at the step's ends
     (first_estimate), and for a contact in an exact segment the crossing of the approach's
     modal solution from there (exact_crossing: the location's first trial then ends the
-    bracket just past the crossing)."""
+    bracket just past the crossing), where that converges."""
     estimate = first_estimate(system, state, workspace.vectors[Vector.NEW_STATE],
                               workspace.values, event, high, h_step, tolerance)
-    if event >= Event.CONTACT:
-        return exact_crossing(system, segment, state, workspace, high, estimate)
-    return estimate
+    if event < Event.CONTACT or segment.exact < 0:
+        return estimate
+    crossing = exact_crossing(system, segment, state, workspace, high, estimate)
+    return crossing if crossing > 0.0 else estimate
 
 
 @njit(cache=True, error_model="numpy", inline="always")
