@@ -45,7 +45,11 @@ reject it, and the next step size), `crossed_event` and `grazing_check` (which e
 crossed; where a point may have lifted off and landed again inside it, `grazing_probe` looks),
 then `finish_step` (no event: the step's end is the new start) or `cross_event` (the crossing
 located by `locate_event` to the event time tolerance, the run moved into the next segment by
-`end_segment`, which the loop then begins: `begin_segment`). Trial steps (`trial_step`) serve
+`end_segment`, which the loop then begins: `begin_segment`). Between the two, where the
+new segment is exact and its opening step aimed at the modal solution's crossing of its phase
+end, `chain_switches` takes the switches that follow one after another for as long as each
+step is one the loop would take, accept and locate without a trial, with none of the loop's
+bookkeeping in between. Trial steps (`trial_step`) serve
 the location, the probe and the debug check. They work on records laid out once: the stepper's
 settings (one float array, `Setting`), the run's arrays (`RunArrays`, its position), the mesh
 period (`equations.PeriodTable`) and the run's `Workspace`, the scratch arrays that `pack_run`
@@ -173,6 +177,7 @@ class Counter(IntEnum):
     TRIAL_STEPS = 7  # trial steps taken (trial_step: event location, grazing probes, checks)
     EVENTS = 8  # events located (cross_event)
     REJECTED_STEPS = 9  # steps rejected (error control; an exact step not certified)
+    SWITCHES_CHAINED = 10  # of the EVENTS, phase switches taken by chain_switches
 
 
 class Memory(IntEnum):
@@ -1278,11 +1283,21 @@ def opening_ahead(system, mesh, run, workspace, segment, horizon):
     if workspace.counters[Counter.OPENING] < 0:
         return -1.0, exponential.NO_AIM
     interval = run.place[0]
-    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
+    return entry_aim(system, workspace, exact_form(workspace, interval, mesh.counts[interval],
+                                                   run.loaded, run.state),
+                     run.state, segment.motor_torque, segment.load_torque,
+                     mesh.lengths[interval], horizon)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def entry_aim(system, workspace, exact, state, motor_torque, load_torque, length, horizon):
+    """opening_ahead's aim from `state`, where a segment of exact form `exact` (−1: none; then
+    (−1, exponential.NO_AIM)) and interval `length` (rad) has just been entered forward with
+    the torques (N·m) held: exact_event_ahead to `horizon` (s)."""
     if exact < 0:
         return -1.0, exponential.NO_AIM
-    return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
-                             segment.load_torque, mesh.lengths[interval], horizon)
+    return exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque,
+                             length, horizon)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1440,10 +1455,9 @@ def advance_to(constants, exact, implicit, run, end, torques, max_steps, samples
 
 @njit(cache=True, error_model="numpy", inline="always")
 def walk(system, mesh, settings, run, workspace, end, torques, max_steps, samples, k):
-    """advance's loop (after begin_walk): steps, and segments ended at events (cross_event),
-    to `end` (or where stop_at stops it) unless the run fails, taking the samples from the
-    `k`-th on (a Samples; None: none) that its exact segments pass (sample_inside). Returns
-    (Status, accepted steps, the next sample's index). Inlined into advance: no counts."""
+    """advance's loop (after begin_walk): steps and events (cross_event, chain_switches) to
+    `end` or where stop_at stops it, unless the run fails, taking the samples (a Samples or
+    None) from the `k`-th that exact segments pass. Returns (Status, steps, next sample)."""
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit = is_explicit(workspace)
@@ -1459,7 +1473,6 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         status = step_allowed(steps, max_steps, time, plan)
         if status != Status.OK:
             break
-        certified = False
         if segment.exact >= 0:
             certified, accepted, clock[1], controller = take_exact_step(
                 system, segment, settings, state, workspace, rows, plan, controller)
@@ -1468,7 +1481,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
                 system, segment, settings, state, workspace, rows, plan, controller)
             if retry:  # (Newton failed on an old Jacobian: again on a fresh one)
                 continue
-            clock[1] = h_next
+            certified, clock[1] = False, h_next
         if not accepted:
             continue
         steps, counters[Counter.JACOBIAN_FRESH] = steps + 1, 0
@@ -1486,6 +1499,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             status, k = cross_event(system, mesh, settings, run, workspace, segment, plan,
                                     target, event, high, samples, k)
             if status == Status.OK:
+                status, steps = chain_switches(system, mesh, settings, run, workspace, torques,
+                                               end, samples, k, steps, max_steps)
                 segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques,
                                         workspace)
         elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
@@ -1612,6 +1627,97 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
         ahead, aim = opening_ahead(system, mesh, run, workspace, segment, end - run.clock[0])
         remember_modal_aim(workspace, ahead, aim)
     return status, k
+
+
+# --- phase switches chained ------------------------------------------------------------------
+
+@njit(**NUMBERS_ONLY)
+def chain_switches(system, mesh, settings, run, workspace, torques, end, samples, k, steps,
+                   max_steps):
+    """After cross_event has moved the run into a new segment (Status.OK): while the segment
+    is exact and its opening step is aimed at the modal solution's crossing of its phase end
+    (opening_ahead: Memory.MODAL_AIM is exponential.CROSSING), take that step and enter the
+    next set at once, for as long as it is the step the loop would take and accept, and it
+    would locate that switch at the step's end without a trial (aimed_switch says when).
+    What the loop does besides between two such switches (the rate and event values at the
+    step's ends, the grazing check, the location, the samples, begin_segment) changes nothing
+    there, and cost high_speed two fifths of its time: docs/exponential-integrator.md,
+    "Phase switches chained". `torques` (N·m) are held; `end` (s): where the call stops;
+    no switch is chained past the `k`-th of `samples` (a Samples; None: none); `steps`
+    accepted of `max_steps`. A debug run (contact slack >= 0) checks every step by
+    violated_before: not here. Returns (pass_event's Status: a stalled or chattering run
+    stops, and walk's loop with it, after begin_segment; the accepted steps)."""
+    status, counters = Status.OK, workspace.counters
+    if settings[Setting.CONTACT_SLACK] >= 0.0:
+        return status, steps
+    sample_stop, interval = stop_at(samples, k, end, -1), run.place[0]
+    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
+    while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
+        segment = segment_of(system, mesh, interval, run.loaded, torques, exact)
+        plan = aimed_switch(system, settings, run, workspace, segment, end, sample_stop,
+                            steps, max_steps)
+        if not plan.aimed:
+            break
+        # as take_exact_step would: a certified step, after an accepted one
+        run.clock[1] = control_exact_step(exponential.CERTIFIED, plan,
+                                          settings[Setting.EXACT_FLOOR], False)[1]
+        steps += 1
+        counters[Counter.EVENTS] += 1
+        counters[Counter.SWITCHES_CHAINED] += 1
+        status = pass_event(run.state, workspace, run.clock, run.clock[0], end, plan,
+                            plan.h_step, Event.PHASE_END)
+        if status == Status.OK:  # (opening_ahead, with the exact form kept for the segment)
+            end_segment(system, mesh, run, workspace, Event.PHASE_END)
+            interval = run.place[0]
+            exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded,
+                               run.state)
+            ahead, aim = entry_aim(system, workspace, exact, run.state, torques[0], torques[1],
+                                   mesh.lengths[interval], end - run.clock[0])
+            remember_modal_aim(workspace, ahead, aim)
+    return status, steps
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def aimed_switch(system, settings, run, workspace, segment, end, sample_stop, steps,
+                 max_steps):
+    """chain_switches' step in `segment` (exact; the run's state its start, the modal
+    solution's crossing of its phase end in Memory.MODAL_AHEAD): the StepPlan that plan_step
+    aims just past the crossing, its exact state in NEW_STATE, where the loop would take it
+    (step_allowed; before `sample_stop`, s), accept it (certified) and locate its phase end
+    at its end with no trial (crossed by at most two location tolerances, as
+    first_estimate reads it, and nothing else crossed: points_stay). Elsewhere a plan not
+    aimed (the loop's own iteration then takes the step)."""
+    time = run.clock[0]
+    plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
+                     workspace.memory[Memory.MODAL_AHEAD], True, settings)
+    no = StepPlan(plan.h_step, plan.h_wanted, plan.landing, False)
+    if not plan.aimed or time + plan.h_step >= sample_stop or \
+            step_allowed(steps, max_steps, time, plan) != Status.OK:
+        return no
+    state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
+    if exact_step(system, segment, state, workspace, plan.h_step,
+                  new_state) != exponential.CERTIFIED:
+        return no
+    speed = new_state[state.shape[0] // 2 + system.pinion]
+    past = (new_state[system.pinion] - segment.length) / speed
+    if not 0.0 < past <= 2.0 * location_tolerance(settings, plan.h_step) or (
+            system.contact_loss and not points_stay(system, segment, new_state,
+                                                    workspace.values[Values.APPROACH])):
+        return no
+    return plan
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def points_stay(system, segment, state, approach):
+    """Whether at `state` no point of `segment` has crossed from the side its load puts it
+    on, a loaded point's approach not below zero and an unloaded one's not above (`approach`
+    is scratch). A set entered by a switch is loaded by those signs (next_segment), so where
+    this holds no contact event crossed (crosses); elsewhere the loop judges the step."""
+    approaches(system, segment.points, segment.point_count, state, approach)
+    for i in range(segment.point_count):
+        if (approach[i] < 0.0) if segment.loaded[i] != 0.0 else (approach[i] > 0.0):
+            return False
+    return True
 
 
 @njit(cache=True, error_model="numpy", inline="always")
