@@ -658,6 +658,33 @@ def test_the_modal_solution_gives_the_phase_event_to_rounding(reference_model):
         assert exponential.modal_phase_event_ahead(*arguments, 1e-3 * ahead)[0] == np.inf
 
 
+def test_halley_s_step_cubes_the_error_and_its_size_bounds_it():
+    """exponential._halley_change on f(t) = e^t − 2 from 0.5 (the root ln 2, 0.193 away):
+    each step leaves an error below the cube of the one before (measured 5.4e-4 after the
+    first, where Newton's step leaves 2.0e-2, its square's half), and _cubed_error, the size
+    _modal_crossing stops on, is no smaller than that error."""
+    root, t = np.log(2.0), 0.5
+    newton = t - (np.exp(t) - 2.0) / np.exp(t)
+    for _ in range(2):
+        change = exponential._halley_change(np.exp(t) - 2.0, np.exp(t), np.exp(t))
+        before, t = t - root, t - change
+        assert abs(t - root) <= abs(before) ** 3
+        derivative = np.exp(t + change)  # (f', f'' and f''' where the step was taken)
+        assert exponential._cubed_error(change, derivative, derivative, derivative) >= abs(
+            t - root)
+    assert abs(newton - root) >= 0.5 * (0.5 - root) ** 2
+
+
+def test_the_slow_polynomial_s_derivatives_are_horner_s():
+    """exponential._polynomial_derivatives: a quartic's value and first three derivatives at
+    a point, as numpy's Polynomial gives them, to rounding."""
+    terms, t = np.array([1.0, 2.0, -3.0, 0.5, 4.0]), 0.7
+    polynomial = np.polynomial.Polynomial(terms)
+    expected = [polynomial.deriv(order)(t) for order in range(4)]
+    assert np.allclose(exponential._polynomial_derivatives(terms, 4, t), expected,
+                       rtol=1e-14, atol=0.0)
+
+
 def contact_changed(stepper, position, torques, h):
     """Whether an exact run from `position` has changed its loaded points, or left its
     contact set, by `h` s after it."""

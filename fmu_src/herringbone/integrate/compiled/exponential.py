@@ -104,13 +104,17 @@ TILT_SEEN = 1e-6
 PREDICTION_ITERATIONS = 8
 PREDICTION_PRECISION = 1e-9
 PREDICTION_SPREAD = 0.01
-# Newton's iterations on the whole modal solution of the pinion angle (_modal_crossing), and
-# the relative change at which they stop. The step is aimed past the crossing by the event
-# location's tolerance, some 1e-10 of the time to it (walk.first_estimate); Newton's error
-# squares at each iteration (on the reference scene 3e-2, 2e-5, 1e-11 of the time), so the
-# iteration after a change below 1e-10 is good to rounding, and a tighter stop only chases it
+# Iterations on the whole modal solution of the pinion angle or an approach
+# (_modal_crossing), and the relative change at which they stop. The step is aimed past the
+# crossing by the event location's tolerance, some 1e-10 of the time to it
+# (walk.first_estimate); the error of a Newton step squares (on the reference scene 3e-2,
+# 2e-5, 1e-11 of the time), so the iteration after a change below 1e-10 is good to rounding.
+# Halley's error cubes (the angle's): where _cubed_error, its bound, is below
+# CROSSING_ROUNDING of the time, the iterate is the root to rounding without another
+# evaluation (two in all on the shipped scenes, against Newton's three)
 CROSSING_ITERATIONS = 30
 CROSSING_PRECISION = 1e-10
+CROSSING_ROUNDING = 1e-20
 # What modal_phase_event_ahead's time is: where the modal solution crosses the interval's end
 # (CROSSING), near it (NEAR: the slow part's time with the fast swing no more than
 # PREDICTION_SPREAD of the way), or only a time by which it has surely crossed (BOUND)
@@ -847,7 +851,7 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     polynomial in t, no exponentials) reaches `length` plus the fast modes' swing of the
     angle (moving forward), or minus it below zero (moving back), by Newton's method; inf
     where it stands still or turns back first, or where it surely stays inside until
-    `horizon` (s: the call's end, which the step will not pass). From there Newton's method
+    `horizon` (s: the call's end, which the step will not pass). From there Halley's method
     on the angle's whole modal solution (_modal_crossing) finds the crossing itself
     (CROSSING); where it does not converge, the time found first is returned as NEAR where
     the swing is no more than PREDICTION_SPREAD of the way, else as a BOUND only (a
@@ -872,7 +876,7 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     if ahead == math.inf:
         return ahead, near
     crossing = _modal_crossing(tables, exact, tables.fast_right[exact, pinion], degree,
-                               length if forward else 0.0, forward, ahead, ahead)
+                               length if forward else 0.0, forward, ahead, ahead, True)
     return (crossing, CROSSING) if crossing > 0.0 else (ahead, near)
 
 
@@ -891,7 +895,7 @@ def approach_crossing(system, buffers, exact, state, motor_torque, load_torque, 
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     degree = _slow_polynomial(tables, exact, tables.approach_slow[exact])
     return _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0, rising,
-                           high, guess if 0.0 < guess < high else high)
+                           high, guess if 0.0 < guess < high else high, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -921,13 +925,17 @@ def _polynomial_at(terms, degree, t):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess):
+def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess, halley):
     """Where a function of the state's whole modal solution from the step's start (its slow
     polynomial of `degree` in tables.modal_slow, its row of the fast modes `rows`: the pinion
-    angle's, a point's approach's) reaches `end`, rising (`forward`) or falling, by Newton's
-    method from `guess` (s) kept inside [0, `sure`] (s), the time by which it has surely
-    passed it, bisecting where a Newton step would leave that bracket; −1 where it does not
+    angle's, a point's approach's) reaches `end`, rising (`forward`) or falling, by Halley's
+    method (`halley`; it stops where _cubed_error puts the iterate at the root to rounding)
+    or Newton's from `guess` (s) kept inside [0, `sure`] (s), the time by which it has surely
+    passed it, bisecting where a step would leave that bracket; −1 where it does not
     converge within CROSSING_ITERATIONS (the function swung back and forth across `end`).
+    An approach, which may cross zero more than once in the bracket, is taken by Newton's:
+    Halley's, whose steps are longer, located jump_resonance's landings and lift-offs in a
+    tenth more trials.
     Each iteration is the function's row of the modes alone, a few complex exponentials.
     The result is a smooth function of the start to rounding (a value found on `end` to the
     bit is the root, not a bracket's end to bisect from): the period map's forward
@@ -935,7 +943,7 @@ def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess):
     low, high = 0.0, sure
     ahead = guess
     for _ in range(CROSSING_ITERATIONS):
-        value, slope = _modal_at(tables, exact, rows, degree, ahead)
+        value, slope, curve, third = _modal_at(tables, exact, rows, degree, ahead)
         value -= end
         if value == 0.0:
             return ahead
@@ -943,9 +951,12 @@ def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess):
             high = ahead
         else:
             low = ahead
-        guess = ahead - value / slope if slope != 0.0 else low
+        change = _halley_change(value, slope, curve) if halley else value / slope
+        guess = ahead - change if slope != 0.0 else low
         if not low < guess < high:
             guess = 0.5 * (low + high)
+        elif halley and _cubed_error(change, slope, curve, third) <= CROSSING_ROUNDING * guess:
+            return guess
         if abs(guess - ahead) <= CROSSING_PRECISION * guess:
             return guess
         ahead = guess
@@ -953,16 +964,52 @@ def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _cubed_error(change, slope, curve, third):
+    """A bound on the error a Halley step of `change` leaves, from the function's first,
+    second and third derivatives where it was taken: to leading order it is
+    |f''²/(4·f'²) − f⁽³⁾/(6·f')|·|change|³, below (f''²/f'² + |f⁽³⁾/f'|)·|change|³."""
+    return ((curve / slope) ** 2 + abs(third / slope)) * abs(change) ** 3
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _halley_change(value, slope, curve):
+    """Halley's step towards a function's zero from its value, slope and curvature there:
+    Newton's step value/slope divided by 1 − (value/slope)·curve/(2·slope), or Newton's own
+    where that divisor falls below one half (a turning point near)."""
+    newton = value / slope
+    divisor = 1.0 - 0.5 * newton * curve / slope
+    return newton / divisor if divisor >= 0.5 else newton
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _modal_at(tables, exact, rows, degree, t):
-    """A function of the state and its rate (per s) t s after the step's start, from its slow
-    polynomial (tables.modal_slow, of `degree`) and its row of the fast modes `rows`."""
-    value, slope = _polynomial_at(tables.modal_slow, degree, t)
+    """A function of the state and its first three derivatives (per s, s², s³) t s after
+    the step's start, from its slow polynomial (tables.modal_slow, of `degree`) and its
+    row of the fast modes `rows`."""
+    value, slope, curve, third = _polynomial_derivatives(tables.modal_slow, degree, t)
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
         mode = rows[k] * tables.start_fast[k] * _exponential(rate, t)
+        rated = mode * rate
+        twice = rated * rate
         value += mode.real
-        slope += (mode * rate).real
-    return value, slope
+        slope += rated.real
+        curve += twice.real
+        third += (twice * rate).real
+    return value, slope, curve, third
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _polynomial_derivatives(terms, degree, t):
+    """The polynomial Σ terms[n]·t^n of `degree` and its first three derivatives in t, by
+    Horner's rule."""
+    value, slope, curve, third = terms[degree], 0.0, 0.0, 0.0
+    for power in range(degree - 1, -1, -1):
+        third = third * t + 3.0 * curve
+        curve = curve * t + 2.0 * slope
+        slope = slope * t + value
+        value = value * t + terms[power]
+    return value, slope, curve, third
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -1320,6 +1320,23 @@ def call_opening_ahead(system, mesh, run, workspace, segment, horizon):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def open_walk(system, mesh, settings, run, workspace, end, torques, max_steps, samples, k):
+    """walk's start: the segment the run is in begun (begin_segment), its first step aimed
+    (aim_first_step), and where that is the modal solution's crossing of the phase end, the
+    switches from there taken by chain_switches, as after an event. Returns (its Status,
+    the steps it took, the CompiledSegment the run is then in)."""
+    segment = begin_segment(system, mesh, run.place[0], run.state, run.loaded, torques,
+                            workspace)
+    aim_first_step(system, mesh, run, workspace, segment, samples, k, end)
+    status, steps = chain_switches(system, mesh, settings, run, workspace, torques, end,
+                                   samples, k, 0, max_steps)
+    if steps > 0:
+        segment = begin_segment(system, mesh, run.place[0], run.state, run.loaded, torques,
+                                workspace)
+    return status, steps, segment
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def aim_first_step(system, mesh, run, workspace, segment, samples, k, end):
     """At a call's start: call_opening_ahead's aim for its first step, to where the call
     stops (stop_at: `end`, s, or the `k`-th of `samples`), remembered (remember_modal_aim)."""
@@ -1461,9 +1478,9 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit = is_explicit(workspace)
-    segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques, workspace)
-    aim_first_step(system, mesh, run, workspace, segment, samples, k, end)
-    steps, status, controller, h = 0, Status.OK, Controller(1e-4, False), clock[1]
+    status, steps, segment = open_walk(system, mesh, settings, run, workspace, end, torques,
+                                       max_steps, samples, k)
+    controller, h = Controller(1e-4, False), clock[1]
     while status == Status.OK:
         target = stop_at(samples, k, end, segment.exact)
         if clock[0] >= target:
@@ -1634,11 +1651,12 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
 @njit(**NUMBERS_ONLY)
 def chain_switches(system, mesh, settings, run, workspace, torques, end, samples, k, steps,
                    max_steps):
-    """After cross_event has moved the run into a new segment (Status.OK): while the segment
-    is exact and its opening step is aimed at the modal solution's crossing of its phase end
-    (opening_ahead: Memory.MODAL_AIM is exponential.CROSSING), take that step and enter the
-    next set at once, for as long as it is the step the loop would take and accept, and it
-    would locate that switch at the step's end without a trial (aimed_switch says when).
+    """After cross_event has moved the run into a new segment (Status.OK), and at a call's
+    start (open_walk): while the segment is exact and its opening step is aimed at the modal
+    solution's crossing of its phase end (opening_ahead, call_opening_ahead:
+    Memory.MODAL_AIM is exponential.CROSSING), take that step and enter the next set at
+    once, for as long as it is the step the loop would take and accept, and it would locate
+    that switch at the step's end without a trial (aimed_switch says when).
     What the loop does besides between two such switches (the rate and event values at the
     step's ends, the grazing check, the location, the samples, begin_segment) changes nothing
     there, and cost high_speed two fifths of its time: docs/exponential-integrator.md,
