@@ -1727,10 +1727,11 @@ def aimed_switch(system, settings, run, workspace, segment, end, sample_stop, st
 
 @njit(cache=True, error_model="numpy", inline="always")
 def points_stay(system, segment, state, approach):
-    """Whether at `state` no point of `segment` has crossed from the side its load puts it
-    on, a loaded point's approach not below zero and an unloaded one's not above (`approach`
-    is scratch). A set entered by a switch is loaded by those signs (next_segment), so where
-    this holds no contact event crossed (crosses); elsewhere the loop judges the step."""
+    """Whether at `state`, a step's end, no point of `segment` is past zero in the direction
+    of its event, a loaded point's approach not below zero and an unloaded one's not above
+    (`approach` is scratch): crosses sees a contact event only at an end strictly past zero,
+    so then none crossed, whatever the values at the step's start; elsewhere the loop
+    judges the step."""
     approaches(system, segment.points, segment.point_count, state, approach)
     for i in range(segment.point_count):
         if (approach[i] < 0.0) if segment.loaded[i] != 0.0 else (approach[i] > 0.0):
