@@ -527,14 +527,15 @@ def test_the_interval_bound_lies_below_every_function_it_admits():
                                      width) == pytest.approx(-curve * width ** 2 / 4)
 
 
-def drive_every_ms(name, span, in_one_call):
+def drive_every_ms(name, span, in_one_call, check_contact=False):
     """The exponential method's outputs every 1 ms over `span` (s) of shipped scene `name`
     (rows by model.output_layout), the scene's torques held from each piece's start: driven
     by a call every 1 ms as the FMU drives it (run_to), or `in_one_call` per piece of the
-    torque schedule, sampled inside it (CompiledStepper.sample); and the run's events."""
+    torque schedule, sampled inside it (CompiledStepper.sample); a debug run (contact checked
+    inside every step) where `check_contact`. Returns (the outputs, the stepper, its Run)."""
     scene = herringbone.load_scene(MODELS / f"{name}.toml")
     model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
+    stepper = CompiledStepper(model, 1e-7, "exponential", check_contact=check_contact)
     run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
     count = round(span / 1e-3)
     rows, times = np.empty((count, model.output_layout_size)), (np.arange(count) + 1) * 1e-3
@@ -542,13 +543,13 @@ def drive_every_ms(name, span, in_one_call):
         for k in range(count):
             stepper.run_to(run, times[k], scene.inputs.at(k * 1e-3))
             rows[k] = run.outputs
-        return rows, run.events
+        return rows, stepper, run
     edges = np.searchsorted(times - 1e-3, scene.inputs.change_times(), side="left")
     for first, after in zip([0, *edges], [*edges, count]):
         if first < after:
             stepper.sample(run, times[first:after], rows[first:after], times[after - 1],
                            scene.inputs.at(first * 1e-3))
-    return rows, run.events
+    return rows, stepper, run
 
 
 SHIPPED = sorted(path.stem for path in MODELS.glob("*.toml"))
@@ -563,32 +564,20 @@ def test_the_host_s_communication_step_does_not_change_the_run(name):
     drive and not the other fails here (torque_step's lost turn-back: 6.2e-4). undamped is
     left out: it rattles chaotically from 50 ms on (the integrators part from each other
     there; docs/exponential-integrator.md)."""
-    stepped, stepped_events = drive_every_ms(name, 0.1, in_one_call=False)
-    sampled, sampled_events = drive_every_ms(name, 0.1, in_one_call=True)
+    stepped, _, stepped_run = drive_every_ms(name, 0.1, in_one_call=False)
+    sampled, _, sampled_run = drive_every_ms(name, 0.1, in_one_call=True)
     model = model_of(name)
     columns = {name: column for name, column in model.output_layout if name in FORCES}
-    assert stepped_events == sampled_events
+    assert stepped_run.events == sampled_run.events
     assert force_error({force: stepped[:, column] for force, column in columns.items()},
                        {force: sampled[:, column] for force, column in columns.items()},
                        model) <= 1e-6
 
 
 def drive_with_a_check(name, span, in_one_call, check_contact):
-    """drive_every_ms's run of shipped scene `name`, a debug run (contact checked inside every
-    step) or not: (final state, outputs every 1 ms, accepted, rejected and trial steps,
-    events, switches chained)."""
-    scene = herringbone.load_scene(MODELS / f"{name}.toml")
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, 1e-7, "exponential", check_contact=check_contact)
-    run = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
-    count = round(span / 1e-3)
-    rows, times = np.empty((count, model.output_layout_size)), (np.arange(count) + 1) * 1e-3
-    for k in range(count):
-        if in_one_call:
-            stepper.sample(run, times[k:], rows[k:], times[-1], scene.inputs.at(0.0))
-            break
-        stepper.run_to(run, times[k], scene.inputs.at(k * 1e-3))
-        rows[k] = run.outputs
+    """drive_every_ms's run, a debug run or not: (final state, outputs every 1 ms, accepted and
+    rejected steps, events, switches chained)."""
+    rows, stepper, run = drive_every_ms(name, span, in_one_call, check_contact)
     return (run.state.copy(), rows, stepper.accepted_steps, run.rejected_steps, run.events,
             run.switches_chained)
 
@@ -597,7 +586,7 @@ def drive_with_a_check(name, span, in_one_call, check_contact):
 @pytest.mark.parametrize("in_one_call", [False, True])
 def test_switches_chained_are_the_loops_to_the_bit(name, share, in_one_call):
     """Phase switches taken one after another (walk.chain_switches) give the run the loop's
-    own iteration gives it, to the bit: over 20 ms (the torques of the start; both drives),
+    own iteration gives it, to the bit: over 20 ms (both drives of drive_every_ms),
     the final state, the outputs every 1 ms and the accepted and rejected steps and events
     equal those of a debug run, which checks inside every step and chains nothing. The
     chain takes `share` of the events at least (measured 0.92 on high_speed, whose events

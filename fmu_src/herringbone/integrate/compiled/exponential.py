@@ -916,11 +916,9 @@ def _polynomial_root(terms, degree, target):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _polynomial_at(terms, degree, t):
-    """The polynomial Σ terms[n]·t^n of `degree` and its derivative in t, by Horner's rule."""
-    value, slope = terms[degree], 0.0
-    for power in range(degree - 1, -1, -1):
-        slope = slope * t + value
-        value = value * t + terms[power]
+    """The polynomial Σ terms[n]·t^n of `degree` and its derivative in t
+    (_polynomial_derivatives; inlined, the higher derivatives are not computed)."""
+    value, slope, _, _ = _polynomial_derivatives(terms, degree, t)
     return value, slope
 
 

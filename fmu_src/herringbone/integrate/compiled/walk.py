@@ -1324,16 +1324,16 @@ def open_walk(system, mesh, settings, run, workspace, end, torques, max_steps, s
     """walk's start: the segment the run is in begun (begin_segment), its first step aimed
     (aim_first_step), and where that is the modal solution's crossing of the phase end, the
     switches from there taken by chain_switches, as after an event. Returns (its Status,
-    the steps it took, the CompiledSegment the run is then in)."""
-    segment = begin_segment(system, mesh, run.place[0], run.state, run.loaded, torques,
-                            workspace)
-    aim_first_step(system, mesh, run, workspace, segment, samples, k, end)
+    the steps it took, the CompiledSegment the run is then in, begun there)."""
+    interval = run.place[0]
+    aim_first_step(system, mesh, run, workspace,
+                   segment_of(system, mesh, interval, run.loaded, torques, exact_form(
+                       workspace, interval, mesh.counts[interval], run.loaded, run.state)),
+                   samples, k, end)
     status, steps = chain_switches(system, mesh, settings, run, workspace, torques, end,
                                    samples, k, 0, max_steps)
-    if steps > 0:
-        segment = begin_segment(system, mesh, run.place[0], run.state, run.loaded, torques,
-                                workspace)
-    return status, steps, segment
+    return status, steps, begin_segment(system, mesh, run.place[0], run.state, run.loaded,
+                                        torques, workspace)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1672,9 +1672,9 @@ def chain_switches(system, mesh, settings, run, workspace, torques, end, samples
     exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
         segment = segment_of(system, mesh, interval, run.loaded, torques, exact)
-        plan = aimed_switch(system, settings, run, workspace, segment, end, sample_stop,
-                            steps, max_steps)
-        if not plan.aimed:
+        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, sample_stop,
+                                   steps, max_steps)
+        if not taken:
             break
         # as take_exact_step would: a certified step, after an accepted one
         run.clock[1] = control_exact_step(exponential.CERTIFIED, plan,
@@ -1703,26 +1703,23 @@ def aimed_switch(system, settings, run, workspace, segment, end, sample_stop, st
     aims just past the crossing, its exact state in NEW_STATE, where the loop would take it
     (step_allowed; before `sample_stop`, s), accept it (certified) and locate its phase end
     at its end with no trial (crossed by at most two location tolerances, as
-    first_estimate reads it, and nothing else crossed: points_stay). Elsewhere a plan not
-    aimed (the loop's own iteration then takes the step)."""
+    first_estimate reads it, and nothing else crossed: points_stay). Returns (whether it is
+    that step: False leaves it to the loop's own iteration; the StepPlan)."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    no = StepPlan(plan.h_step, plan.h_wanted, plan.landing, False)
     if not plan.aimed or time + plan.h_step >= sample_stop or \
             step_allowed(steps, max_steps, time, plan) != Status.OK:
-        return no
+        return False, plan
     state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
     if exact_step(system, segment, state, workspace, plan.h_step,
                   new_state) != exponential.CERTIFIED:
-        return no
+        return False, plan
     speed = new_state[state.shape[0] // 2 + system.pinion]
     past = (new_state[system.pinion] - segment.length) / speed
-    if not 0.0 < past <= 2.0 * location_tolerance(settings, plan.h_step) or (
-            system.contact_loss and not points_stay(system, segment, new_state,
-                                                    workspace.values[Values.APPROACH])):
-        return no
-    return plan
+    return (0.0 < past <= 2.0 * location_tolerance(settings, plan.h_step)
+            and (not system.contact_loss or points_stay(
+                system, segment, new_state, workspace.values[Values.APPROACH]))), plan
 
 
 @njit(cache=True, error_model="numpy", inline="always")
