@@ -142,6 +142,10 @@ class ExactTables(NamedTuple):
     slow_left: np.ndarray  # (P, S, M): L's rows of the slow block
     slow_right: np.ndarray  # (P, N, S): R's columns of the slow block, the state's rows
     slow: np.ndarray  # (P, S, S): the slow block T_slow (s⁻¹)
+    # (P, S, S): the pinion angle's and a point's approach's rows of the slow columns times
+    # T_slow^n/n!, n < S: their slow part's coefficient of t^n is the n-th row · L_slow·X(0)
+    angle_polynomial: np.ndarray
+    approach_polynomial: np.ndarray
     fast_left: np.ndarray  # (P, F, M) complex: L's rows of the fast modes kept
     fast_right: np.ndarray  # (P, N, F) complex: their columns of R, twice for a pair
     rates: np.ndarray  # (P, F) complex: their eigenvalues Λ (s⁻¹)
@@ -426,6 +430,8 @@ def _empty_arrays(places: int, size: int, width: int, slow_width: int, fast_widt
         "slow_left": np.zeros(shape + (slow_width, width)),
         "slow_right": np.zeros(shape + (size, slow_width)),
         "slow": np.zeros(shape + (slow_width, slow_width)),
+        "angle_polynomial": np.zeros(shape + (slow_width, slow_width)),
+        "approach_polynomial": np.zeros(shape + (slow_width, slow_width)),
         "fast_left": np.zeros(shape + (fast_width, width), dtype=complex),
         "fast_right": np.zeros(shape + (size, fast_width), dtype=complex),
         "rates": np.zeros(shape + (fast_width,), dtype=complex),
@@ -457,6 +463,12 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
     arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
     arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
+    # tabulated, since the mesh repeats: the aim at every switch then takes its polynomial
+    # in S² products, not the series' S³
+    arrays["angle_polynomial"][place][:slow, :slow] = _polynomial_rows(
+        right[system.pinion, :slow].real, t_slow.real)
+    arrays["approach_polynomial"][place][:slow, :slow] = _polynomial_rows(
+        arrays["approach_slow"][place][:slow], t_slow.real)
     speed_fast, approach_fast = fast_right[n + system.pinion], base @ fast_right
     arrays["speed_fast"][place][:fast], arrays["approach_fast"][place][:fast] = (speed_fast,
                                                                               approach_fast)
@@ -470,10 +482,20 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["tilt_count"][place] = len(rows)
 
 
+def _polynomial_rows(row: np.ndarray, block: np.ndarray) -> np.ndarray:
+    """row·block^n/n! for n < the block's size, by rows: the coefficients of a function's
+    slow part as a polynomial in t, given its `row` of the slow columns and T_slow."""
+    rows = [row]
+    for power in range(1, block.shape[0]):
+        rows.append(rows[-1] @ block / power)
+    return np.array(rows)
+
+
 # pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
 COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "speed_fast", "approach_fast",
                   "start_fast", "modal_fast", "grid_fast")
-FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "tilt_rows", "speed_slow", "approach_slow",
+FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "angle_polynomial", "approach_polynomial",
+                "tilt_rows", "speed_slow", "approach_slow",
                 "speed_size", "approach_size", "angle_size", "start", "start_slow", "start_size",
                 "modal_slow", "series")
 INT_FIELDS = ("valid", "slow_count", "fast_count", "tilt_count")
@@ -521,6 +543,8 @@ def unpack_tables(buffers):
     at += places * size * slow
     slow_block = _cube(floats, at, places, slow, slow)
     at += places * slow * slow
+    polynomials = _cube(floats, at, 2 * places, slow, slow)
+    at += 2 * places * slow * slow
     rows = _cube(floats, at, places, tilt, size)
     at += places * tilt * size
     rows_of_slow = _cube(floats, at, 2, places, slow)
@@ -538,8 +562,9 @@ def unpack_tables(buffers):
         ints[header:header + places], ints[header + places:header + 2 * places],
         ints[header + 2 * places:header + 3 * places],
         ints[header + 3 * places:header + 4 * places], slow_left, slow_right, slow_block,
-        fast_left, fast_right, rates, rows, rows_of_slow[0], rows_of_slow[1], rows_of_fast[0],
-        rows_of_fast[1], rows_of_fast[2], rows_of_fast_complex[0], rows_of_fast_complex[1],
+        polynomials[:places], polynomials[places:], fast_left, fast_right, rates, rows,
+        rows_of_slow[0], rows_of_slow[1], rows_of_fast[0], rows_of_fast[1], rows_of_fast[2],
+        rows_of_fast_complex[0], rows_of_fast_complex[1],
         floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
         start_slow, start_fast, start_size, modal_slow, modal_fast, grid_fast, series)
 
@@ -737,7 +762,7 @@ def angle_inside(system, buffers, exact, h, at_start, at_end, length):
     tables = unpack_tables(buffers)
     pinion = system.pinion
     swing = _angle_swing(tables, exact)
-    slow = _angle_bound(tables, exact, h, pinion)
+    slow = _angle_bound(tables, exact, h)
     rows = tables.fast_right[:, pinion, :]
     to_end = SlowBound(slow.start - length, slow.drift, slow.curve)
     if keeps_sign(tables, exact, h, tables.angle_size, rows, slow, swing, 1.0, at_start,
@@ -864,7 +889,7 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     pinion = system.pinion
     swing = _angle_swing(tables, exact)
-    degree = _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
+    degree = _slow_polynomial(tables, exact, tables.angle_polynomial[exact])
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
     reach = _polynomial_bound(terms, degree + 1, horizon)[0].drift + swing
     if terms[1] == 0.0 or (reach < terms[0] < length - reach):
@@ -893,7 +918,7 @@ def approach_crossing(system, buffers, exact, state, motor_torque, load_torque, 
     crossing. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
-    degree = _slow_polynomial(tables, exact, tables.approach_slow[exact])
+    degree = _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
     return _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0, rising,
                            high, guess if 0.0 < guess < high else high, False)
 
@@ -1011,27 +1036,21 @@ def _polynomial_derivatives(terms, degree, t):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slow_polynomial(tables, exact, row):
+def _slow_polynomial(tables, exact, rows):
     """The slow part of a function of the state from the step's start (tables.start_slow) as
-    a polynomial in t, the function's `row` of the slow columns given (R_slow[φp] for the
-    pinion angle, approach_slow for a point's approach): its coefficients
-    row·T_slow^n/n!·z_slow into tables.modal_slow (n < S: the block is nilpotent but for
-    rounding). Returns its degree."""
+    a polynomial in t, the function's `rows` given (angle_polynomial, approach_polynomial:
+    its row of the slow columns times T_slow^n/n!, n < S; the block is nilpotent but for
+    rounding): its coefficients into tables.modal_slow. Returns its degree."""
     slow_count = tables.slow_count[exact]
-    series, terms = tables.series, tables.modal_slow
-    for k in range(slow_count):
-        series[0, k] = tables.start_slow[k]
+    start, terms = tables.start_slow, tables.modal_slow
     degree = 0
     for power in range(slow_count):
         total = 0.0
         for k in range(slow_count):
-            total += row[k] * series[0, k]
+            total += rows[power, k] * start[k]
         terms[power] = total
         if total != 0.0:
             degree = power
-        _next_term(tables, exact, slow_count, 1.0 / (power + 1))
-        for i in range(slow_count):
-            series[0, i] = series[1, i]
     return max(degree, 1)
 
 
@@ -1125,7 +1144,7 @@ def approach_monotone(buffers, exact, h):
     that closes in on a lift-off or a landing, or crosses it). A call of its own: it runs
     only there. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    _slow_polynomial(tables, exact, tables.approach_slow[exact])
+    _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
     count, terms = tables.slow_count[exact], tables.modal_slow
     for order in range(1, count):  # the derivative's coefficients n·c_n, in place
         terms[order - 1] = order * terms[order]
@@ -1234,10 +1253,10 @@ def _angle_swing(tables, exact):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _angle_bound(tables, exact, h, pinion):
+def _angle_bound(tables, exact, h):
     """The pinion angle's SlowBound over h from the step's start, from its slow part's
     polynomial (_slow_polynomial, in tables.modal_slow: scratch once the step is taken)."""
-    _slow_polynomial(tables, exact, tables.slow_right[exact, pinion])
+    _slow_polynomial(tables, exact, tables.angle_polynomial[exact])
     return _polynomial_bound(tables.modal_slow, tables.slow_count[exact], h)[0]
 
 
