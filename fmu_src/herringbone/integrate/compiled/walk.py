@@ -549,8 +549,11 @@ def window_samples(system, segment, state, workspace, times, rows, k, time, unti
     `event` at `until` (s), which lies somewhere in it: each taken only where the event has
     not crossed at its own time (its function keeps the sign it had at `time`). One past the
     crossing belongs to the next segment, whose solution reaches back to it, as a run that
-    stops at the sample finds. Returns the index of the first sample left."""
+    stops at the sample finds. The event values at `time` are made again (the loop holds them
+    already; chain_switches does not keep them). Returns the index of the first sample
+    left."""
     scratch, values = workspace.vectors[Vector.TRIAL], workspace.values
+    event_values(system, segment, state, values[Values.APPROACH], values[Values.BEFORE])
     while k < times.shape[0] and times[k] < until:
         exact_state(system, segment, state, workspace, times[k] - time, scratch)
         event_values(system, segment, scratch, values[Values.APPROACH], values[Values.TRIAL])
@@ -1324,16 +1327,17 @@ def open_walk(system, mesh, settings, run, workspace, end, torques, max_steps, s
     """walk's start: the segment the run is in begun (begin_segment), its first step aimed
     (aim_first_step), and where that is the modal solution's crossing of the phase end, the
     switches from there taken by chain_switches, as after an event. Returns (its Status,
-    the steps it took, the CompiledSegment the run is then in, begun there)."""
+    the steps it took, the next sample's index, the CompiledSegment the run is then in, begun
+    there)."""
     interval = run.place[0]
     aim_first_step(system, mesh, run, workspace,
                    segment_of(system, mesh, interval, run.loaded, torques, exact_form(
                        workspace, interval, mesh.counts[interval], run.loaded, run.state)),
                    samples, k, end)
-    status, steps = chain_switches(system, mesh, settings, run, workspace, torques, end,
-                                   samples, k, 0, max_steps)
-    return status, steps, begin_segment(system, mesh, run.place[0], run.state, run.loaded,
-                                        torques, workspace)
+    status, steps, k = chain_switches(system, mesh, settings, run, workspace, torques, end,
+                                      samples, k, 0, max_steps)
+    return status, steps, k, begin_segment(system, mesh, run.place[0], run.state, run.loaded,
+                                           torques, workspace)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1478,8 +1482,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit = is_explicit(workspace)
-    status, steps, segment = open_walk(system, mesh, settings, run, workspace, end, torques,
-                                       max_steps, samples, k)
+    status, steps, k, segment = open_walk(system, mesh, settings, run, workspace, end, torques,
+                                          max_steps, samples, k)
     controller, h = Controller(1e-4, False), clock[1]
     while status == Status.OK:
         target = stop_at(samples, k, end, segment.exact)
@@ -1516,8 +1520,8 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
             status, k = cross_event(system, mesh, settings, run, workspace, segment, plan,
                                     target, event, high, samples, k)
             if status == Status.OK:
-                status, steps = chain_switches(system, mesh, settings, run, workspace, torques,
-                                               end, samples, k, steps, max_steps)
+                status, steps, k = chain_switches(system, mesh, settings, run, workspace,
+                                                  torques, end, samples, k, steps, max_steps)
                 segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques,
                                         workspace)
         elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
@@ -1609,6 +1613,21 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event, ce
     return event, h_step
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def samples_before_event(samples, k, system, segment, settings, state, workspace, time, high,
+                         h_step, event):
+    """In an exact segment, the samples (a Samples or None) from the `k`-th on before `event`,
+    located at `high` (s) into the step of h_step (s) from `state` at `time` (s): those before
+    the location's window (sample_inside), then those in it (sample_in_window). Returns the
+    next sample's index."""
+    # the crossing lies within twice the location tolerance before `high`: a sample there is
+    # on the side its own time puts it
+    window_start = time + high - 2.0 * location_tolerance(settings, h_step)
+    k = sample_inside(samples, k, system, segment, state, workspace, time, window_start)
+    return sample_in_window(samples, k, system, segment, state, workspace, time, time + high,
+                            event)
+
+
 @njit(**NUMBERS_ONLY)
 def cross_event(system, mesh, settings, run, workspace, segment, plan, end, event, high,
                 samples, k):
@@ -1630,12 +1649,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     if violated_before(system, segment, settings, state, workspace, high, h_step):
         return Status.CONTACT_VIOLATED, k
     if segment.exact >= 0:
-        # the crossing lies within twice the location tolerance before `high`: a sample there
-        # is on the side its own time puts it
-        window_start = time + high - 2.0 * location_tolerance(settings, h_step)
-        k = sample_inside(samples, k, system, segment, state, workspace, time, window_start)
-        k = sample_in_window(samples, k, system, segment, state, workspace, time, time + high,
-                             event)
+        k = samples_before_event(samples, k, system, segment, settings, state, workspace, time,
+                                 high, h_step, event)
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
@@ -1658,24 +1673,27 @@ def chain_switches(system, mesh, settings, run, workspace, torques, end, samples
     once, for as long as it is the step the loop would take and accept, and it would locate
     that switch at the step's end without a trial (aimed_switch says when).
     What the loop does besides between two such switches (the rate and event values at the
-    step's ends, the grazing check, the location, the samples, begin_segment) changes nothing
-    there, and cost high_speed two fifths of its time: docs/exponential-integrator.md,
+    step's ends, the grazing check, the location, begin_segment) changes nothing there, and
+    cost high_speed two fifths of its time: docs/exponential-integrator.md,
     "Phase switches chained". `torques` (N·m) are held; `end` (s): where the call stops;
-    no switch is chained past the `k`-th of `samples` (a Samples; None: none); `steps`
-    accepted of `max_steps`. A debug run (contact slack >= 0) checks every step by
-    violated_before: not here. Returns (pass_event's Status: a stalled or chattering run
-    stops, and walk's loop with it, after begin_segment; the accepted steps)."""
+    the samples (a Samples; None: none) from the `k`-th on that a step passes are taken
+    inside it, as cross_event takes them; `steps` accepted of `max_steps`. A debug run
+    (contact slack >= 0) checks every step by violated_before: not here. Returns
+    (pass_event's Status: a stalled or chattering run stops, and walk's loop with it, after
+    begin_segment; the accepted steps; the next sample's index)."""
     status, counters = Status.OK, workspace.counters
     if settings[Setting.CONTACT_SLACK] >= 0.0:
-        return status, steps
-    sample_stop, interval = stop_at(samples, k, end, -1), run.place[0]
+        return status, steps, k
+    interval = run.place[0]
     exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
         segment = segment_of(system, mesh, interval, run.loaded, torques, exact)
-        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, sample_stop,
-                                   steps, max_steps)
+        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
+                                   max_steps)
         if not taken:
             break
+        k = samples_before_event(samples, k, system, segment, settings, run.state, workspace,
+                                 run.clock[0], plan.h_step, plan.h_step, Event.PHASE_END)
         # as take_exact_step would: a certified step, after an accepted one
         run.clock[1] = control_exact_step(exponential.CERTIFIED, plan,
                                           settings[Setting.EXACT_FLOOR], False)[1]
@@ -1692,23 +1710,22 @@ def chain_switches(system, mesh, settings, run, workspace, torques, end, samples
             ahead, aim = entry_aim(system, workspace, exact, run.state, torques[0], torques[1],
                                    mesh.lengths[interval], end - run.clock[0])
             remember_modal_aim(workspace, ahead, aim)
-    return status, steps
+    return status, steps, k
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def aimed_switch(system, settings, run, workspace, segment, end, sample_stop, steps,
-                 max_steps):
+def aimed_switch(system, settings, run, workspace, segment, end, steps, max_steps):
     """chain_switches' step in `segment` (exact; the run's state its start, the modal
     solution's crossing of its phase end in Memory.MODAL_AHEAD): the StepPlan that plan_step
     aims just past the crossing, its exact state in NEW_STATE, where the loop would take it
-    (step_allowed; before `sample_stop`, s), accept it (certified) and locate its phase end
+    (step_allowed; before `end`, s), accept it (certified) and locate its phase end
     at its end with no trial (crossed by at most two location tolerances, as
     first_estimate reads it, and nothing else crossed: points_stay). Returns (whether it is
     that step: False leaves it to the loop's own iteration; the StepPlan)."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    if not plan.aimed or time + plan.h_step >= sample_stop or \
+    if not plan.aimed or time + plan.h_step >= end or \
             step_allowed(steps, max_steps, time, plan) != Status.OK:
         return False, plan
     state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
