@@ -1045,12 +1045,11 @@ def finish_step(state, workspace):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def begin_segment(system, mesh, interval, state, loaded, torques, workspace):
-    """The CompiledSegment of contact interval `interval` (segment_of), with the rate, event
-    values and (where contact can be lost) approach slopes at `state`, its start, in the
-    workspace."""
-    segment = segment_of(system, mesh, interval, loaded, torques,
-                         exact_form(workspace, interval, mesh.counts[interval], loaded, state))
+def begin_segment(system, mesh, interval, state, loaded, torques, workspace, exact):
+    """The CompiledSegment of contact interval `interval` (segment_of; `exact`: its exact form
+    at `state`, exact_form's, which the caller has made), with the rate, event values and
+    (where contact can be lost) approach slopes at `state`, its start, in the workspace."""
+    segment = segment_of(system, mesh, interval, loaded, torques, exact)
     rate, values = workspace.vectors[Vector.RATE], workspace.values
     derivative(system, segment.points, segment.point_count, loaded, torques[0], torques[1], state,
                rate)
@@ -1273,23 +1272,21 @@ def pass_event(state, workspace, clock, time, end, plan, high, event):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def opening_ahead(system, mesh, run, workspace, segment, horizon):
+def opening_ahead(system, mesh, run, workspace, segment, exact, horizon):
     """Where the run has just entered an exact segment forward (end_segment; the torques
-    those of `segment`, the one it left): when the next phase event lies ahead
-    (exponential.modal_phase_event_ahead, from the modal solution), for the opening step to be
-    aimed at, and what kind of time that is (inf where the angle surely stays inside its
-    interval until `horizon`, s: where the call stops); (−1, exponential.NO_AIM) elsewhere. φp's
+    those of `segment`, the one it left; `exact`: the new segment's exact form): when the
+    next phase event lies ahead (exponential.modal_phase_event_ahead, from the modal
+    solution), for the opening step to be aimed at, and what kind of time that is (inf where
+    the angle surely stays inside its interval until `horizon`, s: where the call stops);
+    (−1, exponential.NO_AIM) elsewhere. φp's
     acceleration just after a switch is the fast modes' (1e6 rad/s² and more), so
     phase_event_ahead's extrapolation lands the opening step halfway. Taken here, once an
     event, where it was measured to cost least (docs/exponential-integrator.md, "An opening
     step aimed by the slow motion")."""
     if workspace.counters[Counter.OPENING] < 0:
         return -1.0, exponential.NO_AIM
-    interval = run.place[0]
-    return entry_aim(system, workspace, exact_form(workspace, interval, mesh.counts[interval],
-                                                   run.loaded, run.state),
-                     run.state, segment.motor_torque, segment.load_torque,
-                     mesh.lengths[interval], horizon)
+    return entry_aim(system, workspace, exact, run.state, segment.motor_torque,
+                     segment.load_torque, mesh.lengths[run.place[0]], horizon)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1330,14 +1327,14 @@ def open_walk(system, mesh, settings, run, workspace, end, torques, max_steps, s
     the steps it took, the next sample's index, the CompiledSegment the run is then in, begun
     there)."""
     interval = run.place[0]
+    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     aim_first_step(system, mesh, run, workspace,
-                   segment_of(system, mesh, interval, run.loaded, torques, exact_form(
-                       workspace, interval, mesh.counts[interval], run.loaded, run.state)),
-                   samples, k, end)
-    status, steps, k = chain_switches(system, mesh, settings, run, workspace, torques, end,
-                                      samples, k, 0, max_steps)
+                   segment_of(system, mesh, interval, run.loaded, torques, exact), samples, k,
+                   end)
+    status, steps, k, exact = chain_switches(system, mesh, settings, run, workspace, exact,
+                                             torques, end, samples, k, 0, max_steps)
     return status, steps, k, begin_segment(system, mesh, run.place[0], run.state, run.loaded,
-                                           torques, workspace)
+                                           torques, workspace, exact)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1509,21 +1506,21 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
         # (here, not in a helper: from an inlined one numba 0.68 dropped this store)
         if counters[Counter.OPENING] >= 0 and not (plan.landing or plan.aimed):
             first_steps[counters[Counter.OPENING]] = clock[1]
-        counters[Counter.OPENING] = -1
-        workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
+        counters[Counter.OPENING], workspace.memory[Memory.MODAL_AIM] = -1, exponential.NO_AIM
         event, high = crossed_event(system, segment, rows.new_state, values), plan.h_step
         rate_after_step(system, segment, explicit, rows)
         if system.contact_loss:
             event, high = grazing_probe(system, segment, settings, state, workspace,
                                         plan.h_step, event, certified)
         if event >= 0:
-            status, k = cross_event(system, mesh, settings, run, workspace, segment, plan,
-                                    target, event, high, samples, k)
+            status, k, exact = cross_event(system, mesh, settings, run, workspace, segment,
+                                           plan, target, event, high, samples, k)
             if status == Status.OK:
-                status, steps, k = chain_switches(system, mesh, settings, run, workspace,
-                                                  torques, end, samples, k, steps, max_steps)
+                status, steps, k, exact = chain_switches(system, mesh, settings, run,
+                                                         workspace, exact, torques, end,
+                                                         samples, k, steps, max_steps)
                 segment = begin_segment(system, mesh, run.place[0], state, run.loaded, torques,
-                                        workspace)
+                                        workspace, exact)
         elif settings[Setting.CONTACT_SLACK] >= 0.0 and system.contact_loss and \
                 contact_violated_inside(system, segment, settings, state, workspace, plan.h_step):
             status = Status.CONTACT_VIOLATED
@@ -1639,33 +1636,37 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     past it (pass_event; `end`: where the step would land, s) and into the next segment
     (end_segment), which the loop begins where this returns Status.OK; after a contact event
     in an exact segment, with a step no longer than the exact floor (the approach starts at
-    zero, where a longer one is not certified). Returns (Status; the next sample's index).
-    It returns numbers only, so it is compiled without reference counts
+    zero, where a longer one is not certified). Returns (Status; the next sample's index;
+    the exact form of the segment it entered, −1 where it entered none). It returns numbers
+    only, so it is compiled without reference counts
     (counting.py): it runs at every event, and counting every array of the records it is
     handed cost a fifth of the exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     workspace.counters[Counter.EVENTS] += 1
     if violated_before(system, segment, settings, state, workspace, high, h_step):
-        return Status.CONTACT_VIOLATED, k
+        return Status.CONTACT_VIOLATED, k, -1
     if segment.exact >= 0:
         k = samples_before_event(samples, k, system, segment, settings, state, workspace, time,
                                  high, h_step, event)
-    status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
+    status, exact = pass_event(state, workspace, run.clock, time, end, plan, high, event), -1
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
         if event >= Event.CONTACT and segment.exact >= 0:
             run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
-        ahead, aim = opening_ahead(system, mesh, run, workspace, segment, end - run.clock[0])
+        interval = run.place[0]
+        exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
+        ahead, aim = opening_ahead(system, mesh, run, workspace, segment, exact,
+                                   end - run.clock[0])
         remember_modal_aim(workspace, ahead, aim)
-    return status, k
+    return status, k, exact
 
 
 # --- phase switches chained ------------------------------------------------------------------
 
 @njit(**NUMBERS_ONLY)
-def chain_switches(system, mesh, settings, run, workspace, torques, end, samples, k, steps,
-                   max_steps):
+def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, samples, k,
+                   steps, max_steps):
     """After cross_event has moved the run into a new segment (Status.OK), and at a call's
     start (open_walk): while the segment is exact and its opening step is aimed at the modal
     solution's crossing of its phase end (opening_ahead, call_opening_ahead:
@@ -1675,17 +1676,18 @@ def chain_switches(system, mesh, settings, run, workspace, torques, end, samples
     What the loop does besides between two such switches (the rate and event values at the
     step's ends, the grazing check, the location, begin_segment) changes nothing there, and
     cost high_speed two fifths of its time: docs/exponential-integrator.md,
-    "Phase switches chained". `torques` (N·m) are held; `end` (s): where the call stops;
+    "Phase switches chained". `exact`: the exact form of the run's segment (exact_form);
+    `torques` (N·m) are held; `end` (s): where the call stops;
     the samples (a Samples; None: none) from the `k`-th on that a step passes are taken
     inside it, as cross_event takes them; `steps` accepted of `max_steps`. A debug run
     (contact slack >= 0) checks every step by violated_before: not here. Returns
     (pass_event's Status: a stalled or chattering run stops, and walk's loop with it, after
-    begin_segment; the accepted steps; the next sample's index)."""
+    begin_segment; the accepted steps; the next sample's index; the exact form of the
+    segment it leaves the run in)."""
     status, counters = Status.OK, workspace.counters
     if settings[Setting.CONTACT_SLACK] >= 0.0:
-        return status, steps, k
+        return status, steps, k, exact
     interval = run.place[0]
-    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
     while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
         segment = segment_of(system, mesh, interval, run.loaded, torques, exact)
         taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
@@ -1710,7 +1712,7 @@ def chain_switches(system, mesh, settings, run, workspace, torques, end, samples
             ahead, aim = entry_aim(system, workspace, exact, run.state, torques[0], torques[1],
                                    mesh.lengths[interval], end - run.clock[0])
             remember_modal_aim(workspace, ahead, aim)
-    return status, steps, k
+    return status, steps, k, exact
 
 
 @njit(cache=True, error_model="numpy", inline="always")
