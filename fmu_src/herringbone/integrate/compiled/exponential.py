@@ -1057,7 +1057,7 @@ def _slow_polynomial(tables, exact, rows):
 @njit(cache=True, error_model="numpy", inline="always")
 def _next_term(tables, exact, slow_count, factor):
     """The slow block's series, one term on: tables.series[1] = T_slow·series[0]·factor (h/n
-    for the n-th term of exp(T_slow·h), 1/n for its coefficient of t^n)."""
+    for the n-th term of exp(T_slow·h))."""
     block, series = tables.slow, tables.series
     for i in range(slow_count):
         total = 0.0

@@ -1278,11 +1278,10 @@ def opening_ahead(system, mesh, run, workspace, segment, exact, horizon):
     next phase event lies ahead (exponential.modal_phase_event_ahead, from the modal
     solution), for the opening step to be aimed at, and what kind of time that is (inf where
     the angle surely stays inside its interval until `horizon`, s: where the call stops);
-    (−1, exponential.NO_AIM) elsewhere. φp's
-    acceleration just after a switch is the fast modes' (1e6 rad/s² and more), so
-    phase_event_ahead's extrapolation lands the opening step halfway. Taken here, once an
-    event, where it was measured to cost least (docs/exponential-integrator.md, "An opening
-    step aimed by the slow motion")."""
+    (−1, exponential.NO_AIM) elsewhere. φp's acceleration just after a switch is the fast
+    modes' (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
+    halfway. Taken here, once an event, where it was measured to cost least
+    (docs/exponential-integrator.md, "An opening step aimed by the slow motion")."""
     if workspace.counters[Counter.OPENING] < 0:
         return -1.0, exponential.NO_AIM
     return entry_aim(system, workspace, exact, run.state, segment.motor_torque,
@@ -1638,9 +1637,9 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     in an exact segment, with a step no longer than the exact floor (the approach starts at
     zero, where a longer one is not certified). Returns (Status; the next sample's index;
     the exact form of the segment it entered, −1 where it entered none). It returns numbers
-    only, so it is compiled without reference counts
-    (counting.py): it runs at every event, and counting every array of the records it is
-    handed cost a fifth of the exponential method's time."""
+    only, so it is compiled without reference counts (counting.py): it runs at every event,
+    and counting every array of the records it is handed cost a fifth of the exponential
+    method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     workspace.counters[Counter.EVENTS] += 1
@@ -1649,7 +1648,8 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     if segment.exact >= 0:
         k = samples_before_event(samples, k, system, segment, settings, state, workspace, time,
                                  high, h_step, event)
-    status, exact = pass_event(state, workspace, run.clock, time, end, plan, high, event), -1
+    status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
+    exact = -1
     if status == Status.OK:
         end_segment(system, mesh, run, workspace, event)
         if event >= Event.CONTACT and segment.exact >= 0:
@@ -1675,12 +1675,12 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
     that switch at the step's end without a trial (aimed_switch says when).
     What the loop does besides between two such switches (the rate and event values at the
     step's ends, the grazing check, the location, begin_segment) changes nothing there, and
-    cost high_speed two fifths of its time: docs/exponential-integrator.md,
-    "Phase switches chained". `exact`: the exact form of the run's segment (exact_form);
-    `torques` (N·m) are held; `end` (s): where the call stops;
-    the samples (a Samples; None: none) from the `k`-th on that a step passes are taken
-    inside it, as cross_event takes them; `steps` accepted of `max_steps`. A debug run
-    (contact slack >= 0) checks every step by violated_before: not here. Returns
+    cost high_speed two fifths of its time: docs/exponential-integrator.md, "Phase switches
+    chained". `exact`: the exact form of the run's segment (exact_form); `torques` (N·m) are
+    held; `end` (s): where the call stops; the samples (a Samples; None: none) from the
+    `k`-th on that a step passes are taken inside it, as cross_event takes them; `steps`
+    accepted of `max_steps`. A debug run (contact slack >= 0) checks every step by
+    violated_before: not here. Returns
     (pass_event's Status: a stalled or chattering run stops, and walk's loop with it, after
     begin_segment; the accepted steps; the next sample's index; the exact form of the
     segment it leaves the run in)."""
