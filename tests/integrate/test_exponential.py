@@ -686,8 +686,8 @@ def test_the_tabulated_slow_polynomial_is_the_slow_block_s_exponential(scene_nam
     scene), within 1e-12 of the sum of the products' magnitudes, on every exact form, from
     random slow coordinates. A row tabulated without its 1/n!, or one power off, misses by
     far more."""
-    tables = CompiledStepper(model_of(scene_name), 1e-7, "exponential").exact_tables
-    pinion = model_of(scene_name).system.pinion
+    model = model_of(scene_name)
+    tables, pinion = CompiledStepper(model, 1e-7, "exponential").exact_tables, model.system.pinion
     rng = np.random.default_rng(7)
     for exact in np.flatnonzero(tables.valid):
         size = tables.slow_count[exact]

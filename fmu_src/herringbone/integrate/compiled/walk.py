@@ -1282,21 +1282,24 @@ def opening_ahead(system, mesh, run, workspace, segment, exact, horizon):
     modes' (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
     halfway. Taken here, once an event, where it was measured to cost least
     (docs/exponential-integrator.md, "An opening step aimed by the slow motion")."""
-    if workspace.counters[Counter.OPENING] < 0:
+    if workspace.counters[Counter.OPENING] < 0 or exact < 0:
         return -1.0, exponential.NO_AIM
-    return entry_aim(system, workspace, exact, run.state, segment.motor_torque,
-                     segment.load_torque, mesh.lengths[run.place[0]], horizon)
+    return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
+                             segment.load_torque, mesh.lengths[run.place[0]], horizon)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def entry_aim(system, workspace, exact, state, motor_torque, load_torque, length, horizon):
-    """opening_ahead's aim from `state`, where a segment of exact form `exact` (−1: none; then
-    (−1, exponential.NO_AIM)) and interval `length` (rad) has just been entered forward with
-    the torques (N·m) held: exact_event_ahead to `horizon` (s)."""
-    if exact < 0:
-        return -1.0, exponential.NO_AIM
-    return exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque,
-                             length, horizon)
+def enter_next_segment(system, mesh, run, workspace, segment, event, end):
+    """The run, past `event` (pass_event), moved into the segment that follows (end_segment),
+    that segment's exact form made, and after a forward entry into an exact one its opening
+    step aimed (opening_ahead, the call stopping at `end`, s; remember_modal_aim). `segment`:
+    the one left, whose torques are held. Returns the new segment's exact form."""
+    end_segment(system, mesh, run, workspace, event)
+    interval = run.place[0]
+    exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
+    ahead, aim = opening_ahead(system, mesh, run, workspace, segment, exact, end - run.clock[0])
+    remember_modal_aim(workspace, ahead, aim)
+    return exact
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1651,14 +1654,9 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     status = pass_event(state, workspace, run.clock, time, end, plan, high, event)
     exact = -1
     if status == Status.OK:
-        end_segment(system, mesh, run, workspace, event)
+        exact = enter_next_segment(system, mesh, run, workspace, segment, event, end)
         if event >= Event.CONTACT and segment.exact >= 0:
             run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
-        interval = run.place[0]
-        exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded, run.state)
-        ahead, aim = opening_ahead(system, mesh, run, workspace, segment, exact,
-                                   end - run.clock[0])
-        remember_modal_aim(workspace, ahead, aim)
     return status, k, exact
 
 
@@ -1704,14 +1702,10 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
         counters[Counter.SWITCHES_CHAINED] += 1
         status = pass_event(run.state, workspace, run.clock, run.clock[0], end, plan,
                             plan.h_step, Event.PHASE_END)
-        if status == Status.OK:  # (opening_ahead, with the exact form kept for the segment)
-            end_segment(system, mesh, run, workspace, Event.PHASE_END)
+        if status == Status.OK:
+            exact = enter_next_segment(system, mesh, run, workspace, segment,
+                                       Event.PHASE_END, end)
             interval = run.place[0]
-            exact = exact_form(workspace, interval, mesh.counts[interval], run.loaded,
-                               run.state)
-            ahead, aim = entry_aim(system, workspace, exact, run.state, torques[0], torques[1],
-                                   mesh.lengths[interval], end - run.clock[0])
-            remember_modal_aim(workspace, ahead, aim)
     return status, steps, k, exact
 
 
