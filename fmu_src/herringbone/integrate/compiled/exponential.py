@@ -160,9 +160,10 @@ class ExactTables(NamedTuple):
     tilt_bound: float  # how far from zero the tilt rows' products may be at a segment's start
     inertia: float  # Σ m·r² along the rigid rotation r
     # Scratch. `start`: the augmented X = [state; u] of the last step's start, then the
-    # exact form's index + 1 (0: none yet), the momentum and moment (`_momentum`) there;
-    # start_slow, start_fast, start_size: its modal coordinates and the fast ones' magnitudes
-    start: np.ndarray  # (M + 3,)
+    # exact form's index + 1 (0: none yet), the momentum and moment (`_momentum`) there, and
+    # the time of aimed_fast (s; NaN: none since it was prepared); start_slow, start_fast,
+    # start_size: its modal coordinates and the fast ones' magnitudes
+    start: np.ndarray  # (M + 4,)
     start_slow: np.ndarray  # (S,)
     start_fast: np.ndarray  # (F,) complex
     start_size: np.ndarray  # (F,)
@@ -170,6 +171,7 @@ class ExactTables(NamedTuple):
     #                         modal_phase_event_ahead, approach_crossing)
     modal_fast: np.ndarray  # (F,) complex
     grid_fast: np.ndarray  # (F,) complex: e^{λ·t} at a point of inside_on_grid's grid
+    aimed_fast: np.ndarray  # (F,) complex: e^{λ·t} where the angle's aim last evaluated
     series: np.ndarray  # (2, S): the slow block's series
 
 
@@ -381,10 +383,11 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     inertia = float(np.sum(system.mass * system.rigid_rotation ** 2))
     return ExactTables(
         valid=valid, **arrays, tilt_bound=max(TILT_FRACTION * step_tolerance, TILT_ROUNDING),
-        inertia=inertia, start=np.zeros(width + 3), start_slow=np.zeros(slow_width),
+        inertia=inertia, start=np.zeros(width + 4), start_slow=np.zeros(slow_width),
         start_fast=np.zeros(fast_width, dtype=complex), start_size=np.zeros(fast_width),
         modal_slow=np.zeros(slow_width), modal_fast=np.zeros(fast_width, dtype=complex),
-        grid_fast=np.zeros(fast_width, dtype=complex), series=np.zeros((2, slow_width)))
+        grid_fast=np.zeros(fast_width, dtype=complex),
+        aimed_fast=np.zeros(fast_width, dtype=complex), series=np.zeros((2, slow_width)))
 
 
 def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defective: bool):
@@ -493,7 +496,7 @@ def _polynomial_rows(row: np.ndarray, block: np.ndarray) -> np.ndarray:
 
 # pack_tables' buffers, each in this order (ExactTables' fields of that dtype)
 COMPLEX_FIELDS = ("fast_left", "fast_right", "rates", "speed_fast", "approach_fast",
-                  "start_fast", "modal_fast", "grid_fast")
+                  "start_fast", "modal_fast", "grid_fast", "aimed_fast")
 FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "angle_polynomial", "approach_polynomial",
                 "tilt_rows", "speed_slow", "approach_slow",
                 "speed_size", "approach_size", "angle_size", "start", "start_slow", "start_size",
@@ -537,6 +540,7 @@ def unpack_tables(buffers):
     at += 2 * places * fast
     start_fast, modal_fast = complexes[at:at + fast], complexes[at + fast:at + 2 * fast]
     grid_fast = complexes[at + 2 * fast:at + 3 * fast]
+    aimed_fast = complexes[at + 3 * fast:at + 4 * fast]
     slow_left = _cube(floats, 0, places, slow, width)
     at = places * slow * width
     slow_right = _cube(floats, at, places, size, slow)
@@ -551,8 +555,8 @@ def unpack_tables(buffers):
     at += 2 * places * slow
     rows_of_fast = _cube(floats, at, 3, places, fast)
     at += 3 * places * fast
-    start = floats[at:at + width + 3]
-    at += width + 3
+    start = floats[at:at + width + 4]
+    at += width + 4
     start_slow, start_size = floats[at:at + slow], floats[at + slow:at + slow + fast]
     at += slow + fast
     modal_slow = floats[at:at + slow]
@@ -566,7 +570,8 @@ def unpack_tables(buffers):
         rows_of_slow[0], rows_of_slow[1], rows_of_fast[0], rows_of_fast[1], rows_of_fast[2],
         rows_of_fast_complex[0], rows_of_fast_complex[1],
         floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
-        start_slow, start_fast, start_size, modal_slow, modal_fast, grid_fast, series)
+        start_slow, start_fast, start_size, modal_slow, modal_fast, grid_fast, aimed_fast,
+        series)
 
 
 @njit(cache=True, error_model="numpy")
@@ -625,8 +630,8 @@ def _prepared(tables, exact, state, motor_torque, load_torque):
 @njit(cache=True, error_model="numpy", inline="always")
 def _prepare(system, tables, exact, state, motor_torque, load_torque):
     """The step's start into tables.start (X = [state; u], the exact form's index + 1, the
-    momentum and moment), and L·X into start_slow and start_fast, the fast coordinates'
-    magnitudes into start_size."""
+    momentum and moment, no aimed_fast yet), and L·X into start_slow and start_fast, the fast
+    coordinates' magnitudes into start_size."""
     size = state.shape[0]
     start = tables.start
     for j in range(size):
@@ -649,6 +654,7 @@ def _prepare(system, tables, exact, state, motor_torque, load_torque):
         tables.start_size[k] = math.sqrt(real * real + imaginary * imaginary)
     momentum, moment = _momentum(system, state)
     start[width], start[width + 1], start[width + 2] = exact + 1, momentum, moment
+    start[width + 3] = math.nan
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -685,6 +691,12 @@ def _exponential(rate, t):
     decay, angle = math.exp(exponent), rate.imag * t
     return complex(decay * math.cos(angle), decay * math.sin(angle))
 
+
+# The largest |Re| + |Im| of λ·(h − t) for which a step of h takes e^{λ·h} from the aim's
+# e^{λ·t} (_fast_modes): the series to x³ then errs by x⁴/24 < 1e-17. The aim's last change
+# times |λ| was 1.6e-5 at most on the reference scene, 1.2e-8 on high_speed (forty switches
+# each); a larger one takes exp.
+NEAR_EXPONENT = 1e-4
 
 # What an exact step's certificate says (`step`; walk.control_exact_step acts on it)
 CERTIFIED = 0  # no event function can cross zero inside the step unseen by its ends
@@ -966,7 +978,7 @@ def _modal_crossing(tables, exact, rows, degree, end, forward, sure, guess, hall
     low, high = 0.0, sure
     ahead = guess
     for _ in range(CROSSING_ITERATIONS):
-        value, slope, curve, third = _modal_at(tables, exact, rows, degree, ahead)
+        value, slope, curve, third = _modal_at(tables, exact, rows, degree, ahead, halley)
         value -= end
         if value == 0.0:
             return ahead
@@ -1005,20 +1017,29 @@ def _halley_change(value, slope, curve):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _modal_at(tables, exact, rows, degree, t):
+def _modal_at(tables, exact, rows, degree, t, keep):
     """A function of the state and its first three derivatives (per s, s², s³) t s after
     the step's start, from its slow polynomial (tables.modal_slow, of `degree`) and its
-    row of the fast modes `rows`."""
+    row of the fast modes `rows`. With `keep` (a constant where it is inlined: the angle's
+    aim), the modes' e^{λ·t} are kept in tables.aimed_fast, and t beside them, for the step
+    aimed there (_fast_modes); an approach's Newton iterations, which no step follows, do
+    not keep them (storing them cost jump_resonance 3 to 4 %)."""
     value, slope, curve, third = _polynomial_derivatives(tables.modal_slow, degree, t)
+    aimed = tables.aimed_fast
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
-        mode = rows[k] * tables.start_fast[k] * _exponential(rate, t)
+        propagator = _exponential(rate, t)
+        if keep:
+            aimed[k] = propagator
+        mode = rows[k] * tables.start_fast[k] * propagator
         rated = mode * rate
         twice = rated * rate
         value += mode.real
         slope += rated.real
         curve += twice.real
         third += (twice * rate).real
+    if keep:
+        tables.start[tables.start.shape[0] - 1] = t
     return value, slope, curve, third
 
 
@@ -1165,15 +1186,31 @@ def approach_monotone(buffers, exact, h):
 @njit(cache=True, error_model="numpy", inline="always")
 def _fast_modes(tables, exact, h):
     """Propagate the fast coordinates of the step's start over h into tables.modal_fast.
-    Returns the Σ|a_k| of the pinion speed's fast modes and of a point's approach's."""
+    Returns the Σ|a_k| of the pinion speed's fast modes and of a point's approach's.
+    A step aimed at a crossing ends where the aim last evaluated the modes (_modal_at) but
+    for its last change, tiny: e^{λ·h} is then e^{λ·t} there times the series of
+    e^{λ·(h − t)} (_near_exponential), a few products where exp, cos and sin cost a fifth
+    of the step."""
     speed_swing = approach_swing = 0.0
     rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
+    beyond = h - tables.start[tables.start.shape[0] - 1]  # NaN where no aim evaluated
     for k in range(tables.fast_count[exact]):
         size = tables.start_size[k]
         speed_swing += tables.speed_size[exact, k] * size
         approach_swing += tables.approach_size[exact, k] * size
-        modal_fast[k] = start_fast[k] * _exponential(rates[exact, k], h)
+        rate = rates[exact, k]
+        near = rate * beyond
+        if abs(near.real) + abs(near.imag) <= NEAR_EXPONENT:
+            modal_fast[k] = start_fast[k] * (tables.aimed_fast[k] * _near_exponential(near))
+        else:
+            modal_fast[k] = start_fast[k] * _exponential(rate, h)
     return speed_swing, approach_swing
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _near_exponential(x):
+    """e^x of a complex x with |x| ≤ NEAR_EXPONENT√2, to rounding: its series to x³."""
+    return 1.0 + x * (1.0 + 0.5 * x * (1.0 + x / 3.0))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
