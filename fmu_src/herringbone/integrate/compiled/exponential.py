@@ -654,7 +654,7 @@ def _prepare(system, tables, exact, state, motor_torque, load_torque):
         tables.start_size[k] = math.sqrt(real * real + imaginary * imaginary)
     momentum, moment = _momentum(system, state)
     start[width], start[width + 1], start[width + 2] = exact + 1, momentum, moment
-    start[width + 3] = math.nan
+    start[start.shape[0] - 1] = math.nan  # (aimed_fast's time, as _modal_at keeps it)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1189,8 +1189,7 @@ def _fast_modes(tables, exact, h):
     Returns the Σ|a_k| of the pinion speed's fast modes and of a point's approach's.
     A step aimed at a crossing ends where the aim last evaluated the modes (_modal_at) but
     for its last change, tiny: e^{λ·h} is then e^{λ·t} there times the series of
-    e^{λ·(h − t)} (_near_exponential), a few products where exp, cos and sin cost a fifth
-    of the step."""
+    e^{λ·(h − t)} (_near_exponential), a few products instead of an exp and a sincos."""
     speed_swing = approach_swing = 0.0
     rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
     beyond = h - tables.start[tables.start.shape[0] - 1]  # NaN where no aim evaluated
@@ -1209,7 +1208,8 @@ def _fast_modes(tables, exact, h):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _near_exponential(x):
-    """e^x of a complex x with |x| ≤ NEAR_EXPONENT√2, to rounding: its series to x³."""
+    """e^x of a complex x with |Re x| + |Im x| ≤ NEAR_EXPONENT, to rounding: its series to
+    x³."""
     return 1.0 + x * (1.0 + 0.5 * x * (1.0 + x / 3.0))
 
 
