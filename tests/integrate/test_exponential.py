@@ -692,13 +692,13 @@ def test_a_step_aimed_at_the_crossing_takes_the_aim_s_exponentials(reference_mod
         arguments = (model.system, stepper.exact_buffers, exact, position.state, *torques)
         ahead, aim = exponential.modal_phase_event_ahead(*arguments, length, 1.0)
         h = ahead + stepper.event_time_tolerance
-        evaluated, rates = tables.start[-1], tables.rates[exact, :tables.fast_count[exact]]
-        near = rates * (h - evaluated)
+        rates = tables.rates[exact, :tables.fast_count[exact]]
+        near = rates * (h - tables.start[exponential.AIMED_AT])
         assert aim == exponential.CROSSING
         assert np.all(np.abs(near.real) + np.abs(near.imag) <= exponential.NEAR_EXPONENT)
         aimed, fresh = np.empty_like(position.state), np.empty_like(position.state)
         exponential.state_after(*arguments, h, aimed)
-        tables.start[-1] = np.nan  # (no aim evaluated: the exponentials themselves)
+        tables.start[exponential.AIMED_AT] = np.nan  # (no aim: the exponentials themselves)
         exponential.state_after(*arguments, h, fresh)
         assert np.abs((aimed - fresh) / scales).max() <= 1e-14
 

@@ -123,6 +123,9 @@ NO_AIM = -1  # (walk: no time predicted)
 # The slow block's series stops where a term falls below this fraction of the sum
 SERIES_FLOOR = 1e-18
 MAX_SERIES_TERMS = 40
+# tables.start's entry that holds the time of aimed_fast (s; NaN: none since the start was
+# prepared)
+AIMED_AT = -1
 
 
 class ExactTables(NamedTuple):
@@ -161,7 +164,7 @@ class ExactTables(NamedTuple):
     inertia: float  # Σ m·r² along the rigid rotation r
     # Scratch. `start`: the augmented X = [state; u] of the last step's start, then the
     # exact form's index + 1 (0: none yet), the momentum and moment (`_momentum`) there, and
-    # the time of aimed_fast (s; NaN: none since it was prepared); start_slow, start_fast,
+    # the time of aimed_fast (AIMED_AT); start_slow, start_fast,
     # start_size: its modal coordinates and the fast ones' magnitudes
     start: np.ndarray  # (M + 4,)
     start_slow: np.ndarray  # (S,)
@@ -654,7 +657,7 @@ def _prepare(system, tables, exact, state, motor_torque, load_torque):
         tables.start_size[k] = math.sqrt(real * real + imaginary * imaginary)
     momentum, moment = _momentum(system, state)
     start[width], start[width + 1], start[width + 2] = exact + 1, momentum, moment
-    start[start.shape[0] - 1] = math.nan  # (aimed_fast's time, as _modal_at keeps it)
+    start[AIMED_AT] = math.nan
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1023,7 +1026,8 @@ def _modal_at(tables, exact, rows, degree, t, keep):
     row of the fast modes `rows`. With `keep` (a constant where it is inlined: the angle's
     aim), the modes' e^{λ·t} are kept in tables.aimed_fast, and t beside them, for the step
     aimed there (_fast_modes); an approach's Newton iterations, which no step follows, do
-    not keep them (storing them cost jump_resonance 3 to 4 %)."""
+    not keep them (docs/exponential-integrator.md, "The aimed step's exponentials from the
+    aim's")."""
     value, slope, curve, third = _polynomial_derivatives(tables.modal_slow, degree, t)
     aimed = tables.aimed_fast
     for k in range(tables.fast_count[exact]):
@@ -1039,7 +1043,7 @@ def _modal_at(tables, exact, rows, degree, t, keep):
         curve += twice.real
         third += (twice * rate).real
     if keep:
-        tables.start[tables.start.shape[0] - 1] = t
+        tables.start[AIMED_AT] = t
     return value, slope, curve, third
 
 
@@ -1192,7 +1196,7 @@ def _fast_modes(tables, exact, h):
     e^{λ·(h − t)} (_near_exponential), a few products instead of an exp and a sincos."""
     speed_swing = approach_swing = 0.0
     rates, start_fast, modal_fast = tables.rates, tables.start_fast, tables.modal_fast
-    beyond = h - tables.start[tables.start.shape[0] - 1]  # NaN where no aim evaluated
+    beyond = h - tables.start[AIMED_AT]  # NaN where no aim evaluated
     for k in range(tables.fast_count[exact]):
         size = tables.start_size[k]
         speed_swing += tables.speed_size[exact, k] * size
