@@ -161,9 +161,9 @@ def _content_guid(contents: dict[str, bytes]) -> str:
     """A GUID (8-4-4-4-12 hex digits) from the SHA-256 of every entry's name and content (the
     model description with an empty guid) but the compiled code carried for a first start
     (resources/numba_cache): FMUs of the same model, code and scene share it, any change to
-    those moves it. The carried code is a cache, whatever the build machine's numba cache held
-    (carry_compiled_integrator); it grows as other work compiles other variants, and the
-    FMI's GUID is the fingerprint of the model description and the model it belongs to."""
+    those moves it. The carried code is compiled for the build machine's kind
+    (carry_compiled_integrator), and the FMI's GUID is the fingerprint of the model
+    description and the model it belongs to."""
     from ..integrate.first_start import CARRIED_FOLDER
 
     cache = f"resources/{CARRIED_FOLDER}/"
@@ -315,28 +315,32 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
     load it from the user's cache, herringbone.integrate.compiled.cache), saying so first and
-    showing progress on stdout, and copy the compiled code to `folder`/numba_cache, which the
-    FMU carries in its resources (herringbone.integrate.first_start). Returns that folder.
-    Raises RuntimeError if the cache folder lacks what was compiled (it could not be
-    written)."""
+    showing progress on stdout, and copy the compiled code that a run of the FMU loads into
+    `folder`/numba_cache, which the FMU carries in its resources
+    (herringbone.integrate.first_start.carry_for_scene). Returns that folder. Raises
+    RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
     from ..integrate import first_start
     from ..integrate.compiled import cache, walk
 
     # in this process: a build after the first (the test suite's) finds the code loaded
     first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
-    # where numba put it, whatever the environment (a private attribute numba's types omit)
-    compiled = Path(walk.advance._cache._cache_path)  # type: ignore[attr-defined]
     missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
                                      for signature in walk.advance.signatures) if reason]
     if missing:
-        raise RuntimeError(f"the compiled integrator is not in {compiled} ({missing[0]}): "
-                           "set HERRINGBONE_CACHE_DIR to a writable folder")
-    carried = Path(folder) / first_start.CARRIED_FOLDER / compiled.name
-    carried.mkdir(parents=True)
-    for path in compiled.iterdir():
-        if path.suffix in (".nbi", ".nbc") or path.name == first_start.RECORD:
-            shutil.copyfile(path, carried / path.name)
-    return carried.parent
+        raise RuntimeError(f"the compiled integrator is not in {cache.kernels_folder()} "
+                           f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
+    # what a run loads, taken in a fresh process: a compile caches every kernel the loop
+    # calls as well (its own code holds them), and this process may hold other scenes' code
+    carried = Path(folder) / first_start.CARRIED_FOLDER
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join(  # the package built from
+        [str(GEAR_PACKAGE.parent), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    run = subprocess.run([sys.executable, "-m", "herringbone.integrate.first_start",
+                          str(scene), str(carried)],
+                         env=environment, capture_output=True, text=True)
+    if run.returncode != 0:
+        last = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}"])[-1]
+        raise RuntimeError(f"cannot carry the compiled integrator into the FMU: {last}")
+    return carried
 
 
 def default_fmu_name(scene_name: str, fmi_version: int) -> str:

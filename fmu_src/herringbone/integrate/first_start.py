@@ -1,10 +1,11 @@
 """The integrator's first start on a machine: compiled code carried in, a word before compiling.
 
 numba compiles the integrator's loop (compiled/walk.py) once per machine, numba version and
-version of the package, and caches it (compiled/cache.py). An FMU carries the cache of its
-build machine in resources/numba_cache (`CARRIED_FOLDER`); `prepare`, called as the slave is
-instantiated, copies it into the user's cache folder when that has none for this version, so an
-FMU started on a machine of the build machine's kind loads its code in a fraction of a second.
+version of the package, and caches it (compiled/cache.py). An FMU carries the compiled code
+a run of its scene loads (`carry_for_scene`, in resources/numba_cache: `CARRIED_FOLDER`);
+`prepare`, called as the slave is instantiated, copies it into the user's cache folder when
+that has none for this version, so an FMU started on a machine of the build machine's kind
+loads its code in a fraction of a second.
 
 Where numba must compile anyway (another CPU, another numba, no carried cache), `announce_compiles`
 says so before it starts, with the reason and the time it will take (`estimate_seconds`), and
@@ -20,6 +21,7 @@ pythonfmu, logging off) the message goes to stderr at once and to the queue as w
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import threading
 import time
@@ -31,7 +33,7 @@ from numba.core import event
 
 from .compiled import cache
 
-CARRIED_FOLDER = "numba_cache"  # in an FMU's resources: the build machine's kernels-<digest>
+CARRIED_FOLDER = "numba_cache"  # in an FMU's resources: a kernels-<digest> of the build machine's
 RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, "cpu": name}}
 # Compile time of the whole integrator when nothing is recorded: 40.5 to 44.3 s measured with
 # every cache empty on this project's 2-core machine (AMD EPYC, numba 0.68), shared with others
@@ -228,6 +230,23 @@ def _progress(done, every, say):
         say(f"  ... {time.perf_counter() - started:.0f} s of about {estimate_seconds():.0f} s")
 
 
-# python -m herringbone.integrate.first_start SCENE: what the builder runs
+def carry_for_scene(scene_path, folder) -> list[str]:
+    """What an FMU of the scene carries, put into `folder` (its resources/CARRIED_FOLDER): the
+    compiled code compile_for_scene loads or compiles, as cache.carry_loaded copies it, and the
+    compile times recorded beside it (RECORD). Only what this process has loaded is carried,
+    so the builder runs this in a fresh one. Returns the index files written."""
+    compile_for_scene(scene_path, say=lambda message: print(message, flush=True))
+    written = cache.carry_loaded(Path(folder))
+    if (cache.kernels_folder() / RECORD).is_file():
+        shutil.copyfile(cache.kernels_folder() / RECORD,
+                        Path(folder) / cache.kernels_folder().name / RECORD)
+    return written
+
+
+# python -m herringbone.integrate.first_start SCENE [FOLDER]: what the builder runs, in a fresh
+# process (carry_for_scene into FOLDER)
 if __name__ == "__main__":
-    compile_for_scene(sys.argv[1], say=lambda message: print(message, flush=True))
+    if len(sys.argv) > 2:
+        carry_for_scene(sys.argv[1], sys.argv[2])
+    else:
+        compile_for_scene(sys.argv[1], say=lambda message: print(message, flush=True))

@@ -104,6 +104,50 @@ def seed_from(carried: Path) -> list[str]:
     return copied
 
 
+def carry_loaded(folder: Path) -> list[str]:
+    """Copy into `folder`/kernels-<digest> (as seed_from reads it) the compiled code of this
+    package that this process has loaded or compiled: for each kernel called from Python, the
+    code of each argument types it ran with, and its index holding those entries alone. What
+    those kernels call is compiled into their own code (the loop holds the events, the steps
+    and the equations), so nothing else is needed to run them. Returns the index files
+    written. Raises RuntimeError where an entry is not on disk (the cache folder could not be
+    written)."""
+    target = Path(folder) / kernels_folder().name
+    written = []
+    for dispatcher in _loaded_kernels():
+        cache_file = dispatcher._cache._cache_file
+        overloads = cache_file._load_index()
+        keys = [dispatcher._cache._index_key(signature, dispatcher.targetctx.codegen())
+                for signature in dispatcher.overloads]
+        missing = [why_not_cached(dispatcher, signature) for signature, key
+                   in zip(dispatcher.overloads, keys) if key not in overloads]
+        if missing:
+            raise RuntimeError(f"the compiled integrator is not in {kernels_folder()} "
+                               f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
+        target.mkdir(parents=True, exist_ok=True)
+        for key in keys:
+            _copy_into(kernels_folder() / overloads[key], target)
+        carried = caching.IndexDataCacheFile(str(target), cache_file._index_name[:-len(".nbi")],
+                                             package_digest())
+        carried._save_index({key: overloads[key] for key in keys})
+        written.append(cache_file._index_name)
+    return written
+
+
+def _loaded_kernels() -> list:
+    """This package's kernels (numba dispatchers defined at the top of its modules) that hold
+    compiled code in this process."""
+    import sys
+
+    from numba.core.dispatcher import Dispatcher
+
+    package = __name__.rpartition(".")[0]
+    return [value for name, module in sorted(sys.modules.items())
+            if name.startswith(package + ".") for value in vars(module).values()
+            if isinstance(value, Dispatcher) and value.py_func.__module__ == name
+            and value.overloads]
+
+
 def _copy_into(source: Path, folder: Path) -> None:
     handle, staging = tempfile.mkstemp(dir=folder, prefix=f".{source.name}.")
     os.close(handle)
