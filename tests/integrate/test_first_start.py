@@ -49,6 +49,24 @@ def test_a_built_fmu_starts_on_an_empty_cache_without_compiling(scene_fmu, tmp_p
     assert len(kernels) == 1
 
 
+def test_an_fmu_of_another_method_started_next_compiles_nothing_either(scene_fmu, tmp_path):
+    """Each FMU carries its own scene's code: the second (staggered, DOP853's loop), started
+    after the first (the reference scene, the exponential method's) seeded the user's cache,
+    adds its loop's entry to the index there rather than compiling it."""
+    environment = fresh_user(tmp_path)
+    for scene in ("reference", "staggered"):
+        run = subprocess.run([sys.executable, "-c", SIMULATE, str(scene_fmu(scene))],
+                             env=environment, capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr[-2000:]
+        assert "compil" not in run.stdout + run.stderr, scene
+    index, = Path(environment["HERRINGBONE_CACHE_DIR"]).glob("kernels-*/walk.advance-*.nbi")
+    with open(index, "rb") as f:
+        pickle.load(f)  # numba's version
+        stamp, overloads = pickle.loads(f.read())
+    assert len(overloads) == 2 == len(set(overloads.values()))
+    assert all((index.parent / data).is_file() for data in overloads.values())
+
+
 # Loads or compiles the integrator for a scene (argv[1]) as its FMU would, in a fresh cache, and
 # prints the kernels numba compiled there.
 COMPILE_FOR_SCENE = """

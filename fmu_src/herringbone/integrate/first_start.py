@@ -3,8 +3,8 @@
 numba compiles the integrator's loop (compiled/walk.py) once per machine, numba version and
 version of the package, and caches it (compiled/cache.py). An FMU carries the compiled code
 a run of its scene loads (`carry_for_scene`, in resources/numba_cache: `CARRIED_FOLDER`);
-`prepare`, called as the slave is instantiated, copies it into the user's cache folder when
-that has none for this version, so an FMU started on a machine of the build machine's kind
+`prepare`, called as the slave is instantiated, adds to the user's cache folder what that
+lacks of it (cache.seed_from), so an FMU started on a machine of the build machine's kind
 loads its code in a fraction of a second.
 
 Where numba must compile anyway (another CPU, another numba, no carried cache), `announce_compiles`
@@ -42,9 +42,9 @@ FMI_OK = 0
 
 
 def prepare(slave, logger_address=None) -> None:
-    """Called once as an FMU's slave is instantiated, before anything is compiled: copies the
-    compiled code the FMU carries into the user's cache folder where that has none for this
-    version, and makes any compile that remains announce itself to the host first.
+    """Called once as an FMU's slave is instantiated, before anything is compiled: adds the
+    compiled code the FMU carries to the user's cache folder where that lacks it
+    (cache.seed_from), and makes any compile that remains announce itself to the host first.
     `logger_address`: the `logger` keyword pythonfmu passes to the slave (see HostLine)."""
     line = HostLine(slave, logger_address)
     carried = Path(slave.resources) / CARRIED_FOLDER if slave.resources else None

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import os
 import pickle
 import shutil
@@ -85,29 +86,53 @@ def kernels_folder() -> Path:
 def seed_from(carried: Path) -> list[str]:
     """Copy compiled kernels into the cache folder: from `carried` (a folder that holds a
     kernels-<digest> folder, as build_fmu puts into an FMU), the files of every kernel whose
-    index the cache folder lacks. A kernel already indexed there is left alone (it may hold
-    entries for this machine that the carried one lacks). Returns the index files copied;
-    nothing if `carried` has none for this version. Raises OSError if the cache folder
-    cannot be written (the caller says so; numba then compiles into its own cache)."""
+    index the cache folder lacks, and into a kernel's index that it holds the carried entries
+    it lacks (_merge_index: an FMU carries its own scene's code only, and another FMU may have
+    seeded that kernel with another method's). Returns the index files written; nothing if
+    `carried` has none for this version. Raises OSError if the cache folder cannot be written
+    (the caller says so; numba then compiles into its own cache)."""
     source, target = Path(carried) / kernels_folder().name, kernels_folder()
-    copied = []
+    written = []
     for index in sorted(source.glob("*.nbi")) if source.is_dir() else []:
-        if (target / index.name).exists():
-            continue
         target.mkdir(parents=True, exist_ok=True)
+        if (target / index.name).exists():
+            if _merge_index(source, target, index.name):
+                written.append(index.name)
+            continue
         stem = index.name[:-len(".nbi")]
         # data first, index last, each renamed into place: a process that reads the cache
         # meanwhile sees either no index or a complete kernel
         for data in sorted(source.glob(f"{stem}.*.nbc")) + [index]:
             _copy_into(data, target)
-        copied.append(index.name)
-    return copied
+        written.append(index.name)
+    return written
+
+
+def _merge_index(source: Path, target: Path, name: str) -> bool:
+    """Add to the index `name` in `target` the entries of the one in `source` that it lacks,
+    their code copied under data names of its own (numba's rule: the first number its index
+    does not use), the index rewritten last; whether there were any. An index of another
+    numba or version of the package reads as empty (numba's own reading): the carried one
+    then replaces it."""
+    stem = name[:-len(".nbi")]
+    carried = caching.IndexDataCacheFile(str(source), stem, package_digest())._load_index()
+    index = caching.IndexDataCacheFile(str(target), stem, package_digest())
+    entries = index._load_index()
+    lacking = {key: data for key, data in carried.items() if key not in entries}
+    for key, data in lacking.items():
+        entries[key] = next(index._data_name(number) for number in itertools.count(1)
+                            if index._data_name(number) not in entries.values())
+        _copy_into(source / data, target, entries[key])
+    if lacking:
+        index._save_index(entries)
+    return bool(lacking)
 
 
 def carry_loaded(folder: Path) -> list[str]:
     """Copy into `folder`/kernels-<digest> (as seed_from reads it) the compiled code of this
     package that this process has loaded or compiled: for each kernel called from Python, the
-    code of each argument types it ran with, and its index holding those entries alone. What
+    code for each set of argument types it ran with, and its index holding those entries
+    alone. What
     those kernels call is compiled into their own code (the loop holds the events, the steps
     and the equations), so nothing else is needed to run them. Returns the index files
     written. Raises RuntimeError where an entry is not on disk (the cache folder could not be
@@ -148,12 +173,13 @@ def _loaded_kernels() -> list:
             and value.overloads]
 
 
-def _copy_into(source: Path, folder: Path) -> None:
+def _copy_into(source: Path, folder: Path, name: str | None = None) -> None:
+    """Copy `source` into `folder` (as `name`, else its own), renamed into place."""
     handle, staging = tempfile.mkstemp(dir=folder, prefix=f".{source.name}.")
     os.close(handle)
     try:
         shutil.copyfile(source, staging)
-        os.replace(staging, folder / source.name)
+        os.replace(staging, folder / (name or source.name))
     except BaseException:
         Path(staging).unlink(missing_ok=True)
         raise
