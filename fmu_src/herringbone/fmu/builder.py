@@ -7,7 +7,8 @@ pythonfmu builds an FMU from a script, whose module name must be unique in a hos
 FMUs whose scripts share a name clash in sys.modules): the slave's source is
 herringbone/fmu/slave.py (FMI 2.0) or slave3.py (FMI 3.0), both thin adapters over
 herringbone/fmu/core.py, and the builder hands pythonfmu(3) a copy named `GEAR_SLAVE_MODULE`
-(FMI 2.0) or `GEAR_SLAVE3_MODULE` (FMI 3.0).
+(FMI 2.0) or `GEAR_SLAVE3_MODULE` (FMI 3.0). The FMU carries the modules of the package its
+run imports (carried.py) and the compiled code its run loads (carry_compiled_integrator).
 """
 from __future__ import annotations
 
@@ -23,8 +24,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .. import shipped
+from . import carried as carried_package
 
-GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone, carried by the gear FMU
+GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone
 GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
 GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see above)
 GEAR_SLAVE3 = GEAR_PACKAGE / "fmu" / "slave3.py"
@@ -289,8 +291,9 @@ def build_example_fmus(output_dir: Path) -> list[Path]:
 
 def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
     """Build the gear-train FMU of a scene file (or a shipped scene's name): the slave, the
-    herringbone package and the scene (as resources/scene.toml) go into it; its variables are
-    exactly the scene's. `fmi_version`: 2 (FMI 2.0, pythonfmu) or 3 (FMI 3.0, pythonfmu3)."""
+    modules of the herringbone package its run imports (carried.py), the compiled code its run
+    loads and the scene (as resources/scene.toml) go into it; its variables are exactly the
+    scene's. `fmi_version`: 2 (FMI 2.0, pythonfmu) or 3 (FMI 3.0, pythonfmu3)."""
     if fmi_version not in FMI_VERSIONS:
         raise ValueError(f"fmi_version {fmi_version!r}; allowed: 2 or 3")
     from ..model.scene import load_scene
@@ -306,8 +309,9 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
         slave = Path(tmp) / "slave" / f"{module}.py"
         slave.parent.mkdir()
         shutil.copyfile(source, slave)
+        package = carried_package.stage_package(Path(tmp) / "package")
         return build_slave_fmu(slave_script=slave,
-                               project_files=[GEAR_PACKAGE, scene_copy, carried],
+                               project_files=[package, scene_copy, carried],
                                output=output, handle_state=True, serialize_state=True,
                                no_feedthrough=True, fmi_version=fmi_version)
 

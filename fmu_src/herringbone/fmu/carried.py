@@ -1,0 +1,91 @@
+"""What a gear FMU carries of the herringbone package: the modules its run imports.
+
+A host unpacks an FMU at every instance (fmpy at every `simulate_fmu`) and deletes it after,
+file by file, so the FMU carries the modules its slave imports, directly or through others
+(the closure of their import statements, those inside functions included: `runtime_modules`),
+and every file of integrate/compiled/, whose text is the key of the compiled code it carries
+(compiled.cache.package_digest). The analysis, the command line, the builder and the scipy
+reference stay behind.
+"""
+from __future__ import annotations
+
+import ast
+import shutil
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1]  # herringbone
+# the slaves' modules: what pythonfmu's script (a copy of slave.py or slave3.py) imports
+ENTRY_MODULES = ("herringbone.fmu.slave", "herringbone.fmu.slave3")
+KEYED_FOLDER = PACKAGE / "integrate" / "compiled"  # carried whole: the compiled code's key
+
+
+def runtime_modules() -> set[str]:
+    """The names of the package's modules an FMU's run can import: ENTRY_MODULES, every module
+    of KEYED_FOLDER, and every module their import statements name, followed through, with the
+    packages that hold them."""
+    found: set[str] = set()
+    waiting = [*ENTRY_MODULES, *(_module_name(path) for path in KEYED_FOLDER.glob("*.py"))]
+    while waiting:
+        name = waiting.pop()
+        if name not in found:
+            found.add(name)
+            waiting.extend(_imported(name))
+    return found
+
+
+def stage_package(folder: Path) -> Path:
+    """A copy of the package holding the runtime_modules alone, in `folder`/herringbone (for
+    the FMU's resources). Returns that folder."""
+    target = Path(folder) / PACKAGE.name
+    for name in sorted(runtime_modules()):
+        source = _file_of(name)
+        copy = target / source.relative_to(PACKAGE)
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, copy)
+    return target
+
+
+def _imported(name: str) -> set[str]:
+    """The package's modules that module `name`'s import statements name, and the packages
+    above them (whose __init__ an import runs first)."""
+    path = _file_of(name)
+    here = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+    named: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            named.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = (".".join(here[:len(here) - node.level + 1] + [node.module or ""]).strip(".")
+                    if node.level else node.module or "")
+            named.add(base)
+            named.update(f"{base}.{alias.name}" for alias in node.names)  # a submodule, maybe
+    modules = set()
+    for module in named:
+        while module.startswith(PACKAGE.name):
+            if _module_path(module) is not None:
+                modules.add(module)
+            module = module.rpartition(".")[0]
+    return modules
+
+
+def _module_path(name: str) -> Path | None:
+    """The file of the package's module `name`; None for a name that is not one (an
+    attribute imported from a module)."""
+    path = PACKAGE.parent.joinpath(*name.split("."))
+    for candidate in (path / "__init__.py", path.with_suffix(".py")):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _file_of(name: str) -> Path:
+    """The file of the package's module `name` (one runtime_modules found)."""
+    path = _module_path(name)
+    if path is None:
+        raise ValueError(f"{name} is not a module of {PACKAGE}")
+    return path
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)

@@ -1,0 +1,74 @@
+"""What a gear FMU carries of the package: the modules its run imports (herringbone.fmu.carried)."""
+import subprocess
+import sys
+import zipfile
+
+from herringbone.fmu import carried
+
+# A host process that has never imported herringbone runs the FMU (a state round trip, then a
+# bad parameter, whose message is an error path), and prints the herringbone modules it
+# imported: the FMU's own copy of them.
+RUN_IN_A_HOST = """
+import sys, fmpy
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+fmu = sys.argv[1]
+fmpy.simulate_fmu(fmu, stop_time=0.002, output_interval=1e-4)
+description, folder = read_model_description(fmu), extract(fmu)
+slave = FMU2Slave(guid=description.guid, unzipDirectory=folder, instanceName="round_trip",
+                  modelIdentifier=description.coSimulation.modelIdentifier)
+slave.instantiate()
+slave.setupExperiment(startTime=0.0)
+slave.enterInitializationMode()
+slave.exitInitializationMode()
+slave.doStep(0.0, 1e-3)
+state = slave.deSerializeFMUstate(slave.serializeFMUstate(slave.getFMUstate()))
+slave.setFMUstate(state)
+slave.doStep(1e-3, 1e-3)
+slave.terminate()
+slave.freeInstance()
+try:
+    fmpy.simulate_fmu(fmu, stop_time=0.002, start_values={"zeta_mesh": -1.0})
+except Exception:
+    pass
+# the FMU's own copy, not one this interpreter could find elsewhere
+assert all("/resources/herringbone/" in module.__file__
+           for name, module in sys.modules.items() if name.startswith("herringbone."))
+print(" ".join(sorted(name for name in sys.modules if name.split(".")[0] == "herringbone")))
+"""
+
+
+def test_what_a_host_imports_of_the_fmu_is_among_the_modules_it_carries(built_fmus):
+    run = subprocess.run([sys.executable, "-c", RUN_IN_A_HOST, str(built_fmus["reference"])],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    imported = set(run.stdout.split())
+    assert "herringbone.fmu.core" in imported and "herringbone.integrate.compiled.walk" in imported
+    assert imported <= carried.runtime_modules()
+
+
+def test_an_fmu_carries_the_modules_its_run_imports_and_not_the_analysis(built_fmus):
+    for fmu in (built_fmus["reference"], built_fmus["staggered"]):
+        names = {name.removeprefix("resources/") for name in zipfile.ZipFile(fmu).namelist()
+                 if name.startswith("resources/herringbone/")}
+        expected = {carried._file_of(module).relative_to(carried.PACKAGE.parent).as_posix()
+                    for module in carried.runtime_modules()}
+        assert names == expected
+    # the compiled code's key is every file of integrate/compiled/, whatever a run imports
+    assert {path.name for path in carried.KEYED_FOLDER.glob("*.py")} == {
+        name.rsplit("/", 1)[1] for name in names
+        if name.startswith("herringbone/integrate/compiled/")}
+    assert not {name.split("/")[1] for name in names} & {"analysis", "cli"}
+    assert "herringbone/integrate/reference.py" not in names
+
+
+def test_an_import_names_its_module_and_the_packages_above_it_inside_functions_too():
+    # integrate/first_start.py: `from .compiled import cache` at the top, `from
+    # ..fmu.pythonfmu_logger import host_logger` and `from ..model.assembly import
+    # GearTrainModel` inside functions (names imported from a module are not modules)
+    imported = carried._imported("herringbone.integrate.first_start")
+    assert {"herringbone.integrate.compiled", "herringbone.integrate.compiled.cache",
+            "herringbone.fmu.pythonfmu_logger", "herringbone.model.assembly",
+            "herringbone", "herringbone.fmu", "herringbone.model"} <= imported
+    assert not any(name.endswith(("host_logger", "GearTrainModel")) for name in imported)
+    assert "herringbone.analysis" not in carried.runtime_modules()
