@@ -150,7 +150,8 @@ class GearCore:
         self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
         self.run = None  # compiled_stepper.Run, advanced in place by every doStep
         self.stepper = None
-        self.stepper_values = None  # the values self.stepper was built from
+        self.stepper_values = None  # the values self.stepper was built from, but the inputs
+        self.built_from = None  # ... and with them
         self.declared = {}  # value reference -> Declaration
         self.real_output_entries = {}  # value reference -> entry of output_values (reals)
         for declaration in self._declarations(dict(scene_model.output_layout)):
@@ -393,7 +394,7 @@ class GearCore:
         """Validate the values and place the train in its initial state (docs/model.md section 6)
         at the start time."""
         self.problem, self.input_problem, self.run = None, None, None
-        problem = self._check_values() or self._build()
+        problem = self._check_values() or self._build_if_changed()
         if problem is not None:
             return self._fail(problem)
         try:
@@ -416,6 +417,16 @@ class GearCore:
     def _model_values(self):
         return {k: v for k, v in self.values.items() if k not in INPUTS}
 
+    def _build_if_changed(self):
+        """_build, unless the stepper was built from the values as they are now (the one built
+        at instantiation, for the outputs before initialization, serves the run where the host
+        changed nothing; its modal forms are a third of a short run's time), its count of
+        steps then set back to 0 as a new one's. Returns what _build returns."""
+        if self.stepper is not None and self.built_from == self.values:
+            self.stepper.accepted_steps = 0
+            return None
+        return self._build()
+
     def _build(self):
         """Model and stepper of the current values; returns what is wrong with them, or None."""
         try:
@@ -426,6 +437,7 @@ class GearCore:
                                            method=self.values["solver_method"],
                                            max_step=self.values["max_step"] or math.inf)
             self.stepper_values = self._model_values()
+            self.built_from = dict(self.values)
         except herringbone.SceneError as error:
             # the scene's own words, without its file: the FMU's variables are the parameters
             where = ("parameter " if error.table == "parameters" else
