@@ -175,6 +175,19 @@ def test_serialized_state_restores_every_bit_also_in_a_new_instance(gear, fmu):
         assert target.get(["internal_steps"])["internal_steps"] == steps
 
 
+def test_a_state_restores_every_bit_in_an_instance_started_with_other_torques(gear):
+    # the stepper's tolerances and modal forms are taken in the static scales of the torques
+    # it was built with: the restoring instance builds it again with the saved run's
+    instance = gear(start_values={"M_motor": 600.0, "M_load": 2160.0})
+    run_steps(instance, 30)
+    saved_time, data = instance.time, _serialize(instance)
+    after = run_steps(instance, 30)
+    for target in (gear(), gear(start_values={"M_motor": 600.0, "M_load": 2160.0})):
+        _restore(target, data)
+        target.time = saved_time
+        assert np.array_equal(run_steps(target, 30), after)
+
+
 def test_model_description_ranges_and_dependencies(fmu):
     root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
     declared = {v.get("name"): v[0] for v in root.iter("ScalarVariable")}

@@ -72,7 +72,7 @@ DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (do
 # step stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
 STEP_BUDGET_FLOOR = 10_000
 STEP_BUDGET_PER_MODE = 100
-STATE_FORMAT = "herringbone-fmu-state-1"  # the serialized FMU state's layout (_get_fmu_state)
+STATE_FORMAT = "herringbone-fmu-state-2"  # the serialized FMU state's layout (_get_fmu_state)
 WARNING, ERROR = 1, 3  # the same numbers in fmi2Status and fmi3Status
 STATUS_NAMES = {WARNING: "warning", ERROR: "error"}
 
@@ -150,8 +150,7 @@ class GearCore:
         self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
         self.run = None  # compiled_stepper.Run, advanced in place by every doStep
         self.stepper = None
-        self.stepper_values = None  # the values self.stepper was built from, but the inputs
-        self.built_from = None  # ... and with them
+        self.built_from = None  # the values self.stepper was built from, inputs included
         self.declared = {}  # value reference -> Declaration
         self.real_output_entries = {}  # value reference -> entry of output_values (reals)
         for declaration in self._declarations(dict(scene_model.output_layout)):
@@ -343,7 +342,9 @@ class GearCore:
                 "loaded": position.segment.loaded.tolist(), "step_hint": position.step_hint,
                 "outputs": position.outputs.tolist(),
                 "first_steps": position.first_steps.tolist(),
-                "internal_steps": self.stepper.accepted_steps}
+                "internal_steps": self.stepper.accepted_steps,
+                # the torques' static scales its tolerances and modal forms were taken in
+                "stepper_inputs": [self.built_from["M_motor"], self.built_from["M_load"]]}
         return state
 
     def _set_fmu_state(self, state):
@@ -361,8 +362,10 @@ class GearCore:
         saved = state["run"]
         if saved is None:
             return
-        if self.stepper is None or self.stepper_values != self._model_values():
-            problem = self._build()  # a state of an instance with other parameters
+        # the stepper the saved run was taken by: its values, its inputs when it was built
+        inputs = dict(zip(("M_motor", "M_load"), saved["stepper_inputs"]))
+        if self.stepper is None or self.built_from != {**self.values, **inputs}:
+            problem = self._build(inputs)
             if problem is not None:
                 return self._fail(problem)
         self.run = self.stepper.start(self._position(saved))
@@ -414,9 +417,6 @@ class GearCore:
                      for name in SOLVER_SETTINGS]
         return next((f"{name} {problem}" for name, problem in problems if problem), None)
 
-    def _model_values(self):
-        return {k: v for k, v in self.values.items() if k not in INPUTS}
-
     def _build_if_changed(self):
         """_build, unless the stepper was built from the values as they are now (the one built
         at instantiation, for the outputs before initialization, serves the run where the host
@@ -427,17 +427,19 @@ class GearCore:
             return None
         return self._build()
 
-    def _build(self):
-        """Model and stepper of the current values; returns what is wrong with them, or None."""
+    def _build(self, inputs=None):
+        """Model and stepper of the current values, with the input torques `inputs` ({name:
+        N·m}; None: the current ones), whose static scales the stepper's tolerances and modal
+        forms are taken in; returns what is wrong with them, or None."""
+        built_from = {**self.values, **(inputs or {})}
         try:
-            given = {k: v for k, v in self.values.items() if k in self.scene.parameters}
+            given = {k: v for k, v in built_from.items() if k in self.scene.parameters}
             scene = self.scene.with_parameters(**given).with_inputs(
-                M_motor=self.values["M_motor"], M_load=self.values["M_load"])
-            self.stepper = CompiledStepper(GearTrainModel(scene), self.values["solver_tolerance"],
-                                           method=self.values["solver_method"],
-                                           max_step=self.values["max_step"] or math.inf)
-            self.stepper_values = self._model_values()
-            self.built_from = dict(self.values)
+                M_motor=built_from["M_motor"], M_load=built_from["M_load"])
+            self.stepper = CompiledStepper(GearTrainModel(scene), built_from["solver_tolerance"],
+                                           method=built_from["solver_method"],
+                                           max_step=built_from["max_step"] or math.inf)
+            self.built_from = built_from
         except herringbone.SceneError as error:
             # the scene's own words, without its file: the FMU's variables are the parameters
             where = ("parameter " if error.table == "parameters" else
