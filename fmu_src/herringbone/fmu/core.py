@@ -418,10 +418,10 @@ class GearCore:
         return next((f"{name} {problem}" for name, problem in problems if problem), None)
 
     def _build_if_changed(self):
-        """_build, unless the stepper was built from the values as they are now (the one built
+        """_build, unless the stepper was built from the values as they are now: the one built
         at instantiation, for the outputs before initialization, serves the run where the host
-        changed nothing; its modal forms are a third of a short run's time), its count of
-        steps then set back to 0 as a new one's. Returns what _build returns."""
+        changed nothing (docs/integrator.md, First start, says what that saves), its count of
+        steps set back to 0 as a new one's. Returns what _build returns."""
         if self.stepper is not None and self.built_from == self.values:
             self.stepper.accepted_steps = 0
             return None
