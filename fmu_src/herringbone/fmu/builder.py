@@ -26,7 +26,7 @@ from pathlib import Path
 from .. import shipped
 from . import carried as carried_package
 
-GEAR_PACKAGE = Path(__file__).resolve().parents[1]  # herringbone
+GEAR_PACKAGE = carried_package.PACKAGE  # herringbone
 GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
 GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see above)
 GEAR_SLAVE3 = GEAR_PACKAGE / "fmu" / "slave3.py"
@@ -328,11 +328,7 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
 
     # in this process: a build after the first (the test suite's) finds the code loaded
     first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
-    missing = [reason for reason in (cache.why_not_cached(walk.advance, signature)
-                                     for signature in walk.advance.signatures) if reason]
-    if missing:
-        raise RuntimeError(f"the compiled integrator is not in {cache.kernels_folder()} "
-                           f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
+    cache.require_on_disk(walk.advance)  # before a fresh process would compile it again
     # what a run loads, taken in a fresh process: a compile caches every kernel the loop
     # calls as well (its own code holds them), and this process may hold other scenes' code
     carried = Path(folder) / first_start.CARRIED_FOLDER

@@ -344,7 +344,7 @@ class GearCore:
                 "first_steps": position.first_steps.tolist(),
                 "internal_steps": self.stepper.accepted_steps,
                 # the torques' static scales its tolerances and modal forms were taken in
-                "stepper_inputs": [self.built_from["M_motor"], self.built_from["M_load"]]}
+                "stepper_inputs": {name: self.built_from[name] for name in INPUTS}}
         return state
 
     def _set_fmu_state(self, state):
@@ -363,7 +363,7 @@ class GearCore:
         if saved is None:
             return
         # the stepper the saved run was taken by: its values, its inputs when it was built
-        inputs = dict(zip(("M_motor", "M_load"), saved["stepper_inputs"]))
+        inputs = saved["stepper_inputs"]
         if self.stepper is None or self.built_from != {**self.values, **inputs}:
             problem = self._build(inputs)
             if problem is not None:

@@ -17,6 +17,7 @@ import itertools
 import os
 import pickle
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -114,9 +115,7 @@ def _merge_index(source: Path, target: Path, name: str) -> bool:
     does not use), the index rewritten last; whether there were any. An index of another
     numba or version of the package reads as empty (numba's own reading): the carried one
     then replaces it."""
-    stem = name[:-len(".nbi")]
-    carried = caching.IndexDataCacheFile(str(source), stem, package_digest())._load_index()
-    index = caching.IndexDataCacheFile(str(target), stem, package_digest())
+    carried, index = _index_file(source, name)._load_index(), _index_file(target, name)
     entries = index._load_index()
     lacking = {key: data for key, data in carried.items() if key not in entries}
     for key, data in lacking.items():
@@ -132,38 +131,45 @@ def carry_loaded(folder: Path) -> list[str]:
     """Copy into `folder`/kernels-<digest> (as seed_from reads it) the compiled code of this
     package that this process has loaded or compiled: for each kernel called from Python, the
     code for each set of argument types it ran with, and its index holding those entries
-    alone. What
-    those kernels call is compiled into their own code (the loop holds the events, the steps
-    and the equations), so nothing else is needed to run them. Returns the index files
-    written. Raises RuntimeError where an entry is not on disk (the cache folder could not be
-    written)."""
+    alone. What those kernels call is compiled into their own code (the loop holds the
+    events, the steps and the equations), so nothing else is needed to run them. Returns the
+    index files written. Raises RuntimeError where an entry is not on disk
+    (require_on_disk)."""
     target = Path(folder) / kernels_folder().name
     written = []
     for dispatcher in _loaded_kernels():
-        cache_file = dispatcher._cache._cache_file
-        overloads = cache_file._load_index()
-        keys = [dispatcher._cache._index_key(signature, dispatcher.targetctx.codegen())
+        require_on_disk(dispatcher)
+        cache, source = dispatcher._cache, Path(dispatcher._cache._cache_path)
+        name, overloads = cache._cache_file._index_name, cache._cache_file._load_index()
+        keys = [cache._index_key(signature, dispatcher.targetctx.codegen())
                 for signature in dispatcher.overloads]
-        missing = [why_not_cached(dispatcher, signature) for signature, key
-                   in zip(dispatcher.overloads, keys) if key not in overloads]
-        if missing:
-            raise RuntimeError(f"the compiled integrator is not in {kernels_folder()} "
-                               f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
         target.mkdir(parents=True, exist_ok=True)
         for key in keys:
-            _copy_into(kernels_folder() / overloads[key], target)
-        carried = caching.IndexDataCacheFile(str(target), cache_file._index_name[:-len(".nbi")],
-                                             package_digest())
-        carried._save_index({key: overloads[key] for key in keys})
-        written.append(cache_file._index_name)
+            _copy_into(source / overloads[key], target)
+        _index_file(target, name)._save_index({key: overloads[key] for key in keys})
+        written.append(name)
     return written
+
+
+def require_on_disk(dispatcher) -> None:
+    """Raise RuntimeError, saying what to do, where the cache folder lacks code `dispatcher`
+    (one of this package's kernels) holds in this process: numba could not write it there."""
+    missing = [reason for reason in map(functools.partial(why_not_cached, dispatcher),
+                                        dispatcher.overloads) if reason]
+    if missing:
+        raise RuntimeError(f"the compiled integrator is not in {kernels_folder()} "
+                           f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
+
+
+def _index_file(folder: Path, name: str):
+    """numba's reader and writer of the index `name` (a kernel's .nbi) in `folder`, as this
+    version of the package stamps it."""
+    return caching.IndexDataCacheFile(str(folder), name[:-len(".nbi")], package_digest())
 
 
 def _loaded_kernels() -> list:
     """This package's kernels (numba dispatchers defined at the top of its modules) that hold
     compiled code in this process."""
-    import sys
-
     from numba.core.dispatcher import Dispatcher
 
     package = __name__.rpartition(".")[0]

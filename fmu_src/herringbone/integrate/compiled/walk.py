@@ -1685,9 +1685,8 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
     status, counters = Status.OK, workspace.counters
     if settings[Setting.CONTACT_SLACK] >= 0.0:
         return status, steps, k, exact
-    interval = run.place[0]
     while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
-        segment = segment_of(system, mesh, interval, run.loaded, torques, exact)
+        segment = segment_of(system, mesh, run.place[0], run.loaded, torques, exact)
         taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
                                    max_steps)
         if not taken:
@@ -1705,7 +1704,6 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
         if status == Status.OK:
             exact = enter_next_segment(system, mesh, run, workspace, segment,
                                        Event.PHASE_END, end)
-            interval = run.place[0]
     return status, steps, k, exact
 
 
