@@ -1,6 +1,8 @@
 """The first start on a machine: an FMU carries its compiled integrator; a compile says so first."""
+import itertools
 import os
 import pickle
+import shutil
 import subprocess
 import sys
 import time
@@ -11,6 +13,7 @@ from helpers import MODELS
 
 import herringbone
 from herringbone.integrate import first_start
+from herringbone.integrate.compiled import cache
 
 # s of wall time, process start included: a compile's announcement comes within it of the start
 ANNOUNCEMENT_BOUND = 5.0
@@ -65,6 +68,49 @@ def test_an_fmu_of_another_method_started_next_compiles_nothing_either(scene_fmu
         stamp, overloads = pickle.loads(f.read())
     assert len(overloads) == 2 == len(set(overloads.values()))
     assert all((index.parent / data).is_file() for data in overloads.values())
+
+
+
+def _write_index(folder, name, entries):
+    """An index `name` in `folder` mapping each key to its data file, which holds `entries`'
+    bytes for it (numba's own reader and writer of indexes; the keys stand for its)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    index = cache._index_file(folder, name)
+    index._save_index({key: index._data_name(number) for number, key in
+                       enumerate(entries, start=1)})
+    for key, data in index._load_index().items():
+        (folder / data).write_bytes(entries[key])
+
+
+def test_two_fmus_seeding_a_kernel_at_once_never_name_each_others_code(tmp_path, monkeypatch):
+    """Two processes that seed the same kernel's index at once each read it before the other
+    writes it. However their writes interleave, every entry of the index that lands last
+    names its own code: numba loads an entry's code without checking its key, and would call
+    code compiled for other argument types. (An entry may be lost, which costs a compile.)"""
+    monkeypatch.setenv("HERRINGBONE_CACHE_DIR", str(tmp_path / "user"))
+    name, target = "walk.advance-1.py311.nbi", cache.kernels_folder()
+    _write_index(target, name, {("own",): b"the user's own"})
+    codes = {("own",): b"the user's own"}
+    snapshots = {}
+    for fmu in ("exponential", "dop853"):
+        carried = tmp_path / fmu / target.name
+        _write_index(carried, name, {(fmu,): fmu.encode()})
+        codes[(fmu,)] = fmu.encode()
+        snapshots[fmu] = tmp_path / f"{fmu}-view"  # the cache folder as that process read it
+        shutil.copytree(target, snapshots[fmu])
+        assert cache._merge_index(carried, snapshots[fmu], name)
+    for first, second in itertools.permutations(snapshots.values()):
+        for last_index in (first, second):
+            landed = tmp_path / f"landed-{first.name}-{second.name}-{last_index.name}"
+            shutil.copytree(target, landed)
+            for writer in (first, second):  # each data file renamed into place, then the index
+                for data in writer.glob("*.nbc"):
+                    shutil.copyfile(data, landed / data.name)
+            shutil.copyfile(last_index / name, landed / name)
+            entries = cache._index_file(landed, name)._load_index()
+            assert ("own",) in entries and len(entries) == 2
+            assert all((landed / data).read_bytes() == codes[key]
+                       for key, data in entries.items())
 
 
 # Loads or compiles the integrator for a scene (argv[1]) as its FMU would, in a fresh cache, and

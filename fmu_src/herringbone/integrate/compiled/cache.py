@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import itertools
 import os
 import pickle
+import secrets
 import shutil
 import sys
 import tempfile
@@ -24,6 +24,8 @@ from pathlib import Path
 from numba.core import caching
 
 PACKAGE_DIR = Path(__file__).resolve().parent
+# The data files of seeded entries are numbered from here (_merge_index), far above numba's
+SEEDED_NUMBERS = 1 << 64
 
 
 @functools.cache
@@ -86,41 +88,38 @@ def kernels_folder() -> Path:
 
 def seed_from(carried: Path) -> list[str]:
     """Copy compiled kernels into the cache folder: from `carried` (a folder that holds a
-    kernels-<digest> folder, as build_fmu puts into an FMU), the files of every kernel whose
-    index the cache folder lacks, and into a kernel's index that it holds the carried entries
-    it lacks (_merge_index: an FMU carries its own scene's code only, and another FMU may have
-    seeded that kernel with another method's). Returns the index files written; nothing if
-    `carried` has none for this version. Raises OSError if the cache folder cannot be written
-    (the caller says so; numba then compiles into its own cache)."""
+    kernels-<digest> folder, as build_fmu puts into an FMU), into each kernel's index there
+    the carried entries it lacks, with their code (_merge_index; an FMU carries its own
+    scene's code only, and another FMU may have seeded that kernel with another method's).
+    Returns the index files written; nothing if `carried` has none for this version. Raises
+    OSError if the cache folder cannot be written (the caller says so; numba then compiles
+    into its own cache)."""
     source, target = Path(carried) / kernels_folder().name, kernels_folder()
     written = []
     for index in sorted(source.glob("*.nbi")) if source.is_dir() else []:
         target.mkdir(parents=True, exist_ok=True)
-        if (target / index.name).exists():
-            if _merge_index(source, target, index.name):
-                written.append(index.name)
-            continue
-        stem = index.name[:-len(".nbi")]
-        # data first, index last, each renamed into place: a process that reads the cache
-        # meanwhile sees either no index or a complete kernel
-        for data in sorted(source.glob(f"{stem}.*.nbc")) + [index]:
-            _copy_into(data, target)
-        written.append(index.name)
+        if _merge_index(source, target, index.name):
+            written.append(index.name)
     return written
 
 
 def _merge_index(source: Path, target: Path, name: str) -> bool:
-    """Add to the index `name` in `target` the entries of the one in `source` that it lacks,
-    their code copied under data names of its own (numba's rule: the first number its index
-    does not use), the index rewritten last; whether there were any. An index of another
-    numba or version of the package reads as empty (numba's own reading): the carried one
-    then replaces it."""
+    """Add to the index `name` in `target` (none: an empty one) the entries of the one in
+    `source` that it lacks, their code copied first under data names of their own (random
+    numbers from SEEDED_NUMBERS on; numba numbers its own 1, 2, ...), the index rewritten
+    last; whether there were any. Two processes that seed or compile the same kernel at once
+    each read the index before the other writes it: numbered by numba's rule (the first
+    number the index does not use) both would write the same data file, and the index that
+    lands last would name the other's code, which numba loads without checking its key and
+    calls with arguments of other types. An entry one of them adds may still be lost (the
+    other's index lands last, as between numba's own processes): that kernel is compiled at
+    a later start. An index of another numba or version of the package reads as empty
+    (numba's own reading): the carried entries then replace it."""
     carried, index = _index_file(source, name)._load_index(), _index_file(target, name)
     entries = index._load_index()
     lacking = {key: data for key, data in carried.items() if key not in entries}
     for key, data in lacking.items():
-        entries[key] = next(index._data_name(number) for number in itertools.count(1)
-                            if index._data_name(number) not in entries.values())
+        entries[key] = index._data_name(SEEDED_NUMBERS | secrets.randbits(64))
         _copy_into(source / data, target, entries[key])
     if lacking:
         index._save_index(entries)
