@@ -348,6 +348,9 @@ def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
     assert list(np.isnan(stable.get_ydata())) == [False, False, False, True, False, False]
     assert list(np.isnan(unstable.get_ydata())) == [True, True, False, False, False, True]
     assert list(lines["fold (jump)"].get_ydata()) == [1.5, 2.0]
+    # the lower panel's legend says what it draws, not the table's column name
+    assert {line.get_label() for line in axes[1].get_lines()} >= {
+        "dte peak-to-peak, stable orbits", "dte peak-to-peak, unstable orbits"}
     plt.close(figure)
     up = table.iloc[:3].assign(stability="time")
     path = tmp_path / "curve.png"

@@ -22,6 +22,8 @@ def is_branch(table) -> bool:
 
 
 DOUBLED_COLOUR = "C0"  # a period-2 branch's lines on every panel
+# How a legend names a table column where its name is not what it shows
+SHOWN_AS = {"dte_p2p_um": "dte peak-to-peak"}
 
 
 def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
@@ -49,7 +51,7 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
     abscissa = table[along].to_numpy()
     stability = table["stability"].to_numpy()
     for panel, (column, colour) in zip(axes, columns):
-        values = table[column].to_numpy()
+        values, name = table[column].to_numpy(), SHOWN_AS.get(column, column)
         for kind, style in (("stable", "-"), ("unstable", "--")):
             if not (stability == kind).any():
                 continue  # no legend entry for a line the picture does not have
@@ -57,11 +59,11 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
             shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
             masked = np.where(shown, values, np.nan)
             panel.plot(abscissa, masked, style, color=colour, lw=1.3,
-                       label=_once(panel, f"{column}, {kind_label}{kind} orbits"))
+                       label=_once(panel, f"{name}, {kind_label}{kind} orbits"))
         timed = stability == "time"
         if timed.any():
             panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,
-                       label=_once(panel, f"{column}, time integration (no orbit "
+                       label=_once(panel, f"{name}, time integration (no orbit "
                                                  "converged)"))
         folds = table["event"].str.contains("fold").to_numpy()
         if folds.any():
