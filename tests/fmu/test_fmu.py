@@ -170,6 +170,13 @@ def test_reading_many_reals_at_once_gives_what_reading_each_gives(built_fmus):
             at_once = gear.slave.getReal([v.valueReference for v in variables])
             one_by_one = gear.get([v.name for v in variables])
             assert at_once == [one_by_one[v.name] for v in variables]
+        # the same list read after every step, as a master reads it: the new values each time
+        references, names = [v.valueReference for v in outputs], [v.name for v in outputs]
+        for _ in range(2):
+            before = gear.slave.getReal(references)
+            gear.step(3e-4)
+            after, one_by_one = gear.slave.getReal(references), gear.get(names)
+            assert after != before and after == [one_by_one[name] for name in names]
         assert gear.get(["M_motor"])["M_motor"] == 600.0
         assert gear.get(["F_mesh"])["F_mesh"] > 0.9 * static_mesh_force(
             herringbone.load_scene(MODELS / "reference.toml").with_inputs(
