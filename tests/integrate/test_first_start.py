@@ -70,10 +70,9 @@ def test_an_fmu_of_another_method_started_next_compiles_nothing_either(scene_fmu
     assert all((index.parent / data).is_file() for data in overloads.values())
 
 
-
 def _write_index(folder, name, entries):
     """An index `name` in `folder` mapping each key to its data file, which holds `entries`'
-    bytes for it (numba's own reader and writer of indexes; the keys stand for its)."""
+    bytes for it (numba's own reader and writer of indexes; the keys stand for numba's)."""
     folder.mkdir(parents=True, exist_ok=True)
     index = cache._index_file(folder, name)
     index._save_index({key: index._data_name(number) for number, key in

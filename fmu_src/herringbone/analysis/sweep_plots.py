@@ -105,7 +105,7 @@ def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> 
         axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0,
                      label="K_v = max F_mesh / F_static")
         axes[1].plot(rpm, table["dte_p2p_um"], "o-", color="C2", ms=3, lw=1.0,
-                     label="dte peak-to-peak")
+                     label=SHOWN_AS["dte_p2p_um"])
         axes[1].plot(rpm, table["dte_rms_um"], "s-", color="C0", ms=3, lw=1.0, label="dte rms")
     axes[0].set_ylabel("dynamic factor K_v")
     axes[1].set_ylabel("dte, µm")

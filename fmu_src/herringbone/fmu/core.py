@@ -275,8 +275,8 @@ class GearCore:
 
     def _get_reals(self, vrs):
         # A master reads the same outputs after every doStep: they all sit in output_values,
-        # taken by one numpy index of their entries, made for the last list asked for (one
-        # getter a variable costs 0.35 µs each, a lookup each 0.08)
+        # taken by one numpy index of their entries, made for the last list asked for rather
+        # than a getter or a lookup a variable (CHANGELOG has the figures)
         asked = tuple(vrs)
         if asked != self.read_plan[0]:
             entries = self.real_output_entries
