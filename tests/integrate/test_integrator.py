@@ -11,10 +11,12 @@ from helpers import MODELS, force_error, regression_scene, shipped_run
 from helpers import communication_run as run
 
 import herringbone
+from herringbone.integrate.compiled import walk
 from herringbone.integrate.compiled_stepper import (
     DEFAULT_TOLERANCE,
     LEAST_RINGING_FACTOR,
     CompiledStepper,
+    compiled_entry,
     ringing_factor,
     runge_kutta_method,
     step_tolerance_factor,
@@ -98,6 +100,30 @@ def test_a_saved_position_reruns_identically(reference_model):
     again = stepper.advance(position, 5e-3, (700.0, 1800.0))
     assert np.array_equal(once.state, again.state) and np.array_equal(once.outputs,
                                                                       again.outputs)
+
+
+@pytest.mark.parametrize("method", ["dop853", "radau", "exponential"])
+def test_run_to_calls_its_loop_past_numbas_dispatch_to_the_same_run(reference_model, method):
+    """From its second call run_to calls the loop's compiled entry for its buffers' types
+    (compiled_entry), not numba's dispatcher: the run is the dispatcher's to the bit."""
+    direct, dispatched = (CompiledStepper(reference_model, 1e-7, method) for _ in range(2))
+    runs = [stepper.start(start_position(reference_model, 500.0))
+            for stepper in (direct, dispatched)]
+    for k in range(1, 41):
+        direct.run_to(runs[0], k * 1e-4, (500.0, 1800.0))
+        dispatched.loop = walk.advance
+        dispatched.run_to(runs[1], k * 1e-4, (500.0, 1800.0))
+    assert direct.loop is not walk.advance and runs[0].events > 2
+    assert np.array_equal(runs[0].state, runs[1].state)
+    assert np.array_equal(runs[0].outputs, runs[1].outputs)
+
+
+def test_a_function_numba_has_no_entry_for_is_called_as_it_is():
+    def plain(value):
+        return value
+
+    assert compiled_entry(plain, (1.0,)) is plain
+    assert compiled_entry(walk.advance, (1.0,)) is walk.advance
 
 
 def test_contact_loss_and_regain_agree_with_the_reference(reference_scene):

@@ -29,6 +29,7 @@ import math
 import os
 import time
 
+import numba
 import numpy as np
 
 from ..arguments import COMPILED_DEFAULT_TOLERANCE, COMPILED_METHODS, check_compiled_run
@@ -301,6 +302,7 @@ class CompiledStepper:
         self.exact_buffers = (exponential.pack_tables(self.exact_tables)
                               if self.exact_tables is not None else None)
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
+        self.loop = walk.advance  # run_to's: after its first call, its compiled entry
 
     def _exact_tables(self, model, method, modes, step_tolerance):
         """The exponential method's modal forms of every contact set; where a set's linear
@@ -354,10 +356,12 @@ class CompiledStepper:
         if end <= run.clock.item(0):
             return
         # float(): an int would make numba compile another version
-        status, steps = walk.advance(
-            self.constants, self.exact_buffers, run.implicit, run.buffers, float(end),
-            float(torques[0]), float(torques[1]),
-            NO_STEP_BUDGET if max_steps is None else int(max_steps))
+        arguments = (self.constants, self.exact_buffers, run.implicit, run.buffers, float(end),
+                     float(torques[0]), float(torques[1]),
+                     NO_STEP_BUDGET if max_steps is None else int(max_steps))
+        status, steps = self.loop(*arguments)
+        if self.loop is walk.advance:
+            self.loop = compiled_entry(walk.advance, arguments)
         self.accepted_steps += steps
         if status != COMPLETED:
             self._fail(status, run, steps, end)
@@ -436,6 +440,18 @@ class CompiledStepper:
                         on_sample=on_sample)
             if on_progress is not None:
                 on_progress(run.time)
+
+
+def compiled_entry(function, arguments):
+    """The compiled code that the numba function `function`, once called with `arguments`,
+    runs for arguments of their types, to be called directly with arguments of the same types:
+    numba's dispatcher types every argument of every call to choose it, and a stepper's calls
+    of its loop (the FMU's communication steps) all have the same types, its own buffers, so
+    that work is done once here. `function` itself where numba has no such entry for them."""
+    try:
+        return function.overloads[tuple(numba.typeof(a) for a in arguments)].entry_point
+    except (AttributeError, KeyError, TypeError, ValueError):
+        return function
 
 
 def warm_up(stepper: CompiledStepper, position: Position, sampled: bool = False
