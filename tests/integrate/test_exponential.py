@@ -21,7 +21,7 @@ from helpers import (
 from helpers import communication_run as run
 
 import herringbone
-from herringbone.integrate.compiled import exponential
+from herringbone.integrate.compiled import equations, exponential
 from herringbone.integrate.compiled_stepper import (
     CompiledStepper,
     StepBudgetExceeded,
@@ -389,11 +389,40 @@ def test_a_step_over_which_the_approach_is_monotone_is_certified_across_a_lift_o
     assert stepper.accepted_steps <= 275
 
 
+def test_a_flight_inside_an_uncertified_exact_step_is_found():
+    """A step the certificate cannot clear is taken at the exact floor, h·|λ|max = 3.5, 28 µs
+    on found_e759bc9542, and the cubic through the approach's values and slopes at its ends
+    did not see the lift-off and landing 2.3 µs apart inside it (at 7.07 ms): from 7.05 ms
+    the run found no event, and its mesh pulled at −33 N in tension. The approach's own modal
+    solution inside the step (exponential.approach_dip) shows where it went past zero: the
+    run finds the flight and ends where DOP853 does from the same position (2.5e-10 of the
+    state's scales apart at 1e-11)."""
+    scene = regression_scene("found_e759bc9542")
+    model = GearTrainModel(scene)
+    torques = scene.inputs.at(0.004)  # the motor's torque after its drop at 3.17 ms
+    runs = {}
+    for method in ("exponential", "dop853"):
+        stepper = CompiledStepper(model, 1e-11, method)
+        run_ = stepper.start(start_position(model, scene.inputs.at(0.0)[0]))
+        stepper.run_to(run_, 0.0031738, scene.inputs.at(0.0))
+        stepper.run_to(run_, 0.00705, torques)
+        before = run_.events
+        times = np.arange(0.00705, 0.0071, 1e-6)[1:]
+        rows = np.empty((len(times), len(run_.outputs)))
+        stepper.sample(run_, times, rows, 0.0071, torques)
+        runs[method] = (run_.events - before, rows[:, equations.F_MESH].min(),
+                        run_.state.copy())
+    events, least_force, state = runs["exponential"]
+    assert events >= 2 and least_force >= 0.0
+    assert np.max(np.abs(state - runs["dop853"][2]) / model.state_scales()) < 1e-8
+
+
 def test_an_exact_step_is_taken_uncertified_up_to_the_loops_own_step_bound():
     """DOP853's step bound is tightened where the fast modes are lightly damped, for DOP853's
     own error (undamped: 8.1e-6 s). An exact step makes no error: it is taken uncertified up
-    to the bound at which the loop's checks of its ends and of grazing hold, h·|λ|max =
-    EXPLICIT_STEP_BOUND (4.2e-5 s). undamped, rattling from 50 ms on, took 34.6e3 accepted
+    to DOP853's own bound without it, h·|λ|max = EXPLICIT_STEP_BOUND (4.2e-5 s), what it
+    hides between its ends shown by its modal solution (test_a_flight_inside_an_uncertified_
+    exact_step_is_found). undamped, rattling from 50 ms on, took 34.6e3 accepted
     exact steps a simulated second at DOP853's bound, 13.6e3 at its own (measured over 100 ms,
     1 ms calls), within 1.3e-10 of the reference over 50 ms (benchmarks/exponential.py)."""
     from herringbone.integrate.compiled_stepper import EXPLICIT_STEP_BOUND
@@ -1037,8 +1066,8 @@ def test_a_step_ends_with_the_approach_slopes_of_its_end():
     """The grazing check of a step starts from the approach slopes at its start, which the
     step before it handed on: after every step of separation's run, those slopes are the
     approach rates at the run's state (equations.approach_rates), to rounding, or marked not
-    taken (NaN: after a certified exact step, which skips the check; the next check takes
-    them), never an older step's."""
+    taken (NaN: after an exact step, which needs none; the next check takes them), never an
+    older step's."""
     from herringbone.integrate.compiled import equations, walk
     from herringbone.integrate.compiled_stepper import StepBudgetExceeded
 

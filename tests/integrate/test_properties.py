@@ -168,6 +168,21 @@ TIGHT_DISAGREEMENTS = {
 }
 
 
+# Scenes the two agree on within the tight bound but not within the default one
+DEFAULT_DISAGREEMENTS = {
+    "found_e759bc9542": "a rattling train at 1 rad/s (no motor, mesh damping ζ 0.005, undamped "
+                        "bearings and output shaft, edge ramps) whose motor torque drops "
+                        "fourfold at 3.2 ms (67 landings in 15.6 ms): the reference resolves "
+                        "it; the compiled runs lie just past the bound at the default "
+                        "tolerance, `auto`'s (exponential) 1.1e-4 of the force scale and "
+                        "DOP853's 1.0e-4, and converge on it as the tolerance tightens "
+                        "(1.3e-6, 2.5e-7, 4.7e-8 at 1e-8 to 1e-10; DOP853 1.6e-6, 2.4e-7, "
+                        "4.4e-8): their step tolerance holds each step, not what the landings "
+                        "amplify (found by the draw on 2026-11-29, 2.9e-3 off while the "
+                        "exponential method missed a flight inside an exact step)",
+}
+
+
 # With -m slow: undamped_stiff_bearings at the tight tolerance (the reference at 1e-12 through
 # long ringing, over a minute on two cores), and the known disagreements at both, whose
 # reference checks its run of a train that lands down to scipy's finest step tolerance where
@@ -179,12 +194,13 @@ SLOW_ALWAYS = set(DISAGREEMENTS)
 
 def regression_cases():
     """Every regression scene at the default and at the tight tolerance, a known disagreement
-    (at the tight one only: TIGHT_DISAGREEMENTS) as a strict xfail naming it."""
+    (at the tight one only: TIGHT_DISAGREEMENTS; at the default one only:
+    DEFAULT_DISAGREEMENTS) as a strict xfail naming it."""
     cases = []
     for path in REGRESSION_SCENES:
         for tight in (False, True):
             reason = DISAGREEMENTS.get(path.stem) or (
-                TIGHT_DISAGREEMENTS.get(path.stem) if tight else None)
+                TIGHT_DISAGREEMENTS if tight else DEFAULT_DISAGREEMENTS).get(path.stem)
             marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
             if path.stem in SLOW_ALWAYS or (tight and path.stem in SLOW_WHEN_TIGHT):
                 marks.append(pytest.mark.slow)
@@ -253,7 +269,8 @@ def known_disagreement(scene, tight: bool) -> bool:
     xfail in test_regression_scene holds it, and Hypothesis's database, which replays every
     failing example first, would otherwise report it again on every run instead of drawing."""
     name = checks.regression_name(scene)
-    return name in DISAGREEMENTS or (tight and name in TIGHT_DISAGREEMENTS)
+    return name in DISAGREEMENTS or name in (TIGHT_DISAGREEMENTS if tight
+                                             else DEFAULT_DISAGREEMENTS)
 
 
 @pytest.mark.slow
@@ -306,13 +323,15 @@ def test_a_known_disagreement_is_known_when_drawn_again():
     """Every regression scene found by the draw loads back to the name it was saved under, so
     that the many-scene tests recognize a known disagreement when Hypothesis replays it."""
     found = [path for path in REGRESSION_SCENES if path.stem.startswith("found_")]
-    assert found and set(DISAGREEMENTS) | set(TIGHT_DISAGREEMENTS) <= {p.stem for p in found}
+    known = set(DISAGREEMENTS) | set(TIGHT_DISAGREEMENTS) | set(DEFAULT_DISAGREEMENTS)
+    assert found and known <= {p.stem for p in found}
     for path in found:
         scene = herringbone.load_scene(path)
         assert checks.regression_name(scene) == path.stem
         assert known_disagreement(scene, tight=True) == (
             path.stem in DISAGREEMENTS or path.stem in TIGHT_DISAGREEMENTS)
-        assert known_disagreement(scene, tight=False) == (path.stem in DISAGREEMENTS)
+        assert known_disagreement(scene, tight=False) == (
+            path.stem in DISAGREEMENTS or path.stem in DEFAULT_DISAGREEMENTS)
 
 
 @pytest.mark.slow  # the reference's check of two landing trains: 25 s

@@ -867,6 +867,83 @@ def _interval_inside(tables, exact, pinion, length, start, end, grid):
                               width) > swing)
 
 
+# approach_dip's march: an interval turns the fastest mode by at most DIP_TURN (|λ|·δ); one
+# its bound cannot clear is halved, down to DIP_HALVINGS halvings, and passed there: what it
+# leaves is a touch within that interval's parabola of zero, at most 5e-7 of the modes' swing
+# (right after a contact event, where the approach starts at zero, every step has one)
+DIP_TURN = 0.5
+DIP_HALVINGS = 8
+
+
+@njit(**NUMBERS_ONLY)
+def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, sign):
+    """Where (s) inside the step of h (s) from `state` the approach of the segment's points
+    (one function: the tilt is zero, they have no lead error) first lies past zero, on the
+    side opposite to `sign` (+1: loaded, a lift-off; −1: unloaded, a landing), where the
+    step's ends do not show it: where its end lies on the side `sign`, or where it does not
+    but the approach comes back before it (a flight, or a touch, before the crossing the end
+    shows); −1 where there is none. Judged on its modal solution by _first_past_zero. A step
+    the certificate cannot clear is taken at the exact floor, h·|λ|max = 3.5, where a
+    lift-off and a landing a tenth as long can lie between its ends unseen by the cubic
+    through their values and slopes (tests/regression/found_e759bc9542.toml). `buffers`: the
+    tables as pack_tables packs them."""
+    tables = unpack_tables(buffers)
+    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    degree = _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
+    fastest = curve = 0.0
+    for k in range(tables.fast_count[exact]):
+        size = abs(tables.rates[exact, k])
+        fastest = max(fastest, size)
+        curve += tables.approach_size[exact, k] * tables.start_size[k] * size * size
+    power = 1.0
+    for order in range(2, degree + 1):
+        curve += order * (order - 1) * abs(tables.modal_slow[order]) * power
+        power *= h
+    widest = h / max(1.0, math.ceil(h * fastest / DIP_TURN))
+    past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest)
+    if past < 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
+        return past
+    return past if _first_past_zero(tables, exact, degree, -sign, curve, past, h,
+                                    widest) > 0.0 else -1.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest):
+    """The first time (s) in (start, end] at which sign times the approach is negative,
+    marching from `start` by intervals at most `widest` (s) long on which _interval_low
+    bounds it from its values and rates at their ends and its curvature bound `curve`, an
+    interval that bound cannot clear halved (DIP_HALVINGS times at most); −1 where there is
+    none."""
+    narrowest = widest / 2.0 ** DIP_HALVINGS
+    width = widest
+    value0, rate0 = _approach_at(tables, exact, degree, sign, start)
+    while start < end:
+        stop = min(end, start + width)
+        value1, rate1 = _approach_at(tables, exact, degree, sign, stop)
+        if value1 < 0.0:
+            return stop
+        cleared = _interval_low(value0, rate0, value1, rate1, curve, stop - start) > 0.0
+        if cleared or width <= narrowest:
+            start, value0, rate0 = stop, value1, rate1
+            width = min(widest, 2.0 * width) if cleared else width
+        else:
+            width *= 0.5
+    return -1.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _approach_at(tables, exact, degree, sign, t):
+    """sign times the approach and its rate t s into the step (approach_dip's: its slow
+    polynomial in tables.modal_slow, of `degree`)."""
+    value, rate = _polynomial_at(tables.modal_slow, degree, t)
+    for k in range(tables.fast_count[exact]):
+        rate_k = tables.rates[exact, k]
+        mode = tables.approach_fast[exact, k] * tables.start_fast[k] * _exponential(rate_k, t)
+        value += mode.real
+        rate += (mode * rate_k).real
+    return sign * value, sign * rate
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _interval_low(value0, rate0, value1, rate1, curve, width):
     """The least a function can be over an interval of `width` with these values and rates

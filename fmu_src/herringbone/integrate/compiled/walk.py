@@ -25,7 +25,8 @@ against the bracket's low end, where nothing has crossed yet, and a last trial j
 located crossing makes sure no other came first, but where the points of an exact set cross
 together). A point that lifts off and lands again inside one step (or touches and leaves) is
 caught from the cubic through its approach and approach rate at the step's ends
-(`grazing_suspect`), and looked for by trial steps inside the step (`probe_inside`).
+(`grazing_suspect`), and looked for by trial steps inside the step (`probe_inside`); inside an
+exact step that is not certified, from the approach's modal solution itself (`exact_dip`).
 
 What follows an event (`next_segment`): the loaded points of the segment are decided by the
 sign of their approach, all of them, whatever the event was. So a point that crossed in the
@@ -116,9 +117,9 @@ class Setting(IntEnum):
     EVENT_TIME_TOLERANCE = 2  # s: how far past its crossing a segment may end
     CONTACT_SLACK = 3  # m; >= 0 turns the debug contact check on, < 0 leaves it off
     EXACT_MAX_STEP = 4  # s: the longest step of an exact segment (exponential method)
-    # s: the longest exact step taken uncertified (control_exact_step): the step bound at
-    # which the loop's checks of a step's ends and of grazing hold (h·|λ|max <= 3.5), with no
-    # error bound in it, an exact step making none
+    # s: the longest exact step taken uncertified (control_exact_step): DOP853's step bound
+    # h·|λ|max <= 3.5 with no error bound in it, an exact step making none (what such a step
+    # hides between its ends, its modal solution shows: grazing_probe)
     EXACT_FLOOR = 5
     ABSOLUTE_TOLERANCE = 6  # from here to the end: per state entry, in the entry's units
 
@@ -446,6 +447,27 @@ def _exact_monotone(workspace, segment, h):
         return lambda workspace, segment, h: False
     return lambda workspace, segment, h: exponential.approach_monotone(
         workspace.exact, segment.exact, h)
+
+
+def exact_dip(system, segment, state, workspace, h):
+    """exponential.approach_dip on the workspace's tables where it is the exponential method's
+    and the segment exact, as a fraction of the step of h (s) from `state` (−1: none); NaN
+    elsewhere, where it cannot judge."""
+
+
+@overload(exact_dip, inline="always")
+def _exact_dip(system, segment, state, workspace, h):
+    if _lacks(workspace, "exact"):
+        return lambda system, segment, state, workspace, h: math.nan
+
+    def dip(system, segment, state, workspace, h):
+        if segment.exact < 0:
+            return math.nan
+        at = exponential.approach_dip(system, workspace.exact, segment.exact, state,
+                                      segment.motor_torque, segment.load_torque, h,
+                                      1.0 if segment.loaded[0] != 0.0 else -1.0)
+        return at / h if at > 0.0 else -1.0
+    return dip
 
 
 def exact_crossing(system, segment, state, workspace, high, guess):
@@ -831,8 +853,6 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
     fraction, grazing_suspect's) among PROBE_FRACTIONS, until one shows an event crossed. One
     that does becomes the bracket's end: its state goes to NEW_STATE, its event values to the
     AFTER row. Returns (the event crossed first, or −1; the bracket's end, s)."""
-    vectors, values = workspace.vectors, workspace.values
-    trial = vectors[Vector.TRIAL]
     done = 0.0
     for _ in range(len(PROBE_FRACTIONS) + 1):
         fraction = 2.0
@@ -844,15 +864,31 @@ def probe_inside(system, segment, settings, state, workspace, suspect, h, event)
         if fraction >= 1.0:
             break
         done = fraction
-        trial_step(system, segment, settings, state, workspace, fraction * h, trial)
-        event_values(system, segment, trial, values[Values.APPROACH], values[Values.TRIAL])
-        found = first_crossing(values[Values.BEFORE], values[Values.TRIAL], segment.events,
-                               segment.loaded)
-        if found >= 0:  # crossed by then: the bracket shrinks to the probe
-            copy_into(vectors[Vector.NEW_STATE], trial)
-            copy_into(values[Values.AFTER], values[Values.TRIAL])
-            return found, fraction * h
+        found, high = probe_at(system, segment, settings, state, workspace, fraction, h, -1)
+        if found >= 0:
+            return found, high
     return event, h
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def probe_at(system, segment, settings, state, workspace, fraction, h, event):
+    """A trial step to `fraction` of a step of h (s) from `state` that crossed `event` (−1:
+    none) by its end. Where it shows an event crossed, it becomes the bracket's end: its
+    state goes to NEW_STATE, its event values to the AFTER row. Returns (the event crossed
+    first, or `event`; the bracket's end, s)."""
+    vectors, values = workspace.vectors, workspace.values
+    trial = vectors[Vector.TRIAL]
+    if fraction >= 1.0:
+        return event, h
+    trial_step(system, segment, settings, state, workspace, fraction * h, trial)
+    event_values(system, segment, trial, values[Values.APPROACH], values[Values.TRIAL])
+    found = first_crossing(values[Values.BEFORE], values[Values.TRIAL], segment.events,
+                           segment.loaded)
+    if found < 0:
+        return event, h
+    copy_into(vectors[Vector.NEW_STATE], trial)
+    copy_into(values[Values.AFTER], values[Values.TRIAL])
+    return found, fraction * h
 
 
 # --- the steps of the loop --------------------------------------------------------------------
@@ -973,8 +1009,8 @@ def control_exact_step(verdict, plan, floor, rejected):
     longer, or as long where the step before it was `rejected` (its growth would try again
     what was just refused: near a landing the certifiable step shrinks as the approach
     closes). One whose phase events are sure is accepted at the exact floor `floor` (s;
-    Setting.EXACT_FLOOR) or below, where the loop's checks of a step's ends and of grazing
-    see a point's approach cross, and the next may grow up to `floor`; one that is not (the
+    Setting.EXACT_FLOOR) or below, where the approach's modal solution shows a crossing
+    its ends do not (grazing_probe), and the next may grow up to `floor`; one that is not (the
     pinion may turn back across an end of its interval and return, which no end shows) only
     at TURN_BACK_FLOOR of `floor`. A longer one is rejected and tried EXACT_SHRINK times as
     long, not below where it would be accepted. A step cut short (landing on the end, aimed
@@ -1591,19 +1627,25 @@ def rate_after_step(system, segment, explicit, rows):
 
 @njit(cache=True, error_model="numpy")
 def grazing_probe(system, segment, settings, state, workspace, h_step, event, certified):
-    """The grazing check of an accepted step of h_step (s) (grazing_check; the rate at its
-    end in RATE_AFTER), and where it finds a suspect, the probe (probe_inside). A `certified`
-    exact step has no grazing inside: it marks the approach slopes at its end not taken, for
-    the next step's check to take them if it needs them; one that crossed a contact event
-    (its approach monotone) takes them at both ends, for the location's first estimate.
-    Returns (the event crossed first, −1 for none; the bracket's high end, s)."""
+    """What an accepted step of h_step (s) hides between its ends (the rate at its end in
+    RATE_AFTER). A `certified` exact step hides nothing; one that is not, its approach's
+    modal solution shows (exact_dip), and where it lies past zero a probe there (probe_at)
+    shrinks the bracket to it. Either marks the approach slopes at its end not taken, for
+    the next step's check to take them if it needs them, or where it crossed a contact
+    event takes them at both ends, for the location's first estimate. A step of DOP853 or
+    Radau IIA has the grazing check of the cubic through its ends (grazing_check) and its
+    probes (probe_inside). Returns (the event crossed first, −1 for none; the bracket's high
+    end, s)."""
     vectors, values = workspace.vectors, workspace.values
-    if certified:
-        if event >= Event.CONTACT:  # a monotone approach crossed zero
+    dip = -1.0 if certified else exact_dip(system, segment, state, workspace, h_step)
+    if not math.isnan(dip):  # an exact step: its modal solution shows what lies inside
+        if event >= Event.CONTACT:  # the location's first estimate takes the slopes
             approach_slopes(system, segment, state, vectors[Vector.RATE],
                             vectors[Vector.NEW_STATE], vectors[Vector.RATE_AFTER], values)
         else:
             values[Values.SLOPES_AFTER, 0] = math.nan
+        if dip > 0.0:
+            return probe_at(system, segment, settings, state, workspace, dip, h_step, event)
         return event, h_step
     suspect = grazing_check(system, segment, state, vectors[Vector.RATE],
                             vectors[Vector.NEW_STATE], vectors[Vector.RATE_AFTER], values, h_step)
