@@ -3,6 +3,7 @@ matrix exponential, which contact sets it takes exactly, agreement with the scip
 the reference scene and on scenes that lose and regain contact, exact re-runs from a saved
 position, and DOP853's results, bit for bit, where no segment is exact."""
 import contextlib
+import math
 import warnings
 from typing import NamedTuple
 
@@ -415,6 +416,25 @@ def test_a_flight_inside_an_uncertified_exact_step_is_found():
     events, least_force, state = runs["exponential"]
     assert events >= 2 and least_force >= 0.0
     assert np.max(np.abs(state - runs["dop853"][2]) / model.state_scales()) < 1e-8
+
+
+def test_the_approachs_march_clears_a_loaded_step_and_gives_up_on_one_without_load(
+        reference_model):
+    """approach_dip over a step at the exact floor: from the static start under the scene's
+    torques, the approach clears the step (−1: no dip); at rest without load, its points in
+    contact, the approach stays at zero, no interval is ever cleared, and the march gives up
+    after DIP_EVALUATIONS evaluations (NaN: the step has the cubic's check) rather than
+    crawling through the step by its narrowest intervals."""
+    stepper = CompiledStepper(reference_model, 1e-7, "exponential")
+    count, loaded = int(stepper.counts[0]), np.ones(stepper.tables.shape[2])
+    system, tables, h = reference_model.system, stepper.exact_buffers, stepper.exact_floor
+    for state, torques, expected in (
+            (start_position(reference_model, 500.0).state, (500.0, 1800.0), -1.0),
+            (np.zeros(2 * reference_model.size), (0.0, 0.0), math.nan)):
+        exact = exponential.variant_of(tables, 0, count, loaded, state)
+        assert exact >= 0
+        dip = exponential.approach_dip(system, tables, exact, state, *torques, h, 1.0)
+        assert dip == expected or (math.isnan(expected) and math.isnan(dip))
 
 
 def test_an_exact_step_is_taken_uncertified_up_to_the_loops_own_step_bound():

@@ -870,9 +870,13 @@ def _interval_inside(tables, exact, pinion, length, start, end, grid):
 # approach_dip's march: an interval turns the fastest mode by at most DIP_TURN (|λ|·δ); one
 # its bound cannot clear is halved, down to DIP_HALVINGS halvings, and passed there: what it
 # leaves is a touch within that interval's parabola of zero, at most 5e-7 of the modes' swing
-# (right after a contact event, where the approach starts at zero, every step has one)
+# (right after a contact event, where the approach starts at zero, every step has one). An
+# approach that hovers at zero through the step (a mesh in contact without load) would take
+# it down to its narrowest intervals all the way: past DIP_EVALUATIONS evaluations it gives
+# up, and the step has the cubic's check as a step of DOP853 has
 DIP_TURN = 0.5
 DIP_HALVINGS = 8
+DIP_EVALUATIONS = 256
 
 
 @njit(**NUMBERS_ONLY)
@@ -882,7 +886,8 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
     side opposite to `sign` (+1: loaded, a lift-off; −1: unloaded, a landing), where the
     step's ends do not show it: where its end lies on the side `sign`, or where it does not
     but the approach comes back before it (a flight, or a touch, before the crossing the end
-    shows); −1 where there is none. Judged on its modal solution by _first_past_zero. A step
+    shows); −1 where there is none; NaN where the march gives up (DIP_EVALUATIONS). Judged
+    on its modal solution by _first_past_zero. A step
     the certificate cannot clear is taken at the exact floor, h·|λ|max = 3.5, where a
     lift-off and a landing a tenth as long can lie between its ends unseen by the cubic
     through their values and slopes (tests/regression/found_e759bc9542.toml). `buffers`: the
@@ -901,10 +906,10 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
         power *= h
     widest = h / max(1.0, math.ceil(h * fastest / DIP_TURN))
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest)
-    if past < 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
+    if not past > 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
         return past
-    return past if _first_past_zero(tables, exact, degree, -sign, curve, past, h,
-                                    widest) > 0.0 else -1.0
+    back = _first_past_zero(tables, exact, degree, -sign, curve, past, h, widest)
+    return back if math.isnan(back) else (past if back > 0.0 else -1.0)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -913,11 +918,13 @@ def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest):
     marching from `start` by intervals at most `widest` (s) long on which _interval_low
     bounds it from its values and rates at their ends and its curvature bound `curve`, an
     interval that bound cannot clear halved (DIP_HALVINGS times at most); −1 where there is
-    none."""
+    none, NaN past DIP_EVALUATIONS evaluations."""
     narrowest = widest / 2.0 ** DIP_HALVINGS
     width = widest
     value0, rate0 = _approach_at(tables, exact, degree, sign, start)
-    while start < end:
+    for _ in range(DIP_EVALUATIONS):
+        if start >= end:
+            return -1.0
         stop = min(end, start + width)
         value1, rate1 = _approach_at(tables, exact, degree, sign, stop)
         if value1 < 0.0:
@@ -928,7 +935,7 @@ def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest):
             width = min(widest, 2.0 * width) if cleared else width
         else:
             width *= 0.5
-    return -1.0
+    return -1.0 if start >= end else math.nan
 
 
 @njit(cache=True, error_model="numpy", inline="always")

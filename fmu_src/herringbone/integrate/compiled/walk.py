@@ -451,8 +451,8 @@ def _exact_monotone(workspace, segment, h):
 
 def exact_dip(system, segment, state, workspace, h):
     """exponential.approach_dip on the workspace's tables where it is the exponential method's
-    and the segment exact, as a fraction of the step of h (s) from `state` (−1: none); NaN
-    elsewhere, where it cannot judge."""
+    and the segment exact, as a fraction of the step of h (s) from `state` (−1: none, NaN:
+    it gave up); NaN elsewhere, where it cannot judge."""
 
 
 @overload(exact_dip, inline="always")
@@ -466,7 +466,7 @@ def _exact_dip(system, segment, state, workspace, h):
         at = exponential.approach_dip(system, workspace.exact, segment.exact, state,
                                       segment.motor_torque, segment.load_torque, h,
                                       1.0 if segment.loaded[0] != 0.0 else -1.0)
-        return at / h if at > 0.0 else -1.0
+        return at / h if at > 0.0 else at
     return dip
 
 
