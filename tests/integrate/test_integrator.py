@@ -118,6 +118,28 @@ def test_run_to_calls_its_loop_past_numbas_dispatch_to_the_same_run(reference_mo
     assert np.array_equal(runs[0].outputs, runs[1].outputs)
 
 
+def test_a_stepper_that_has_run_pickles_and_its_copy_runs_alike(reference_model):
+    """The compiled entry run_to keeps is code of this process: a stepper pickled or copied
+    after it has run (a sweep's period map sent to a worker) leaves it behind, and the copy
+    finds its own and runs to the bit as the original."""
+    import copy
+    import pickle
+
+    stepper = CompiledStepper(reference_model, 1e-7)
+    runs = [stepper.start(start_position(reference_model, 500.0))]
+    stepper.run_to(runs[0], 1e-3, (500.0, 1800.0))
+    for twin in (pickle.loads(pickle.dumps(stepper)), copy.deepcopy(stepper)):
+        assert twin.loop is walk.advance
+        runs.append(twin.start(stepper.position(runs[0])))
+        twin.run_to(runs[-1], 3e-3, (500.0, 1800.0))
+        twin.run_to(runs[-1], 4e-3, (500.0, 1800.0))
+        assert twin.loop is not walk.advance
+    stepper.run_to(runs[0], 3e-3, (500.0, 1800.0))
+    stepper.run_to(runs[0], 4e-3, (500.0, 1800.0))
+    for run_ in runs[1:]:
+        assert np.array_equal(run_.state, runs[0].state)
+
+
 def test_a_function_numba_has_no_entry_for_is_called_as_it_is():
     def plain(value):
         return value

@@ -304,6 +304,13 @@ class CompiledStepper:
         self.accepted_steps = 0  # over the stepper's life, for benchmarks
         self.loop = walk.advance  # run_to's: after its first call, its compiled entry
 
+    def __getstate__(self):
+        """What pickle and copy take of the stepper: all of it but its loop's compiled entry
+        (compiled_entry), which is code of this process, not data; the copy finds its own."""
+        state = self.__dict__.copy()
+        state["loop"] = walk.advance
+        return state
+
     def _exact_tables(self, model, method, modes, step_tolerance):
         """The exponential method's modal forms of every contact set; where a set's linear
         system has no such form (free bodies whose zero eigenvalues rounding splits, with
