@@ -87,15 +87,18 @@ def test_helix_error_moves_load_to_the_other_half(reference_scene):
                                                                                   rel=1e-9)
 
 
+@pytest.mark.parametrize("phase0", [0.0, 1.1754943508222875e-38])
 def test_a_train_turning_backwards_from_a_switch_starts_static_in_the_set_it_turns_into(
-        reference_scene):
+        reference_scene, phase0):
     """The reference scene turned backwards (w0_pinion −157.08 rad/s) starts at φp = 0, on a
     switch: its contact set is the one that ends there, the one the pinion turns into, and the
     start is that set's static equilibrium, so the mesh force holds until the next switch
     (2.9 ms away). Started in the set that begins there (six points, not four), the train left
     it at once: the two integrators gave the outputs before and after that switch at t = 0,
-    0.33 of the force scale apart, and the run opened with a transient."""
-    scene = reference_scene.with_parameters(w0_pinion=-157.08)
+    0.33 of the force scale apart, and the run opened with a transient. A phase0 of 1e-38 (the
+    property tests' draw: tests/regression/found_1553e03b40.toml) put that switch at phase
+    1.0 instead of 0 (Python's −1e-38 % 1.0 is 1.0), where the rule did not see it."""
+    scene = reference_scene.with_parameters(w0_pinion=-157.08, phase0=phase0)
     model = GearTrainModel(scene)
     contact_set = start_position(model, scene.inputs.at(0.0)[0]).segment.contact_set
     assert contact_set.pinion_angle + contact_set.length == pytest.approx(0.0, abs=1e-12)

@@ -26,6 +26,13 @@ from .geometry import HALVES, GearGeometry
 PHASE_TOLERANCE = 1e-10
 
 
+def fraction_of_period(phase: float) -> float:
+    """`phase` (fraction of a period) taken into [0, 1), where the mesh reads every phase:
+    Python's `%` takes a tiny negative phase to 1.0 itself (−1e-38 % 1.0 == 1.0)."""
+    fraction = phase % 1.0
+    return 0.0 if fraction >= 1.0 else fraction
+
+
 @dataclass(frozen=True)
 class Stream:
     """One of the four streams of contact points: a helix half's line of engagement."""
@@ -37,7 +44,7 @@ class Stream:
     @property
     def delay(self) -> float:
         """The stream's delay k against phase 0 (Kryukov & Savelieva), fraction of a period."""
-        return (-self.lead) % 1.0
+        return fraction_of_period(-self.lead)
 
 
 def streams(parameters: dict) -> list[Stream]:
@@ -47,7 +54,7 @@ def streams(parameters: dict) -> list[Stream]:
                ("left", "post-pole"): parameters["eps_q"],
                ("right", "pre-pole"): parameters["stagger"],
                ("right", "post-pole"): parameters["stagger"] + parameters["eps_q"]}
-    return [Stream(half, line, (parameters["phase0"] + offset) % 1.0)
+    return [Stream(half, line, fraction_of_period(parameters["phase0"] + offset))
             for (half, line), offset in offsets.items()]
 
 
@@ -113,7 +120,7 @@ class Mesh:
 
     def _switch_phases(self) -> np.ndarray:
         p_x = self.geometry.axial_pitch
-        phases = sorted((z / p_x - stream.lead) % 1.0
+        phases = sorted(fraction_of_period(z / p_x - stream.lead)
                         for stream in self.streams
                         for z in kink_positions(self.geometry.face_width(stream.half),
                                                 self.edge_ramp))
@@ -139,10 +146,13 @@ class Mesh:
         within = phase - cycle
         interval = int(np.searchsorted(self.switch_phases, within + PHASE_TOLERANCE,
                                        side="right")) - 1
-        if backwards and interval >= 0 and within - self.switch_phases[interval] <= PHASE_TOLERANCE:
-            interval -= 1  # on the switch
+        last = len(self.switch_phases) - 1
         if interval < 0:  # before the first switch: the last interval of the previous cycle
-            return cycle - 1, len(self.switch_phases) - 1
+            cycle, interval, within = cycle - 1, last, within + 1.0
+        if backwards and within - self.switch_phases[interval] <= PHASE_TOLERANCE:
+            interval -= 1  # on the switch
+            if interval < 0:
+                cycle, interval = cycle - 1, last
         return cycle, interval
 
     def interval_start(self, cycle: int, interval: int) -> float:
