@@ -157,6 +157,16 @@ DISAGREEMENTS = {
                         "1.6e-4 of the force scale at 1e-7, 2.4e-5 at 1e-8, 5.2e-6 at 1e-9, "
                         "9.1e-7 at 1e-10: its step tolerance holds each step, not what the "
                         "landings amplify (found by the draw on 2026-11-29)",
+    "found_a0c02a6892": "a train turned backwards (w0 −223 rad/s) whose mesh separates within 2 ms "
+                        "and does not land again, its wheel on undamped bearings of 3.7e10 N/m: a "
+                        "bearing mode at 3.1e6 rad/s rings undamped through the remaining 18 ms, "
+                        "some 9 000 periods, and the phase error each step's tolerance allows "
+                        "(the tolerance times the frequency, integrate/compiled_stepper.py) "
+                        "adds up over them: the compiled run (DOP853, `auto`'s) converges on "
+                        "the reference at 1e-12 in proportion to its tolerance, 1.8e-4 of the "
+                        "force scale at 1e-7, 1.8e-5 at 1e-8, 1.6e-6 at 1e-9, 3.3e-8 at 1e-10, "
+                        "and the reference at 1e-10 lies 2.1e-5 from it (found by the draw on "
+                        "2026-11-29)",
 }
 # Scenes the two agree on within the default bound but not within the tight one
 TIGHT_DISAGREEMENTS = {
