@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from scipy.optimize import brentq
 
 from ..model.geometry import GearGeometry
-from ..model.mesh import PHASE_TOLERANCE
+from ..model.mesh import PHASE_TOLERANCE, fraction_of_period
 from ..model.mesh import streams as mesh_streams
 
 
@@ -54,7 +54,7 @@ def phase_overlap(alpha_k, alpha_l, rho_f, rho_a) -> float:
 def stream_count(eps: float, delay: float, phase: float) -> int:
     """Pairs in contact of one stream at `phase`: the points z/p = u + n (u = (φ − k) mod 1,
     n ≥ 0) with z < ε, i.e. ⌊ε⌋+1 for u < frac(ε), else ⌊ε⌋ — the way mesh.py counts them."""
-    return max(0, math.ceil(eps - (phase - delay) % 1.0))
+    return max(0, math.ceil(eps - fraction_of_period(phase - delay)))
 
 
 def contact_count(streams, phase: float) -> int:
@@ -67,7 +67,8 @@ def count_intervals(streams) -> list[tuple[float, float, int]]:
     """[(start, end, count)] covering one period [0, 1) from φ = 0: the count is constant on
     each interval. Breakpoints (entry at k, exit at k + frac(ε)) closer than PHASE_TOLERANCE are
     one, as in mesh.py, so coinciding entries and exits leave no interval of zero length."""
-    points = sorted(p % 1.0 for eps, delay in streams for p in (delay, delay + eps % 1.0))
+    points = sorted(fraction_of_period(p) for eps, delay in streams
+                    for p in (delay, delay + eps % 1.0))
     breaks = [0.0]
     for p in points:
         if p - breaks[-1] > PHASE_TOLERANCE and 1.0 - p > PHASE_TOLERANCE:

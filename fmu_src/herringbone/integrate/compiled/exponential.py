@@ -839,11 +839,7 @@ def _interval_inside(tables, exact, pinion, length, start, end, grid):
     polynomial, degree = tables.modal_slow, tables.slow_count[exact] - 1
     value0, rate0 = _polynomial_at(polynomial, degree, start)
     value1, rate1 = _polynomial_at(polynomial, degree, end)
-    curve = 0.0
-    power = 1.0
-    for order in range(2, degree + 1):
-        curve += order * (order - 1) * abs(polynomial[order]) * power
-        power *= end
+    curve = _polynomial_curve(polynomial, degree, end)
     swing = 0.0
     for k in range(tables.fast_count[exact]):
         rate = tables.rates[exact, k]
@@ -900,10 +896,7 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
         size = abs(tables.rates[exact, k])
         fastest = max(fastest, size)
         curve += tables.approach_size[exact, k] * tables.start_size[k] * size * size
-    power = 1.0
-    for order in range(2, degree + 1):
-        curve += order * (order - 1) * abs(tables.modal_slow[order]) * power
-        power *= h
+    curve += _polynomial_curve(tables.modal_slow, degree, h)
     widest = h / max(1.0, math.ceil(h * fastest / DIP_TURN))
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest)
     if not past > 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
@@ -949,6 +942,17 @@ def _approach_at(tables, exact, degree, sign, t):
         value += mode.real
         rate += (mode * rate_k).real
     return sign * value, sign * rate
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _polynomial_curve(terms, degree, end):
+    """A bound on |p''| over [0, end] of the polynomial Σ terms[n]·t^n of `degree`:
+    Σ n·(n − 1)·|terms[n]|·end^(n−2)."""
+    curve, power = 0.0, 1.0
+    for order in range(2, degree + 1):
+        curve += order * (order - 1) * abs(terms[order]) * power
+        power *= end
+    return curve
 
 
 @njit(cache=True, error_model="numpy", inline="always")
