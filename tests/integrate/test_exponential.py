@@ -397,10 +397,7 @@ def test_a_flight_inside_an_uncertified_exact_step_is_found():
     the run found no event, and its mesh pulled at −33 N in tension. The approach's own modal
     solution inside the step (exponential.approach_dip) shows where it went past zero: the
     run finds the flight and ends where DOP853 does from the same position (2.5e-10 of the
-    state's scales apart at 1e-11). Its samples carry no tension here; in one CI run of six
-    one sample pulled at −0.076 N, 1.05e-5 of the force scale, past the property checks'
-    TENSION_BOUND and not reproduced by the same command here: an open fault, held here to
-    1e-4 of the force scale, well clear of the defect's −33 N (4.6e-3)."""
+    state's scales apart at 1e-11). Its samples carry no tension."""
     scene = regression_scene("found_e759bc9542")
     model = GearTrainModel(scene)
     torques = scene.inputs.at(0.004)  # the motor's torque after its drop at 3.17 ms
@@ -411,13 +408,13 @@ def test_a_flight_inside_an_uncertified_exact_step_is_found():
         stepper.run_to(run_, 0.0031738, scene.inputs.at(0.0))
         stepper.run_to(run_, 0.00705, torques)
         before = run_.events
-        times = np.arange(0.00705, 0.0071, 1e-6)[1:]
+        times = np.linspace(0.00705, 0.0071, 51)[1:]
         rows = np.empty((len(times), len(run_.outputs)))
         stepper.sample(run_, times, rows, 0.0071, torques)
         runs[method] = (run_.events - before, rows[:, equations.F_MESH].min(),
                         run_.state.copy())
     events, least_force, state = runs["exponential"]
-    assert events >= 2 and least_force >= -1e-4 * model.force_scale()
+    assert events >= 2 and least_force >= 0.0
     assert np.max(np.abs(state - runs["dop853"][2]) / model.state_scales()) < 1e-8
 
 

@@ -222,6 +222,24 @@ def test_rows_of_the_wrong_shape_are_refused():
     assert run.time == 0.0
 
 
+@pytest.mark.parametrize("times, culprit", [
+    # as np.arange's last time can land, a rounding past the end it was meant to stop at
+    (np.array([1e-4, np.nextafter(3e-4, 1.0)]), r"times\[1\] = 0.00030000000000000003 s is past"),
+    (np.array([2e-4, 1e-4]), r"times\[1\] = 0.0001 s falls below times\[0\]"),
+])
+def test_sample_times_past_the_end_or_falling_are_refused_before_a_step(times, culprit):
+    """A run stops at `end`: a row for a time past it would be left as it was, whatever an
+    empty array held (a test that sampled np.arange's times to its own end read one such row
+    as a force of -0.076 N in one CI run of six)."""
+    scene = herringbone.load_scene(MODELS / "reference.toml")
+    stepper = CompiledStepper(GearTrainModel(scene), 1e-7, "exponential")
+    run = stepper.start(start_position(stepper.model, 500.0))
+    rows = np.full((len(times), len(run.outputs)), np.nan)
+    with pytest.raises(ValueError, match=culprit):
+        stepper.sample(run, times, rows, 3e-4, scene.inputs.at(0.0))
+    assert run.time == 0.0 and np.isnan(rows).all()
+
+
 # test_compiled_memory's check, of one call of CompiledStepper.sample through 40 sample times
 PROBE = probe(
     setup="""

@@ -385,11 +385,16 @@ class CompiledStepper:
         past the run's takes the outputs the run holds. Raises as run_to would (a budget of
         `max_steps` steps for the whole call), once on_sample(t, outputs by name), if given,
         has been called for every row written before the failure. `rows`: C-contiguous,
-        len(times) rows of the run's outputs' length."""
+        len(times) rows of the run's outputs' length. ValueError, before any step, for rows of
+        another shape and for times that fall or reach past `end` (the run would stop at `end`
+        with their rows unwritten)."""
         times = np.ascontiguousarray(times, dtype=float)
         if rows.shape != (len(times), len(run.outputs)) or not rows.flags.c_contiguous:
             raise ValueError(f"rows: {rows.shape}, C-contiguous {rows.flags.c_contiguous}; "
                              f"allowed: a C-contiguous {(len(times), len(run.outputs))} array")
+        if len(times) and not (times[-1] <= end and np.all(times[1:] >= times[:-1])):
+            raise ValueError(f"times: {_unordered(times, end)}; allowed: rising times, none "
+                             f"past end")
         status, steps, written = walk.advance_sampled(
             self.constants, self.exact_buffers, run.implicit, run.buffers, times, rows,
             float(end), float(torques[0]), float(torques[1]),
@@ -447,6 +452,18 @@ class CompiledStepper:
                         on_sample=on_sample)
             if on_progress is not None:
                 on_progress(run.time)
+
+
+def _unordered(times: np.ndarray, end: float) -> str:
+    """What is wrong with sample times that are not rising or reach past `end`: the first
+    culprit, by index and value."""
+    falling = np.flatnonzero(times[1:] < times[:-1])
+    if len(falling):
+        k = int(falling[0]) + 1
+        return (f"times[{k}] = {float(times[k])!r} s falls below "
+                f"times[{k - 1}] = {float(times[k - 1])!r} s")
+    k = int(np.argmax(times > end))
+    return f"times[{k}] = {float(times[k])!r} s is past end = {float(end)!r} s"
 
 
 def compiled_entry(function, arguments):
