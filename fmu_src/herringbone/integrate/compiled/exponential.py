@@ -482,10 +482,24 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     arrays["speed_size"][place][:fast] = np.abs(speed_fast)
     arrays["approach_size"][place][:fast] = np.abs(approach_fast)
     arrays["angle_size"][place][:fast] = np.abs(fast_right[system.pinion])
-    # measured in the state's scales: a row's product is then a relative tilt
-    arrays["tilt_rows"][place][:len(rows)] = (_unit_rows(rows * state_scales[None, :])
-                                               / state_scales[None, :])
+    arrays["tilt_rows"][place][:len(rows)] = scaled_basis(rows, state_scales)
     arrays["tilt_count"][place] = len(rows)
+
+
+def scaled_basis(rows: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """Rows spanning the space `rows` span (tilt_rows: orthonormal in the state's own units),
+    orthonormal in the state measured in `scales`, and applied to the state itself: their
+    products with a state are the coordinates, in its scales, of its part in that space
+    (variant_of's relative tilt). The rows as given, each merely scaled, are nearly parallel
+    there (the scales span eight decades): on regain_after_separation's flight a wheel
+    swinging on its bearings at 1e-3 of its scales read 8e-10 on every one of them, below
+    the bound at 1e-6, and the segment went on exact without that swing. Columns no row
+    involves stay exact zeros (tilt_rows says why)."""
+    if len(rows) == 0:
+        return rows
+    basis = np.linalg.svd(_unit_rows(rows * scales[None, :]), full_matrices=False)[2]
+    basis[:, ~rows.any(axis=0)] = 0.0
+    return basis / scales[None, :]
 
 
 def _polynomial_rows(row: np.ndarray, block: np.ndarray) -> np.ndarray:
