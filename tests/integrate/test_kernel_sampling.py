@@ -226,6 +226,7 @@ def test_rows_of_the_wrong_shape_are_refused():
     # as np.arange's last time can land, a rounding past the end it was meant to stop at
     (np.array([1e-4, np.nextafter(3e-4, 1.0)]), r"times\[1\] = 0.00030000000000000003 s is past"),
     (np.array([2e-4, 1e-4]), r"times\[1\] = 0.0001 s falls below times\[0\]"),
+    (np.array([1e-4, np.nan, 2e-4]), r"times\[1\] is not a number"),
 ])
 def test_sample_times_past_the_end_or_falling_are_refused_before_a_step(times, culprit):
     """A run stops at `end`: a row for a time past it would be left as it was, whatever an

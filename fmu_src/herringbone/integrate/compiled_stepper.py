@@ -457,6 +457,8 @@ class CompiledStepper:
 def _unordered(times: np.ndarray, end: float) -> str:
     """What is wrong with sample times that are not rising or reach past `end`: the first
     culprit, by index and value."""
+    if np.isnan(times).any():
+        return f"times[{int(np.argmax(np.isnan(times)))}] is not a number"
     falling = np.flatnonzero(times[1:] < times[:-1])
     if len(falling):
         k = int(falling[0]) + 1
