@@ -15,6 +15,7 @@ from herringbone.integrate.compiled import walk
 from herringbone.integrate.compiled_stepper import (
     DEFAULT_TOLERANCE,
     LEAST_RINGING_FACTOR,
+    RINGING_CUT_FLOOR,
     CompiledStepper,
     compiled_entry,
     ringing_factor,
@@ -202,6 +203,21 @@ def test_the_steps_are_held_to_the_undamped_modes_of_the_free_flight_too():
     held = GearTrainModel(dataclasses.replace(scene, given={**scene.given,
                                                             "contact_loss": False}))
     assert step_tolerance_factor(held, held.eigenvalues()) == pytest.approx(0.193, abs=0.005)
+
+
+def test_the_ringing_cut_stops_where_rounding_begins():
+    """found_b94916f10b rings nearly undamped (ζ 1.6e-4), so its steps take the tolerance
+    times LEAST_RINGING_FACTOR: at 1e-11 that would be 3e-14, where DOP853's error estimate
+    meets rounding and the run failed at its first step. The cut stops at RINGING_CUT_FLOOR,
+    and the run holds; a tolerance asked for below the floor is kept as asked."""
+    scene = regression_scene("found_b94916f10b")
+    model = GearTrainModel(scene)
+    assert step_tolerance_factor(model, model.eigenvalues()) == LEAST_RINGING_FACTOR
+    stepper = CompiledStepper(model, 1e-11, "dop853")
+    assert stepper.step_tolerance == RINGING_CUT_FLOOR
+    simulate_with(stepper, scene, stop_time=1e-3)
+    assert stepper.accepted_steps > 0
+    assert CompiledStepper(model, 5e-14, "dop853").step_tolerance == 5e-14
 
 
 def test_implicit_method_steps_over_overdamped_stiff_modes(reference_scene):

@@ -113,14 +113,6 @@ DISAGREEMENTS = {
                         "forces by 7.5e-6: the per-step references lie 4.8e-4 (1e-10) and "
                         "3.1e-6 (1e-12) from it, the compiled runs 2.6e-3 (1e-7) and 1.6e-5 "
                         "(1e-9) (found by the draw on 2026-11-27)",
-    "found_302cde7a53": "a light train at 148 rad/s with no damping at all (no mesh damping, an "
-                        "undamped input shaft, no bearings), a lead error and sharp face edges, "
-                        "that loses and regains contact 162 times in 7.8 ms: reference_simulate "
-                        "resolves it (its error over the run estimated at 6.4e-8), but a "
-                        "relative 1e-11 on the initial pinion speed moves its forces by 1.5e-6: "
-                        "the per-step references lie 5.5e-4 (1e-10) and 3.0e-6 (1e-12) from it, "
-                        "the compiled runs 8.7e-4 (1e-7) and 5.1e-6 (1e-9) (found by the draw "
-                        "on 2026-11-27)",
     "found_7829a34ec8": "a rattling train (mesh damping ζ 0.0067, undamped bearings; contact lost "
                         "and regained 97 times): reference_simulate, which checks a run that "
                         "lands, warns that even at scipy's finest step tolerance its error over "
@@ -143,51 +135,6 @@ DISAGREEMENTS = {
                         "scale at 1e-7, 2.3e-6 at 1e-9, 1.7e-7 at 1e-10, 1.5e-8 at 1e-11: its "
                         "step tolerance holds each step, not what the landings amplify (found "
                         "by the draw on 2026-11-28)",
-    "found_64696b9bdb": "a train with no mesh damping, undamped wheel bearings and output "
-                        "shaft, edge ramps and a lead error on one half, at 40 rad/s (59 "
-                        "landings in 16 ms): the reference resolves it (error over the run "
-                        "estimated at 3.9e-9 at 1e-10); the compiled run (DOP853, `auto`'s) "
-                        "converges on it in proportion to its tolerance, 1.6e-4 of the force "
-                        "scale at 1e-7, 1.5e-6 at 1e-9, 1.5e-7 at 1e-10, 7e-9 at 1e-11: its "
-                        "step tolerance holds each step, not what the landings amplify (found "
-                        "by the draw on 2026-11-28)",
-    "found_8a09df8092": "a light train at 1830 rad/s with no damping at all (no mesh damping, "
-                        "undamped bearings and output shaft), edge ramps and a lead error on "
-                        "one half, whose motor torque drops tenfold at 1 ms (13 landings in "
-                        "5 ms): the reference resolves it (reference_simulate's error over the "
-                        "run estimated at 5.6e-8 at 1e-10, 4.0e-8 at 1e-12); the compiled run "
-                        "(DOP853, `auto`'s) converges on it in proportion to its tolerance, "
-                        "1.6e-4 of the force scale at 1e-7, 2.4e-5 at 1e-8, 5.2e-6 at 1e-9, "
-                        "9.1e-7 at 1e-10: its step tolerance holds each step, not what the "
-                        "landings amplify (found by the draw on 2026-11-29)",
-    "found_a0c02a6892": "a train turned backwards (w0 −223 rad/s) whose mesh separates within 2 ms "
-                        "and does not land again, its wheel on undamped bearings of 3.7e10 N/m: a "
-                        "bearing mode at 3.1e6 rad/s rings undamped through the remaining 18 ms, "
-                        "some 9 000 periods, and the phase error each step's tolerance allows "
-                        "(the tolerance times the frequency, integrate/compiled_stepper.py) "
-                        "adds up over them: the compiled run (DOP853, `auto`'s) converges on "
-                        "the reference at 1e-12 in proportion to its tolerance, 1.8e-4 of the "
-                        "force scale at 1e-7, 1.8e-5 at 1e-8, 1.6e-6 at 1e-9, 3.3e-8 at 1e-10, "
-                        "and the reference at 1e-10 lies 2.1e-5 from it (found by the draw on "
-                        "2026-11-29)",
-    "found_133371b34b": "a rattling train with no damping at all (no mesh damping, undamped "
-                        "bearings), edge ramps and a lead error on one half, at 1 rad/s (48 "
-                        "landings in 5 ms): the reference resolves it (reference_simulate's "
-                        "error over the run estimated at 1.6e-8 at 1e-10, 1.5e-8 at 1e-12); "
-                        "the compiled run (DOP853, `auto`'s) converges on it in proportion to "
-                        "its tolerance, 5.3e-4 of the force scale at 1e-7, 5e-5 at 1e-8, 4.7e-6 "
-                        "at 1e-9, 4.3e-7 at 1e-10: its step tolerance holds each step, not what "
-                        "the landings amplify (found by the draw on 2026-11-29)",
-    "found_ac909a1c90": "a free gear pair with nothing else and no damping at all (no motor, "
-                        "load or bearings, no mesh damping) at 2322 rad/s for 15.6 ms, its "
-                        "mesh ringing undamped: reference_simulate's runs (it never loses "
-                        "contact; its steps cut by the ringing) at 1e-10 and 1e-12 lie 9.8e-6 "
-                        "of the force scale apart, DOP853's at 1e-10 to 1e-12 within 9.2e-7 of "
-                        "each other and 3.2e-7 to 5.7e-7 from the reference at 1e-12, and the "
-                        "compiled runs (the exponential method, `auto`'s) lie 2.4e-4 (1e-7) and "
-                        "3.3e-6 (1e-9) from the reference at 1e-10 and 1e-12: every error kept "
-                        "by the undamped ringing, no judge good to the tight bound (found by "
-                        "the draw on 2026-11-29, against the per-step references then)",
     "found_57ba526e1e": "a free gear pair (no motor, load or bearings; mesh damping ζ 0.13) "
                         "with a lead error on its right half, at 1097 rad/s under its torques, "
                         "that loses and regains contact 38 times in 15.6 ms: the reference "
@@ -197,16 +144,6 @@ DISAGREEMENTS = {
                         "scale at 1e-7, 2e-4 at 1e-8, 1.8e-5 at 1e-9, 1.3e-6 at 1e-10: its step "
                         "tolerance holds each step, not what the landings amplify (found by "
                         "the draw on 2026-11-29)",
-    "found_b94916f10b": "a light train turned backwards at 1 rad/s on undamped bearings of 4e10 "
-                        "to 5e10 N/m, in contact throughout: a mode at 2.6e5 rad/s that only "
-                        "the mesh damps, at ζ 1.6e-4, rings some 2 600 radians over the 10 ms, "
-                        "and the compiled steps are cut for ringing no further than "
-                        "LEAST_RINGING_FACTOR (0.03, ζ 6e-4): the compiled run (DOP853, "
-                        "`auto`'s) converges on the reference in proportion to its tolerance, "
-                        "1.2e-4 of the force scale at 1e-7, 1.2e-6 at 1e-9, 1.1e-7 at 1e-10, "
-                        "8.5e-9 at 1e-11, where reference_simulate at 1e-10 lies 5.8e-8 from "
-                        "itself at 1e-12 (found by the draw on 2026-11-29, against a per-step "
-                        "reference then, itself 1.6e-5 off)",
 }
 # Scenes the two agree on within the default bound but not within the tight one
 TIGHT_DISAGREEMENTS = {
@@ -217,36 +154,21 @@ TIGHT_DISAGREEMENTS = {
                         "1e-9 lies 2.4e-6 from it (5.9e-5 at 1e-7, within its bound 1e-4) and "
                         "converges on it as its tolerance tightens (2.7e-7 at 1e-10, 1.6e-8 "
                         "at 1e-11)",
-    "found_a2c385b6f6": "a train at 1 rad/s with undamped shafts, no bearings and a lead error, "
-                        "that a torque step at 2 ms sets rattling (31 landings in 10 ms): the "
-                        "reference resolves it (reference_simulate's error over the run "
-                        "estimated at 3e-9 at 1e-12); the compiled run at 1e-9 lies 1.2e-6 of "
-                        "the force scale from it (9e-5 at 1e-7, within its bound), the per-step "
-                        "reference at 1e-10 9.9e-6 (found by the draw on 2026-11-27, 2.5e-5 "
-                        "off before the steps saw the free flight's undamped modes)",
+    "found_ac909a1c90": "a free gear pair with nothing else and no damping at all (no motor, "
+                        "load or bearings, no mesh damping) at 2322 rad/s for 15.6 ms, its "
+                        "mesh ringing undamped: reference_simulate's runs (it never loses "
+                        "contact; its steps cut by the ringing) at 1e-10 and 1e-12 lie 9.8e-6 "
+                        "of the force scale apart, DOP853's at 1e-10 to 1e-12 within 9.2e-7 of "
+                        "each other and 3.2e-7 to 5.7e-7 from the reference at 1e-12; the "
+                        "compiled run (the exponential method, `auto`'s) lies 3.3e-5 from the "
+                        "reference at 1e-7 and 1.2e-6 at 1e-9: every error kept by the "
+                        "undamped ringing, no judge good to the tight bound (found by the draw "
+                        "on 2026-11-29)",
 }
 
 
 # Scenes the two agree on within the tight bound but not within the default one
 DEFAULT_DISAGREEMENTS = {
-    "found_e759bc9542": "a rattling train at 1 rad/s (no motor, mesh damping ζ 0.005, undamped "
-                        "bearings and output shaft, edge ramps) whose motor torque drops "
-                        "fourfold at 3.2 ms (67 landings in 15.6 ms): the reference resolves "
-                        "it; the compiled runs lie just past the bound at the default "
-                        "tolerance, `auto`'s (exponential) 1.1e-4 of the force scale and "
-                        "DOP853's 1.0e-4, and converge on it as the tolerance tightens "
-                        "(1.3e-6, 2.5e-7, 4.7e-8 at 1e-8 to 1e-10; DOP853 1.6e-6, 2.4e-7, "
-                        "4.4e-8): their step tolerance holds each step, not what the landings "
-                        "amplify (found by the draw on 2026-11-29, 2.9e-3 off while the "
-                        "exponential method missed a flight inside an exact step)",
-    "found_ffd90b1d66": "a train without damping run away backwards by its unbalanced torques, "
-                        "from 1 to 1.36e5 rad/s in 19 ms: the compiled run's angular momentum "
-                        "lies 1.13e-9 of its scale off the torque impulse at the default "
-                        "tolerance (`auto`'s exponential method; 5.9e-10 at 1e-9), the "
-                        "reference's 6.3e-10, DOP853's 6.8e-10 at 1e-7 and 6.7e-9 at 1e-9, more "
-                        "at the tighter tolerance: the rounding of a run whose speed grows "
-                        "100 000-fold, at the bound's edge, not a step's error (found by the "
-                        "draw on 2026-11-29)",
 }
 
 
