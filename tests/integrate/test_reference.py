@@ -230,3 +230,26 @@ def test_one_event_alone_reads_as_the_row_of_all_of_them():
         for event, value in enumerate(values):
             alone = segments.event_value(model, segment, event, states[:, column])
             assert alone == value, (event, column)
+
+
+@pytest.mark.parametrize("event", [segments.PHASE_START, segments.PHASE_END])
+def test_a_phase_event_leaves_the_state_on_the_far_side_of_its_switch(reference_scene, event):
+    """A located phase crossing may leave φp a rounding short of its switch: at 6.7e5 rad/s
+    the last bit of t = 14 ms is 1.1e-12 rad (found_0deb4142a8, a free pinion run away
+    backwards). `after` moves to the neighbouring set with φp on that set's side of the
+    switch, where `begin` keeps it; with φp left 2.3e-12 rad across, beyond the phase band,
+    `begin` sent it back and the reference stalled."""
+    model = GearTrainModel(reference_scene)
+    torques = (500.0, 1800.0)
+    position = contract.start_position(model, torques[0])
+    contact_set, state = position.segment.contact_set, position.state.copy()
+    short = 2.3e-12
+    state[model.pinion] = short if event == segments.PHASE_START else contact_set.length - short
+    segment = segments.begin(model, contact_set, state, torques)
+    assert (segment.contact_set.cycle, segment.contact_set.index) == (contact_set.cycle,
+                                                                      contact_set.index)
+    after, moved = segments.after(model, segment, event, state, torques)
+    step = 1 if event == segments.PHASE_END else -1
+    neighbour = model.mesh.contact_set(contact_set.cycle, contact_set.index + step)
+    assert after.contact_set.pinion_angle == neighbour.pinion_angle
+    assert moved[model.pinion] == (0.0 if event == segments.PHASE_END else neighbour.length)

@@ -183,9 +183,16 @@ def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray
           torques: tuple[float, float]) -> tuple[Segment, np.ndarray]:
     """The segment that follows event number `event` (an `Event`: PHASE_END, PHASE_START or
     CONTACT + point) at `state`, and the state re-expressed for it: a phase event moves to
-    the neighbouring set; then every point's flag is decided afresh (`begin`)."""
+    the neighbouring set, φp on its side of the switch (the event located the crossing, and
+    what the located time's rounding leaves on the other side is taken as that rounding: at
+    6.7e5 rad/s the last bit of t = 14 ms is 1.1e-12 rad of φp, beyond PHASE_BAND, and `begin`
+    sent the state back across the switch it had just crossed, segment after segment, on
+    tests/regression/found_0deb4142a8.toml); then every point's flag is decided afresh
+    (`begin`)."""
     state = state.copy()
     contact_set = segment.contact_set
     if event in (PHASE_END, PHASE_START):
         contact_set = neighbour_set(model, contact_set, event == PHASE_END, state)
+        state[model.pinion] = (max(state[model.pinion], 0.0) if event == PHASE_END
+                               else min(state[model.pinion], contact_set.length))
     return begin(model, contact_set, state, torques), state
