@@ -66,8 +66,8 @@ FREQUENCY_ERROR_PER_TOLERANCE = 1.0
 # ζ/LIGHT_DAMPING, ζ the least damping ratio of the oscillating modes within
 # FAST_MODE_FRACTION of |λ|max (the ones whose steps make the error), but no tighter than
 # LEAST_RINGING_FACTOR times it, which holds the designed accuracy over some 17 000 radians of
-# ringing (ζ = 6e-5): undamped bearings ring thousands of radians in a 10 ms run, and at a
-# tenth of the tolerance no shipped scene takes another step (docs/integrator.md, Methods).
+# ringing (ζ = 6e-5): undamped bearings ring thousands of radians in a 10 ms run, and `auto`
+# takes no more steps for it on any shipped scene (docs/integrator.md, Methods).
 LIGHT_DAMPING = 0.02
 FAST_MODE_FRACTION = 0.1
 LEAST_RINGING_FACTOR = 0.003

@@ -241,8 +241,8 @@ def exact_condition(system: System, points: np.ndarray, count: int, loaded: np.n
     the tilt starts at zero. Where contact can be lost every point's approach is also an
     event function, and an exact segment finds and certifies its crossings on one approach
     without lead error (_approach): so no point of the set, loaded or not, may have one. A
-    flight of random_287 (a lead error on both halves) went on past a landing that way, 0.88
-    of the force scale off DOP853."""
+    flight of tests/regression/found_79a4848a80.toml (a lead error on both halves) went on
+    past a landing that way, 0.88 of the force scale off DOP853."""
     if system.contact_loss and (np.any(points[LEAD_ERROR0, :count] != 0.0)
                                 or np.any(points[LEAD_ERROR_SLOPE, :count] != 0.0)):
         return False
