@@ -154,16 +154,6 @@ TIGHT_DISAGREEMENTS = {
                         "1e-9 lies 2.4e-6 from it (5.9e-5 at 1e-7, within its bound 1e-4) and "
                         "converges on it as its tolerance tightens (2.7e-7 at 1e-10, 1.6e-8 "
                         "at 1e-11)",
-    "found_ac909a1c90": "a free gear pair with nothing else and no damping at all (no motor, "
-                        "load or bearings, no mesh damping) at 2322 rad/s for 15.6 ms, its "
-                        "mesh ringing undamped: reference_simulate's runs (it never loses "
-                        "contact; its steps cut by the ringing) at 1e-10 and 1e-12 lie 9.8e-6 "
-                        "of the force scale apart, DOP853's at 1e-10 to 1e-12 within 9.2e-7 of "
-                        "each other and 3.2e-7 to 5.7e-7 from the reference at 1e-12; the "
-                        "compiled run (the exponential method, `auto`'s) lies 3.3e-5 from the "
-                        "reference at 1e-7 and 1.2e-6 at 1e-9: every error kept by the "
-                        "undamped ringing, no judge good to the tight bound (found by the draw "
-                        "on 2026-11-29)",
 }
 
 
