@@ -52,6 +52,16 @@ def force_error(a, b, scene) -> float:
     return max(force_errors(a, b, scene).values())
 
 
+def compiled_run(scene, tolerance, method):
+    """herringbone.simulate's outputs of `scene` by the compiled `method` at `tolerance`
+    ({name: samples}); DOP853 at 1e-11 is the converged run the methods are checked against."""
+    from herringbone.integrate.compiled_stepper import CompiledStepper
+    from herringbone.integrate.contract import simulate_with
+    from herringbone.model.assembly import GearTrainModel
+
+    return simulate_with(CompiledStepper(GearTrainModel(scene), tolerance, method), scene)
+
+
 def communication_run(stepper, stop_time, communication_step, torques=(500.0, 1800.0)):
     """A stepper's outputs at every communication point from the start position of the motor
     torque, as a co-simulation master would see them ({output name: samples})."""

@@ -14,6 +14,7 @@ from helpers import (
     FORCES,
     MODELS,
     REGRESSION,
+    compiled_run,
     force_error,
     regression_scene,
     shipped_drive,
@@ -182,10 +183,9 @@ def test_a_swing_the_tilt_sees_keeps_a_flight_off_the_exact_form():
     read 0 for the rest of the flight, 1.8e-4 of the force scale off DOP853 at 1e-11 (DOP853
     at 1e-6: 5.1e-7)."""
     scene = regression_scene("regain_after_separation")
-    model = GearTrainModel(scene)
-    truth = simulate_with(CompiledStepper(model, 1e-11, "dop853"), scene)
-    run = simulate_with(CompiledStepper(model, 1e-6, "exponential"), scene)
-    assert force_error(run, truth, model) <= 5e-6
+    truth = compiled_run(scene, 1e-11, "dop853")
+    run = compiled_run(scene, 1e-6, "exponential")
+    assert force_error(run, truth, scene) <= 5e-6
 
 
 def test_a_set_with_a_lead_error_is_not_exact_where_contact_can_be_lost():
@@ -212,10 +212,9 @@ def test_a_flight_with_a_lead_error_finds_its_landing():
     and one went on past a landing at 2.84 ms that its lead error brought about, 0.88 of the
     force scale off DOP853 at 1e-11. Now stepped by DOP853 there, it lies 2.6e-8 from it."""
     scene = regression_scene("found_79a4848a80")
-    model = GearTrainModel(scene)
-    truth = simulate_with(CompiledStepper(model, 1e-11, "dop853"), scene)
-    run = simulate_with(CompiledStepper(model, 1e-7, "exponential"), scene)
-    assert force_error(run, truth, model) <= 1e-6
+    truth = compiled_run(scene, 1e-11, "dop853")
+    run = compiled_run(scene, 1e-7, "exponential")
+    assert force_error(run, truth, scene) <= 1e-6
 
 
 @pytest.mark.parametrize("name", ["stiff_bearings", "undamped", "wide_face"])

@@ -34,15 +34,19 @@ import os
 import helpers.property_checks as checks
 import numpy as np
 import pytest
-from helpers import MODELS, REGRESSION, benchmark_module, force_error, regression_scene
+from helpers import (
+    MODELS,
+    REGRESSION,
+    benchmark_module,
+    compiled_run,
+    force_error,
+    regression_scene,
+)
 from helpers.random_scenes import random_scene, scenes
 from helpers.scene_distribution import LOW_SPEED, turned_backwards
 from hypothesis import HealthCheck, assume, given, settings
 
 import herringbone
-from herringbone.integrate.compiled_stepper import CompiledStepper
-from herringbone.integrate.contract import simulate_with
-from herringbone.model.assembly import GearTrainModel
 
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
@@ -350,8 +354,7 @@ def test_a_train_that_rings_long_is_judged_against_reference_simulates_run():
     assert reference.landings == 0
     judge = checks.force_judge(scene, reference, checks.REFERENCE_TOLERANCE)
     assert force_error(reference.outputs, judge.outputs, scene) > 1e-5
-    model = GearTrainModel(scene)
-    compiled = simulate_with(CompiledStepper(model, 1e-11, "dop853"), scene)
+    compiled = compiled_run(scene, 1e-11, "dop853")
     assert force_error(compiled, judge.outputs, scene) < 1e-7
 
 
