@@ -148,6 +148,17 @@ DISAGREEMENTS = {
                         "scale at 1e-7, 2e-4 at 1e-8, 1.8e-5 at 1e-9, 1.3e-6 at 1e-10: its step "
                         "tolerance holds each step, not what the landings amplify (found by "
                         "the draw on 2026-11-29)",
+    "found_279bae3628": "a light train at 1 rad/s (mesh damping ζ 0.005, no bearings, an "
+                        "undamped soft output shaft) whose motor torque drops fourfold at 4.4 "
+                        "ms, so that the load turns it back (the pinion to 1700 rad/s) and it "
+                        "lands 25 times in 11 ms: the reference resolves it "
+                        "(reference_simulate's error over the run estimated at 2e-8 at scipy's "
+                        "finest step tolerance); the compiled "
+                        "run (the exponential method, `auto`'s) converges on it in proportion "
+                        "to its tolerance, 1.1e-3 of the force scale at 1e-7, 9.6e-5 at 1e-8, "
+                        "8e-6 at 1e-9, 6.6e-7 at 1e-10 (DOP853 five times further off): its "
+                        "step tolerance holds each step, not what the landings amplify (found "
+                        "by the draw on 2026-11-29)",
 }
 # Scenes the two agree on within the default bound but not within the tight one
 TIGHT_DISAGREEMENTS = {
