@@ -87,6 +87,22 @@ def turned_backwards(scene, torques_too: bool):
                                     in zip(inputs.times, inputs.M_motor, inputs.M_load)])
 
 
+def made_exact(scene):
+    """The scene with what keeps a contact set from being time-invariant taken away, so that
+    the exponential method propagates its segments exactly (docs/exponential-integrator.md):
+    the right half as the left (face width, bearings and their places), no lead errors, no
+    stagger, and sharp face edges where the train is not slow (below LOW_SPEED the drawn ramps
+    stay, sharp edges there chatter: those trains are exact between the ramps)."""
+    p = scene.parameters
+    exact = {"b_right": p["b_left"], "dbeta_left": 0.0, "dbeta_right": 0.0, "stagger": 0.0}
+    if abs(p["w0_pinion"]) >= LOW_SPEED:
+        exact["edge_ramp"] = 0.0
+    for name in [name for name in p if name.endswith("_left")
+                 and name.startswith(("a_", "c_brg_", "h_brg_"))]:
+        exact[name.replace("_left", "_right")] = p[name]
+    return scene.with_parameters(**exact)
+
+
 def pitch_radii(p: dict) -> tuple[float, float]:
     """Rp, Rw = z·m_n / (2 cos β)."""
     return tuple(p[z] * p["m_n"] / (2.0 * math.cos(p["beta"])) for z in ("z_pinion", "z_wheel"))

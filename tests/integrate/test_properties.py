@@ -7,7 +7,8 @@ property_checks.check_scene: compiled against reference within 1e-4 of the force
 default tolerance (1e-6 at 1e-9, against a reference at 1e-12; where the reference's run lifts
 off and lands, against reference_simulate's, which checks its error over the run), no tension,
 finite outputs, angular momentum following the torques to 1e-9, the same n_contacts away from
-switches.
+switches. The same draw made exact (scene_distribution.made_exact: symmetric halves, no lead
+errors, sharp edges) puts the exponential method's exact segments to the same checks.
 
 Every run checks a few dozen seeded scenes (scene_distribution's NumPy sampler): the same
 scenes on every run and machine. (Hypothesis's derandomized draw is not the same: it mixes in
@@ -43,10 +44,13 @@ from helpers import (
     regression_scene,
 )
 from helpers.random_scenes import random_scene, scenes
-from helpers.scene_distribution import LOW_SPEED, turned_backwards
+from helpers.scene_distribution import LOW_SPEED, made_exact, turned_backwards
 from hypothesis import HealthCheck, assume, given, settings
 
 import herringbone
+from herringbone.integrate.compiled import exponential
+from herringbone.integrate.compiled_stepper import choose_method
+from herringbone.model.assembly import GearTrainModel
 
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
@@ -260,6 +264,34 @@ def test_a_random_scene_turned_backwards(seed, torques_too):
     checks.check_scene(turned_backwards(random_scene(seed), torques_too))
 
 
+# The draw rarely gives a train whose contact sets are all exact (symmetric halves, no lead
+# error, no stagger, sharp edges), so the exponential method's exact segments see few random
+# scenes: the same seeds made exact (scene_distribution.made_exact). 0.2 to 2.5 s a scene
+# (4 s at the tight tolerance)
+@pytest.mark.parametrize("seed", range(52, 68))
+def test_a_random_train_made_exact_at_the_default_tolerance(seed):
+    checks.check_scene(made_exact(random_scene(seed)))
+
+
+@pytest.mark.parametrize("seed", range(68, 76))
+def test_a_random_train_made_exact_at_a_tight_tolerance(seed):
+    check_tight(made_exact(random_scene(seed)))
+
+
+def test_a_train_made_exact_runs_the_exponential_method_unless_slow():
+    """made_exact takes away everything that keeps a contact set from being time-invariant but
+    the edge ramps of a slow train: every set of a faster one is exact, so `auto` takes the
+    exponential method there; a slow one keeps ramps, and sets that meet them are not exact."""
+    for seed in range(52, 76):
+        model = GearTrainModel(made_exact(random_scene(seed)))
+        exact = exponential.exact_sets(model.system, model.mesh.period_table())[
+            :, exponential.ALL_LOADED]
+        slow = abs(model.scene.parameters["w0_pinion"]) < LOW_SPEED
+        assert exact.all() != slow, (seed, exact)
+        if not slow:
+            assert choose_method(model) == "exponential"
+
+
 def known_disagreement(scene, tight: bool) -> bool:
     """Whether a drawn scene is a regression scene whose disagreement is known: its strict
     xfail in test_regression_scene holds it, and Hypothesis's database, which replays every
@@ -282,6 +314,24 @@ def test_many_random_scenes_at_the_default_tolerance(scene):
 @settings(LONG)
 @given(scenes())
 def test_many_random_scenes_at_a_tight_tolerance(scene):
+    assume(not known_disagreement(scene, tight=True))
+    assume(checks.can_be_judged(scene, 1e-12, checks.TIGHT_BOUND))
+    check_tight(scene)
+
+
+@pytest.mark.slow
+@settings(LONG)
+@given(scenes().map(made_exact))
+def test_many_random_trains_made_exact_at_the_default_tolerance(scene):
+    assume(not known_disagreement(scene, tight=False))
+    assume(checks.can_be_judged(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
+    checks.check_scene(scene)
+
+
+@pytest.mark.slow
+@settings(LONG)
+@given(scenes().map(made_exact))
+def test_many_random_trains_made_exact_at_a_tight_tolerance(scene):
     assume(not known_disagreement(scene, tight=True))
     assume(checks.can_be_judged(scene, 1e-12, checks.TIGHT_BOUND))
     check_tight(scene)
