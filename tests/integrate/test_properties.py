@@ -301,37 +301,27 @@ def known_disagreement(scene, tight: bool) -> bool:
                                              else DEFAULT_DISAGREEMENTS)
 
 
+# the draw as it comes, and made exact (scene_distribution.made_exact)
+AS_DRAWN_OR_EXACT = pytest.mark.parametrize("exact", [False, True], ids=["as_drawn", "made_exact"])
+
+
 @pytest.mark.slow
+@AS_DRAWN_OR_EXACT
 @settings(LONG)
-@given(scenes())
-def test_many_random_scenes_at_the_default_tolerance(scene):
+@given(drawn=scenes())
+def test_many_random_scenes_at_the_default_tolerance(drawn, exact):
+    scene = made_exact(drawn) if exact else drawn
     assume(not known_disagreement(scene, tight=False))
     assume(checks.can_be_judged(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
     checks.check_scene(scene)
 
 
 @pytest.mark.slow
+@AS_DRAWN_OR_EXACT
 @settings(LONG)
-@given(scenes())
-def test_many_random_scenes_at_a_tight_tolerance(scene):
-    assume(not known_disagreement(scene, tight=True))
-    assume(checks.can_be_judged(scene, 1e-12, checks.TIGHT_BOUND))
-    check_tight(scene)
-
-
-@pytest.mark.slow
-@settings(LONG)
-@given(scenes().map(made_exact))
-def test_many_random_trains_made_exact_at_the_default_tolerance(scene):
-    assume(not known_disagreement(scene, tight=False))
-    assume(checks.can_be_judged(scene, checks.REFERENCE_TOLERANCE, checks.DEFAULT_BOUND))
-    checks.check_scene(scene)
-
-
-@pytest.mark.slow
-@settings(LONG)
-@given(scenes().map(made_exact))
-def test_many_random_trains_made_exact_at_a_tight_tolerance(scene):
+@given(drawn=scenes())
+def test_many_random_scenes_at_a_tight_tolerance(drawn, exact):
+    scene = made_exact(drawn) if exact else drawn
     assume(not known_disagreement(scene, tight=True))
     assume(checks.can_be_judged(scene, 1e-12, checks.TIGHT_BOUND))
     check_tight(scene)
