@@ -178,6 +178,16 @@ TIGHT_DISAGREEMENTS = {
 
 # Scenes the two agree on within the tight bound but not within the default one
 DEFAULT_DISAGREEMENTS = {
+    "found_39bc44cd08": "a light train at 1 rad/s (no motor, no bearings, no mesh damping, "
+                        "edge ramps) whose motor torque drops ninefold at 3.9 ms, so that the "
+                        "load turns it back and it lands 37 times in 7.8 ms: the reference "
+                        "resolves it (reference_simulate's error over the run estimated at "
+                        "1.2e-10); the compiled run (DOP853, `auto`'s: the ramps of a slow "
+                        "train keep sets from being exact) converges on it in proportion to its "
+                        "tolerance, 1.5e-4 of the force scale at 1e-7 (bound 1e-4), 9.9e-6 at "
+                        "1e-8, 5.8e-7 at 1e-9 (within the tight bound), 2.8e-8 at 1e-10: the "
+                        "landings amplify each step's error (found by the made-exact draw on "
+                        "2026-11-29)",
 }
 
 
