@@ -56,6 +56,19 @@ from herringbone.model.assembly import GearTrainModel
 LONG = settings(max_examples=int(os.environ.get("HERRINGBONE_PROPERTY_EXAMPLES", "300")),
                 deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow])
 REGRESSION_SCENES = sorted(REGRESSION.glob("*.toml"))
+
+
+def landing_amplified(train, estimate, method, errors, found):
+    """The reason of a train the reference resolves and the compiled run converges on in
+    proportion to its tolerance, but past the bound: the tolerance holds each step, and the
+    train's landings amplify a step's error. `errors`: the compiled run's, over the force
+    scale, at its tolerances."""
+    return (f"{train}: the reference resolves it (reference_simulate's error over the run "
+            f"estimated at {estimate}); the compiled run ({method}) converges on it in "
+            f"proportion to its tolerance (over the force scale: {errors}): its step tolerance "
+            f"holds each step, not what the landings amplify (found by {found})")
+
+
 # Scenes of the draw that the two integrators do not agree on, each a fault not yet cured; strict,
 # so that a cure makes its test fail until the entry is removed
 DISAGREEMENTS = {
@@ -136,43 +149,29 @@ DISAGREEMENTS = {
                         "(1e-10) and 1.6e-5 (1e-12) from it, the compiled runs 0.014 (1e-7) and "
                         "1.5e-4 (1e-9): the train amplifies a step's error some million-fold, "
                         "beyond what a tolerance per step holds",
-    "found_465097d4b4": "a train with no mesh damping, no load and no bearings, a lead error on "
-                        "one half, whose motor torque drops tenfold at 5.9 ms (35 landings in "
-                        "16 ms): the reference resolves it (reference_simulate's error over the "
-                        "run estimated at 4e-11 at 1e-10); the compiled run (DOP853, `auto`'s) "
-                        "converges on it in proportion to its tolerance, 1.5e-4 of the force "
-                        "scale at 1e-7, 2.3e-6 at 1e-9, 1.7e-7 at 1e-10, 1.5e-8 at 1e-11: its "
-                        "step tolerance holds each step, not what the landings amplify (found "
-                        "by the draw on 2026-11-28)",
-    "found_57ba526e1e": "a free gear pair (no motor, load or bearings; mesh damping ζ 0.13) "
-                        "with a lead error on its right half, at 1097 rad/s under its torques, "
-                        "that loses and regains contact 38 times in 15.6 ms: the reference "
-                        "resolves it (reference_simulate's error over the run estimated at "
-                        "1.3e-9 at 1e-10, 1.5e-9 at 1e-12); the compiled run (DOP853, `auto`'s) "
-                        "converges on it in proportion to its tolerance, 7e-4 of the force "
-                        "scale at 1e-7, 2e-4 at 1e-8, 1.8e-5 at 1e-9, 1.3e-6 at 1e-10: its step "
-                        "tolerance holds each step, not what the landings amplify (found by "
-                        "the draw on 2026-11-29)",
-    "found_279bae3628": "a light train at 1 rad/s (mesh damping ζ 0.005, no bearings, an "
-                        "undamped soft output shaft) whose motor torque drops fourfold at 4.4 "
-                        "ms, so that the load turns it back (the pinion to 1700 rad/s) and it "
-                        "lands 25 times in 11 ms: the reference resolves it "
-                        "(reference_simulate's error over the run estimated at 2e-8 at scipy's "
-                        "finest step tolerance); the compiled run (the exponential method, "
-                        "`auto`'s) converges on it in proportion to its tolerance, 1.1e-3 of "
-                        "the force scale at 1e-7, 9.6e-5 at 1e-8, 8e-6 at 1e-9, 6.6e-7 at "
-                        "1e-10 (DOP853 five times further off): its step tolerance holds each "
-                        "step, not what the landings amplify (found by the draw on 2026-11-29)",
-    "found_9d9f16c6e7": "a light train at 1 rad/s (no motor, no bearings, mesh damping ζ "
-                        "0.006, edge ramps) whose motor torque drops tenfold at 3.7 ms, so that "
-                        "the load turns it back and it lands 99 times in 18.6 ms: the reference "
-                        "resolves it (reference_simulate's error over the run estimated at "
-                        "4.4e-9 at 1e-12); the compiled run (the exponential method, `auto`'s, "
-                        "half the sets exact; DOP853 as far off) converges on it in proportion "
-                        "to its tolerance, 1.6e-3 of the force scale at 1e-7, 6.9e-5 at 1e-8, "
-                        "3.6e-6 at 1e-9, 1.8e-7 at 1e-10, 2.8e-9 at 1e-11: the landings "
-                        "amplify each step's error (found by the made-exact draw on "
-                        "2026-11-29)",
+    "found_465097d4b4": landing_amplified(
+        "a train with no mesh damping, no load and no bearings, a lead error on one half, whose "
+        "motor torque drops tenfold at 5.9 ms (35 landings in 16 ms)", "4e-11 at 1e-10",
+        "DOP853, `auto`'s", "1.5e-4 at 1e-7, 2.3e-6 at 1e-9, 1.7e-7 at 1e-10, 1.5e-8 at 1e-11",
+        "the draw on 2026-11-28"),
+    "found_57ba526e1e": landing_amplified(
+        "a free gear pair (no motor, load or bearings; mesh damping ζ 0.13) with a lead error "
+        "on its right half, at 1097 rad/s under its torques, that loses and regains contact 38 "
+        "times in 15.6 ms", "1.3e-9 at 1e-10, 1.5e-9 at 1e-12", "DOP853, `auto`'s",
+        "7e-4 at 1e-7, 2e-4 at 1e-8, 1.8e-5 at 1e-9, 1.3e-6 at 1e-10", "the draw on 2026-11-29"),
+    "found_279bae3628": landing_amplified(
+        "a light train at 1 rad/s (mesh damping ζ 0.005, no bearings, an undamped soft output "
+        "shaft) whose motor torque drops fourfold at 4.4 ms, so that the load turns it back "
+        "(the pinion to 1700 rad/s) and it lands 25 times in 11 ms",
+        "2e-8 at scipy's finest step tolerance", "the exponential method, `auto`'s; DOP853 five "
+        "times further off", "1.1e-3 at 1e-7, 9.6e-5 at 1e-8, 8e-6 at 1e-9, 6.6e-7 at 1e-10",
+        "the draw on 2026-11-29"),
+    "found_9d9f16c6e7": landing_amplified(
+        "a light train at 1 rad/s (no motor, no bearings, mesh damping ζ 0.006, edge ramps) "
+        "whose motor torque drops tenfold at 3.7 ms, so that the load turns it back and it "
+        "lands 99 times in 18.6 ms", "4.4e-9 at 1e-12", "the exponential method, `auto`'s, "
+        "half the sets exact; DOP853 as far off", "1.6e-3 at 1e-7, 6.9e-5 at 1e-8, 3.6e-6 at "
+        "1e-9, 1.8e-7 at 1e-10, 2.8e-9 at 1e-11", "the made-exact draw on 2026-11-29"),
 }
 # Scenes the two agree on within the default bound but not within the tight one
 TIGHT_DISAGREEMENTS = {
@@ -188,25 +187,18 @@ TIGHT_DISAGREEMENTS = {
 
 # Scenes the two agree on within the tight bound but not within the default one
 DEFAULT_DISAGREEMENTS = {
-    "found_39bc44cd08": "a light train at 1 rad/s (no motor, no bearings, no mesh damping, "
-                        "edge ramps) whose motor torque drops ninefold at 3.9 ms, so that the "
-                        "load turns it back and it lands 37 times in 7.8 ms: the reference "
-                        "resolves it (reference_simulate's error over the run estimated at "
-                        "1.2e-10); the compiled run (DOP853, `auto`'s: the ramps of a slow "
-                        "train keep sets from being exact) converges on it in proportion to its "
-                        "tolerance, 1.5e-4 of the force scale at 1e-7 (bound 1e-4), 9.9e-6 at "
-                        "1e-8, 5.8e-7 at 1e-9 (within the tight bound), 2.8e-8 at 1e-10: the "
-                        "landings amplify each step's error (found by the made-exact draw on "
-                        "2026-11-29)",
-    "found_7257c253f0": "a light train at 1 rad/s (no load rotor, no bearings, a lead error "
-                        "on its right half, edge ramps) under steady torques, which rattles, "
-                        "swinging between 6.4 and -1.2 rad/s, and lands 32 times in 15.6 ms: "
-                        "the reference resolves it (reference_simulate's error over the run "
-                        "estimated at 2.7e-11); the compiled run (DOP853, `auto`'s) converges "
-                        "on it in proportion to its tolerance, 1.2e-4 of the force scale at "
-                        "1e-7 (bound 1e-4), 1e-5 at 1e-8, 7.7e-7 at 1e-9 (within the tight "
-                        "bound), 2e-8 at 1e-10: the landings amplify each step's error (found "
-                        "by the draw on 2026-11-29)",
+    "found_39bc44cd08": landing_amplified(
+        "a light train at 1 rad/s (no motor, no bearings, no mesh damping, edge ramps) whose "
+        "motor torque drops ninefold at 3.9 ms, so that the load turns it back and it lands 37 "
+        "times in 7.8 ms", "1.2e-10", "DOP853, `auto`'s: the ramps of a slow train keep sets "
+        "from being exact", "1.5e-4 at 1e-7 (bound 1e-4), 9.9e-6 at 1e-8, 5.8e-7 at 1e-9 "
+        "(within the tight bound), 2.8e-8 at 1e-10", "the made-exact draw on 2026-11-29"),
+    "found_7257c253f0": landing_amplified(
+        "a light train at 1 rad/s (no load rotor, no bearings, a lead error on its right half, "
+        "edge ramps) under steady torques, which rattles, swinging between 6.4 and -1.2 rad/s, "
+        "and lands 32 times in 15.6 ms", "2.7e-11", "DOP853, `auto`'s",
+        "1.2e-4 at 1e-7 (bound 1e-4), 1e-5 at 1e-8, 7.7e-7 at 1e-9 (within the tight bound), "
+        "2e-8 at 1e-10", "the draw on 2026-11-29"),
 }
 
 

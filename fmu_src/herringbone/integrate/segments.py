@@ -183,12 +183,11 @@ def after(model: GearTrainModel, segment: Segment, event: int, state: np.ndarray
           torques: tuple[float, float]) -> tuple[Segment, np.ndarray]:
     """The segment that follows event number `event` (an `Event`: PHASE_END, PHASE_START or
     CONTACT + point) at `state`, and the state re-expressed for it: a phase event moves to
-    the neighbouring set, φp on its side of the switch (the event located the crossing, and
-    what the located time's rounding leaves on the other side is taken as that rounding: at
-    6.7e5 rad/s the last bit of t = 14 ms is 1.1e-12 rad of φp, beyond PHASE_BAND, and `begin`
-    sent the state back across the switch it had just crossed, segment after segment, on
-    tests/regression/found_0deb4142a8.toml); then every point's flag is decided afresh
-    (`begin`)."""
+    the neighbouring set, φp on its side of the switch: the event located the crossing, and
+    whatever the located time's rounding leaves on the other side is that rounding, which at
+    high speed exceeds PHASE_BAND (1.1e-12 rad of φp at 6.7e5 rad/s and t = 14 ms,
+    tests/regression/found_0deb4142a8.toml), where `begin` would send the state back across
+    the switch; then every point's flag is decided afresh (`begin`)."""
     state = state.copy()
     contact_set = segment.contact_set
     if event in (PHASE_END, PHASE_START):
