@@ -719,7 +719,7 @@ def _exponential(rate, t):
 
 # The largest |Re| + |Im| of λ·(h − t) for which a step of h takes e^{λ·h} from the aim's
 # e^{λ·t} (_fast_modes): the series to x³ then errs by x⁴/24 < 1e-17, and an aimed step lies
-# well within it (docs/exponential-integrator.md, "The aimed step's exponentials from the
+# well within it (docs/exponential-measurements.md, "The aimed step's exponentials from the
 # aim's"); a larger one takes exp.
 NEAR_EXPONENT = 1e-4
 
@@ -1136,7 +1136,7 @@ def _modal_at(tables, exact, rows, degree, t, keep):
     row of the fast modes `rows`. With `keep` (a constant where it is inlined: the angle's
     aim), the modes' e^{λ·t} are kept in tables.aimed_fast, and t beside them, for the step
     aimed there (_fast_modes); an approach's Newton iterations, which no step follows, do
-    not keep them (docs/exponential-integrator.md, "The aimed step's exponentials from the
+    not keep them (docs/exponential-measurements.md, "The aimed step's exponentials from the
     aim's")."""
     value, slope, curve, third = _polynomial_derivatives(tables.modal_slow, degree, t)
     aimed = tables.aimed_fast

@@ -1317,7 +1317,7 @@ def opening_ahead(system, mesh, run, workspace, segment, exact, horizon):
     (−1, exponential.NO_AIM) elsewhere. φp's acceleration just after a switch is the fast
     modes' (1e6 rad/s² and more), so phase_event_ahead's extrapolation lands the opening step
     halfway. Taken here, once an event, where it was measured to cost least
-    (docs/exponential-integrator.md, "An opening step aimed by the slow motion")."""
+    (docs/exponential-measurements.md, "An opening step aimed by the slow motion")."""
     if workspace.counters[Counter.OPENING] < 0 or exact < 0:
         return -1.0, exponential.NO_AIM
     return exact_event_ahead(system, workspace, exact, run.state, segment.motor_torque,
@@ -1715,7 +1715,7 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
     that switch at the step's end without a trial (aimed_switch says when).
     What the loop does besides between two such switches (the rate and event values at the
     step's ends, the grazing check, the location, begin_segment) changes nothing there, and
-    cost high_speed two fifths of its time: docs/exponential-integrator.md, "Phase switches
+    cost high_speed two fifths of its time: docs/exponential-measurements.md, "Phase switches
     chained". `exact`: the exact form of the run's segment (exact_form); `torques` (N·m) are
     held; `end` (s): where the call stops; the samples (a Samples; None: none) from the
     `k`-th on that a step passes are taken inside it, as cross_event takes them; `steps`
