@@ -4,12 +4,12 @@ Every random scene (random_scenes.scenes(): 8-60 teeth, helix 5°-40°, bearings
 damping down to zero, 1-2500 rad/s, some turned backwards, light loads, torque steps, lead
 errors, stagger, edge ramps; 5-20 ms runs) and every tests/regression/*.toml scene must pass
 property_checks.check_scene: compiled against reference within 1e-4 of the force scale at the
-default tolerance (1e-6 at 1e-9, against a reference at 1e-12; where the reference's run lifts
-off and lands, against reference_simulate's, which checks its error over the run), no tension,
-finite outputs, angular momentum following the torques to 1e-9 of its largest term, the same
-n_contacts away from switches. The same draw made exact (scene_distribution.made_exact:
-symmetric halves, no lead errors, sharp edges) puts the exponential method's exact segments to
-the same checks.
+default tolerance (1e-6 at 1e-9, against a reference at 1e-12; 1e-2 at 1e-5, against one at
+1e-8; where the reference's run lifts off and lands, against reference_simulate's, which checks
+its error over the run), no tension, finite outputs, angular momentum following the torques to
+1e-9 of its largest term, the same n_contacts away from switches. The same draw made exact
+(scene_distribution.made_exact: symmetric halves, no lead errors, sharp edges) puts the
+exponential method's exact segments to the same checks.
 
 Every run checks a few dozen seeded scenes (scene_distribution's NumPy sampler): the same
 scenes on every run and machine. (Hypothesis's derandomized draw is not the same: it mixes in
@@ -237,6 +237,12 @@ def check_tight(scene):
                        reference_tolerance=1e-12)
 
 
+def check_loose(scene):
+    """Compiled at 1e-5 against the reference at 1e-8: within 1e-2 of the force scale."""
+    checks.check_scene(scene, checks.LOOSE_TOLERANCE, checks.LOOSE_BOUND,
+                       reference_tolerance=1e-8)
+
+
 # Seeded scenes the integrators disagree on, each a fault not yet cured (strict xfails)
 SEED_DISAGREEMENTS = {
     34: "the compiled integrator at its default tolerance is 8e-4 of the force scale off (a "
@@ -298,6 +304,22 @@ def test_a_random_train_made_exact_at_the_default_tolerance(seed):
 @pytest.mark.parametrize("seed", range(68, 76))
 def test_a_random_train_made_exact_at_a_tight_tolerance(seed):
     check_tight(made_exact(random_scene(seed)))
+
+
+# A loose tolerance is what a sweep or a first look asks for: longer DOP853 steps for the
+# grazing checks to see through, and event location tolerances a hundred times wider. The
+# same rule as at 1e-7 and 1e-9 (a thousand times the tolerance); measured 4.5e-8 to 1.3e-4
+# of the force scale on these 20. Seeds 0-299 as drawn and 0-149 made exact passed but for
+# landing-amplified trains (seed 34 and 191, 1.1e-2) and four that cannot be judged. 0.1 to
+# 4 s a scene
+@pytest.mark.parametrize("seed", seeded_cases(range(12)))
+def test_random_scene_at_a_loose_tolerance(seed):
+    check_loose(random_scene(seed))
+
+
+@pytest.mark.parametrize("seed", range(76, 84))
+def test_a_random_train_made_exact_at_a_loose_tolerance(seed):
+    check_loose(made_exact(random_scene(seed)))
 
 
 def test_a_train_made_exact_runs_the_exponential_method_unless_slow():
