@@ -44,6 +44,7 @@ from herringbone.arguments import (  # noqa: E402
     FMU_SOLVER_METHOD,
     FMU_SOLVER_TOLERANCE,
 )
+from herringbone.fmu.pythonfmu_logger import HostLine  # noqa: E402
 from herringbone.integrate import first_start  # noqa: E402
 from herringbone.integrate.compiled_stepper import (  # noqa: E402
     DEFAULT_TOLERANCE,
@@ -133,7 +134,8 @@ class GearCore:
     def _setup(self, logger_address):
         """Load the scene, declare the variables (through the adapter's `_register`) and
         start the train at t = 0 with the scene's own values."""
-        first_start.prepare(self, logger_address)  # before anything is compiled
+        # before anything is compiled
+        first_start.prepare(self.resources, HostLine(self, logger_address).say)
         self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
         self.values = dict(self.scene.parameters)
         self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})

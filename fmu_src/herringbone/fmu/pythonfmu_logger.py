@@ -2,7 +2,8 @@
 `logger` keyword of the slave's constructor), read with ctypes. pythonfmu tells a slave neither
 whether the host enabled logging nor how to reach the host's logger before the FMI call returns
 (it queues a slave's messages until then), and the gear FMU needs both: to say a problem on
-stderr only where the host would not show it, and to announce a compile before it starts.
+stderr only where the host would not show it, and to announce a compile before it starts
+(HostLine: the integrator's first start says it through one, integrate/first_start.py).
 
 pythonfmu 0.7's C++ Fmi2Logger (its src/pythonfmu/fmi2.cpp and Logger.hpp): a vtable pointer,
 the debug-logging flag at byte FLAG, the instance name (a std::string: data pointer, then size)
@@ -13,9 +14,13 @@ the one described here; anything else answers None ("not known").
 from __future__ import annotations
 
 import ctypes
+import sys
+import weakref
 from collections.abc import Callable
+from types import FrameType
 
 FLAG, NAME, FUNCTIONS = 8, 16, 72
+FMI_OK = 0
 # fmi2CallbackLogger(environment, instance name, status, category, message)
 _CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
                              ctypes.c_char_p, ctypes.c_char_p)
@@ -62,3 +67,45 @@ def host_logger(address: int | None, instance_name: str) -> Callable[[int, bytes
     environment = _pointer(functions, 4 * ctypes.sizeof(ctypes.c_void_p))
     callback = _CALLBACK(logger)
     return lambda status, text: callback(environment, name, status, None, text)
+
+
+class HostLine:
+    """A direct line to the host's logger, for messages that cannot wait for the FMI call to
+    return. `say(message, status)` calls the host's fmi2CallbackLogger at once where it can,
+    else writes to stderr and queues the message with the slave's log as well.
+
+    pythonfmu queues a slave's log messages and hands them over only when the FMI call returns
+    (those of fmi2Instantiate at the next call), and a compile announced that way would be read
+    after it is done. The host's logger is found through pythonfmu 0.7's own logger object
+    (host_logger), and called only while the instance's __init__ runs (inside
+    fmi2Instantiate, when the host's callbacks are certainly alive; compiles happen there)."""
+
+    def __init__(self, slave, logger_address=None):
+        self._slave = weakref.ref(slave)
+        self._init = type(slave).__init__.__code__
+        self._name = str(slave.instance_name).encode()
+        self._call = host_logger(logger_address, str(slave.instance_name))
+
+    def say(self, message: str, status: int = FMI_OK) -> None:
+        """Show `message` to the host: through its logger callback while it instantiates the
+        FMU, else on stderr (and in the slave's log, where there is a slave)."""
+        text = f"{self._name.decode()}: {message}"
+        if self._call is not None and self._instantiating():
+            # hosts format the message printf-style
+            self._call(status, text.replace("%", "%%").encode())
+            return
+        print(f"herringbone FMU {text}", file=sys.stderr, flush=True)
+        slave = self._slave()
+        if slave is not None:
+            from pythonfmu.enums import Fmi2Status
+
+            slave.log(text.replace("%", "%%"), Fmi2Status(status))
+
+    def _instantiating(self) -> bool:
+        frame: FrameType | None = sys._getframe(1)
+        slave = self._slave()
+        while frame is not None:
+            if frame.f_code is self._init and frame.f_locals.get("self") is slave:
+                return True
+            frame = frame.f_back
+        return False

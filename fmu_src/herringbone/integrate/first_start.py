@@ -12,11 +12,9 @@ says so before it starts, with the reason and the time it will take (`estimate_s
 again when done; every compile's time is recorded beside the cache (`RECORD`) for the next
 estimate.
 
-The message reaches the host while it waits: pythonfmu queues a slave's log messages and hands
-them over only when the FMI call returns (those of fmi2Instantiate at the next call), so
-`HostLine` calls the host's logger itself, through the logger object pythonfmu 0.7 passes to
-the slave, after checking that the object is laid out as expected; where it cannot (another
-pythonfmu, logging off) the message goes to stderr at once and to the queue as well.
+The messages go through whatever `say` the caller hands over: the FMU's is a line straight to
+its host's logger (fmu/pythonfmu_logger.py, HostLine), so that the host shows them while it
+waits rather than when the FMI call returns.
 """
 from __future__ import annotations
 
@@ -25,9 +23,7 @@ import shutil
 import sys
 import threading
 import time
-import weakref
 from pathlib import Path
-from types import FrameType
 
 from numba.core import event
 
@@ -38,24 +34,24 @@ RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, 
 # Compile time of the whole integrator when nothing is recorded: 40.5 to 44.3 s measured with
 # every cache empty on this project's 2-core machine (AMD EPYC, numba 0.68), shared with others
 DEFAULT_COMPILE_SECONDS = 40.0
-FMI_OK = 0
+FMI_WARNING = 1
 
 
-def prepare(slave, logger_address=None) -> None:
+def prepare(resources, say) -> None:
     """Called once as an FMU's slave is instantiated, before anything is compiled: adds the
-    compiled code the FMU carries to the user's cache folder where that lacks it
-    (cache.seed_from), and makes any compile that remains announce itself to the host first.
-    `logger_address`: the `logger` keyword pythonfmu passes to the slave (see HostLine)."""
-    line = HostLine(slave, logger_address)
-    carried = Path(slave.resources) / CARRIED_FOLDER if slave.resources else None
+    compiled code the FMU carries (in its `resources` folder, None where it has none) to the
+    user's cache folder where that lacks it (cache.seed_from), and makes any compile that
+    remains announce itself first, through `say(message, status)` (status an FMI status: 0 OK,
+    1 warning)."""
+    carried = Path(resources) / CARRIED_FOLDER if resources else None
     if carried is not None and carried.is_dir():
         try:
             cache.seed_from(carried)
         except OSError as error:
-            line.say(f"cannot copy the compiled integrator the FMU carries into "
-                     f"{cache.kernels_folder()} ({error}); it will be compiled instead. Set "
-                     "HERRINGBONE_CACHE_DIR to a writable folder to keep it", status=1)
-    announce_compiles(line.say)
+            say(f"cannot copy the compiled integrator the FMU carries into "
+                f"{cache.kernels_folder()} ({error}); it will be compiled instead. Set "
+                "HERRINGBONE_CACHE_DIR to a writable folder to keep it", FMI_WARNING)
+    announce_compiles(say)
 
 
 def estimate_seconds() -> float:
@@ -146,48 +142,6 @@ def announce_compiles(say) -> None:
             _announcer = _Announcer(say)
             event.register("numba:compile", _announcer)
         _announcer.say = say
-
-
-class HostLine:
-    """A direct line to the host's logger, for messages that cannot wait for the FMI call to
-    return. `say(message, status)` calls the host's fmi2CallbackLogger at once where it can,
-    else writes to stderr and queues the message with the slave's log as well.
-
-    The host's logger is found through pythonfmu 0.7's own logger object
-    (fmu.pythonfmu_logger), and called only while the instance's __init__ runs (inside
-    fmi2Instantiate, when the host's callbacks are certainly alive; compiles happen there)."""
-
-    def __init__(self, slave, logger_address=None):
-        from ..fmu.pythonfmu_logger import host_logger
-
-        self._slave = weakref.ref(slave)
-        self._init = type(slave).__init__.__code__
-        self._name = str(slave.instance_name).encode()
-        self._call = host_logger(logger_address, str(slave.instance_name))
-
-    def say(self, message: str, status: int = FMI_OK) -> None:
-        """Show `message` to the host: through its logger callback while it instantiates the
-        FMU, else on stderr (and in the slave's log, where there is a slave)."""
-        text = f"{self._name.decode()}: {message}"
-        if self._call is not None and self._instantiating():
-            # hosts format the message printf-style
-            self._call(status, text.replace("%", "%%").encode())
-            return
-        print(f"herringbone FMU {text}", file=sys.stderr, flush=True)
-        slave = self._slave()
-        if slave is not None:
-            from pythonfmu.enums import Fmi2Status
-
-            slave.log(text.replace("%", "%%"), Fmi2Status(status))
-
-    def _instantiating(self) -> bool:
-        frame: FrameType | None = sys._getframe(1)
-        slave = self._slave()
-        while frame is not None:
-            if frame.f_code is self._init and frame.f_locals.get("self") is slave:
-                return True
-            frame = frame.f_back
-        return False
 
 
 def compile_for_scene(scene_path, say=print, progress_every=10.0) -> float | None:
