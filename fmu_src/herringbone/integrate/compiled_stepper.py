@@ -242,6 +242,12 @@ class Run:
         return int(self._counters[walk.Counter.SWITCHES_CHAINED])
 
     @property
+    def contacts_chained(self) -> int:
+        """Of the events, the landings and lift-offs taken one after another without the
+        loop's general iteration (walk.chain_switches): for benchmarks and tests."""
+        return int(self._counters[walk.Counter.CONTACTS_CHAINED])
+
+    @property
     def rejected_steps(self) -> int:
         """Steps the run has rejected (by error control; exact steps it could not certify),
         beside its accepted steps: for benchmarks."""

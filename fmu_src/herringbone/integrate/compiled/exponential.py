@@ -895,6 +895,10 @@ def _interval_inside(tables, exact, pinion, length, start, end, grid):
 DIP_TURN = 0.5
 DIP_HALVINGS = 8
 DIP_EVALUATIONS = 256
+# approach_first_crossing's march gives up sooner, at its first touch too: it only saves the
+# loop its own steps, and where the approach comes near zero without crossing (separation's
+# loaded points) marches to DIP_EVALUATIONS cost a quarter of the scene's time for no event
+FIRST_CROSSING_EVALUATIONS = 48
 
 
 @njit(**NUMBERS_ONLY)
@@ -910,6 +914,45 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
     lift-off and a landing a tenth as long can lie between its ends unseen by the cubic
     through their values and slopes (tests/regression/found_e759bc9542.toml). `buffers`: the
     tables as pack_tables packs them."""
+    tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
+                                               load_torque, h)
+    past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
+                            DIP_EVALUATIONS)
+    if not past > 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
+        return past
+    back = _first_past_zero(tables, exact, degree, -sign, curve, past, h, widest,
+                            DIP_EVALUATIONS)
+    return back if math.isnan(back) else (past if back > 0.0 else -1.0)
+
+
+@njit(**NUMBERS_ONLY)
+def approach_first_crossing(system, buffers, exact, state, motor_torque, load_torque, h,
+                            sign):
+    """Where (s from `state`) the approach of the segment's points (one function, as
+    approach_dip takes it) first crosses zero from the side `sign` (+1: loaded, a lift-off;
+    −1: unloaded, a landing) within h (s), whatever the step's end shows: approach_dip's march
+    from the start brackets the first time it lies past zero, and Newton's method on its modal
+    solution finds the crossing inside that bracket (_modal_crossing). −1 where it stays on its
+    side over all of h; NaN where the march gives up or Newton does not converge. A step aimed
+    just past the crossing then ends on the event (walk.aimed_contact). `buffers`: the tables
+    as pack_tables packs them."""
+    tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
+                                               load_torque, h)
+    past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
+                            FIRST_CROSSING_EVALUATIONS)
+    if not past > 0.0:
+        return past
+    crossing = _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0,
+                               sign < 0.0, past, past, False)
+    return crossing if crossing > 0.0 else math.nan
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _dip_march(system, buffers, exact, state, motor_torque, load_torque, h):
+    """What approach_dip's march over a step of h (s) from `state` needs: (the tables, their
+    modal start and the approach's slow polynomial made; its degree; the bound on the
+    approach's curvature over the step; the widest interval, s, one that turns the fastest
+    mode by DIP_TURN)."""
     tables = unpack_tables(buffers)
     _start_from(system, tables, exact, state, motor_torque, load_torque)
     degree = _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
@@ -919,25 +962,22 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
         fastest = max(fastest, size)
         curve += tables.approach_size[exact, k] * tables.start_size[k] * size * size
     curve += _polynomial_curve(tables.modal_slow, degree, h)
-    widest = h / max(1.0, math.ceil(h * fastest / DIP_TURN))
-    past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest)
-    if not past > 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
-        return past
-    back = _first_past_zero(tables, exact, degree, -sign, curve, past, h, widest)
-    return back if math.isnan(back) else (past if back > 0.0 else -1.0)
+    return tables, degree, curve, h / max(1.0, math.ceil(h * fastest / DIP_TURN))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest):
+def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest, most):
     """The first time (s) in (start, end] at which sign times the approach is negative,
     marching from `start` by intervals at most `widest` (s) long on which _interval_low
     bounds it from its values and rates at their ends and its curvature bound `curve`, an
-    interval that bound cannot clear halved (DIP_HALVINGS times at most); −1 where there is
-    none, NaN past DIP_EVALUATIONS evaluations."""
+    interval that bound cannot clear halved (DIP_HALVINGS times at most) and passed there as
+    a touch; −1 where there is none, NaN past `most` evaluations, or at the first touch
+    where `most` is FIRST_CROSSING_EVALUATIONS (approach_first_crossing's: a touch is where
+    the loop's own steps look closer)."""
     narrowest = widest / 2.0 ** DIP_HALVINGS
     width = widest
     value0, rate0 = _approach_at(tables, exact, degree, sign, start)
-    for _ in range(DIP_EVALUATIONS):
+    for _ in range(most):
         if start >= end:
             return -1.0
         stop = min(end, start + width)
@@ -945,6 +985,8 @@ def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest):
         if value1 < 0.0:
             return stop
         cleared = _interval_low(value0, rate0, value1, rate1, curve, stop - start) > 0.0
+        if not cleared and width <= narrowest and most == FIRST_CROSSING_EVALUATIONS:
+            return math.nan
         if cleared or width <= narrowest:
             start, value0, rate0 = stop, value1, rate1
             width = min(widest, 2.0 * width) if cleared else width

@@ -47,10 +47,12 @@ crossed; where a point may have lifted off and landed again inside it, `grazing_
 then `finish_step` (no event: the step's end is the new start) or `cross_event` (the crossing
 located by `locate_event` to the event time tolerance, the run moved into the next segment by
 `end_segment`, which the loop then begins: `begin_segment`). Between the two, where the
-new segment is exact and its opening step aimed at the modal solution's crossing of its phase
-end, `chain_switches` takes the switches that follow one after another for as long as each
-step is one the loop would take, accept and locate without a trial, with none of the loop's
-bookkeeping in between. Trial steps (`trial_step`) serve
+new segment is exact, `chain_switches` takes the events that follow one after another for as
+long as each step is one that ends on its event, located without a trial, with none of the
+loop's bookkeeping in between: a phase switch where the opening step is aimed at the modal
+solution's crossing of the phase end and the loop would take and accept it (the run then
+the loop's own to the bit), and where contact can be lost, a landing or a lift-off stepped
+onto just past the first crossing of the approach's modal solution. Trial steps (`trial_step`) serve
 the location, the probe and the debug check. They work on records laid out once: the stepper's
 settings (one float array, `Setting`), the run's arrays (`RunArrays`, its position), the mesh
 period (`equations.PeriodTable`) and the run's `Workspace`, the scratch arrays that `pack_run`
@@ -179,6 +181,7 @@ class Counter(IntEnum):
     EVENTS = 8  # events located (cross_event)
     REJECTED_STEPS = 9  # steps rejected (error control; an exact step not certified)
     SWITCHES_CHAINED = 10  # of the EVENTS, phase switches taken by chain_switches
+    CONTACTS_CHAINED = 11  # of the EVENTS, landings and lift-offs taken by chain_switches
 
 
 class Memory(IntEnum):
@@ -485,6 +488,22 @@ def _exact_crossing(system, segment, state, workspace, high, guess):
         system, workspace.exact, segment.exact, state, segment.motor_torque,
         segment.load_torque, high,
         segment.exact % exponential.VARIANTS == exponential.NONE_LOADED, guess)
+
+
+def exact_first_crossing(system, segment, state, workspace, h):
+    """exponential.approach_first_crossing on the workspace's tables where it is the
+    exponential method's (the segment exact): where the points' approach first crosses zero
+    within h (s) from `state` (−1: it does not; NaN: it cannot tell); NaN in the others'."""
+
+
+@overload(exact_first_crossing, inline="always")
+def _exact_first_crossing(system, segment, state, workspace, h):
+    if _lacks(workspace, "exact"):
+        return lambda system, segment, state, workspace, h: math.nan
+    return lambda system, segment, state, workspace, h: exponential.approach_first_crossing(
+        system, workspace.exact, segment.exact, state, segment.motor_torque,
+        segment.load_torque, h,
+        -1.0 if segment.exact % exponential.VARIANTS == exponential.NONE_LOADED else 1.0)
 
 
 def exact_event_ahead(system, workspace, exact, state, motor_torque, load_torque, length,
@@ -1702,51 +1721,74 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     return status, k, exact
 
 
-# --- phase switches chained ------------------------------------------------------------------
+# --- events chained ---------------------------------------------------------------------------
 
 @njit(**NUMBERS_ONLY)
 def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, samples, k,
                    steps, max_steps):
     """After cross_event has moved the run into a new segment (Status.OK), and at a call's
-    start (open_walk): while the segment is exact and its opening step is aimed at the modal
-    solution's crossing of its phase end (opening_ahead, call_opening_ahead:
-    Memory.MODAL_AIM is exponential.CROSSING), take that step and enter the next set at
-    once, for as long as it is the step the loop would take and accept, and it would locate
-    that switch at the step's end without a trial (aimed_switch says when).
-    What the loop does besides between two such switches (the rate and event values at the
-    step's ends, the grazing check, the location, begin_segment) changes nothing there, and
-    cost high_speed two fifths of its time: docs/exponential-measurements.md, "Phase switches
-    chained". `exact`: the exact form of the run's segment (exact_form); `torques` (N·m) are
-    held; `end` (s): where the call stops; the samples (a Samples; None: none) from the
-    `k`-th on that a step passes are taken inside it, as cross_event takes them; `steps`
-    accepted of `max_steps`. A debug run (contact slack >= 0) checks every step by
-    violated_before: not here. Returns
-    (pass_event's Status: a stalled or chattering run stops, and walk's loop with it, after
-    begin_segment; the accepted steps; the next sample's index; the exact form of the
-    segment it leaves the run in)."""
+    start (open_walk): while the segment is exact and its next event can be stepped onto at
+    once, take that step and enter the next segment, for as long as it is a step the loop
+    would accept and locate without a trial (next_chained says when). What the loop does
+    besides between two such events (the rate and event values at the step's ends, the
+    grazing check, the location, begin_segment) changes nothing there, and cost high_speed
+    two fifths of its time: docs/exponential-measurements.md, "Phase switches chained".
+    `exact`: the exact form of the run's segment (exact_form); `torques` (N·m) are held;
+    `end` (s): where the call stops; the samples (a Samples; None: none) from the `k`-th on
+    that a step passes are taken inside it, as cross_event takes them; `steps` accepted of
+    `max_steps`. A debug run (contact slack >= 0) checks every step by violated_before: not
+    here. Returns (pass_event's Status: a stalled or chattering run stops, and walk's loop
+    with it, after begin_segment; the accepted steps; the next sample's index; the exact form
+    of the segment it leaves the run in)."""
     status, counters = Status.OK, workspace.counters
     if settings[Setting.CONTACT_SLACK] >= 0.0:
         return status, steps, k, exact
-    while status == Status.OK and workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
+    event = -1
+    while status == Status.OK and exact >= 0:
         segment = segment_of(system, mesh, run.place[0], run.loaded, torques, exact)
-        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
-                                   max_steps)
-        if not taken:
+        event, plan = next_chained(system, settings, run, workspace, segment, end, steps,
+                                   max_steps, event >= Event.CONTACT)
+        if event < 0:
             break
         k = samples_before_event(samples, k, system, segment, settings, run.state, workspace,
-                                 run.clock[0], plan.h_step, plan.h_step, Event.PHASE_END)
+                                 run.clock[0], plan.h_step, plan.h_step, event)
         # as take_exact_step would: a certified step, after an accepted one
         run.clock[1] = control_exact_step(exponential.CERTIFIED, plan,
                                           settings[Setting.EXACT_FLOOR], False)[1]
         steps += 1
         counters[Counter.EVENTS] += 1
-        counters[Counter.SWITCHES_CHAINED] += 1
+        counters[Counter.SWITCHES_CHAINED if event < Event.CONTACT
+                 else Counter.CONTACTS_CHAINED] += 1
         status = pass_event(run.state, workspace, run.clock, run.clock[0], end, plan,
-                            plan.h_step, Event.PHASE_END)
+                            plan.h_step, event)
         if status == Status.OK:
-            exact = enter_next_segment(system, mesh, run, workspace, segment,
-                                       Event.PHASE_END, end)
+            exact = enter_next_segment(system, mesh, run, workspace, segment, event, end)
+            if event >= Event.CONTACT:  # as cross_event leaves it
+                run.clock[1] = min(run.clock[1], settings[Setting.EXACT_FLOOR])
     return status, steps, k, exact
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def next_chained(system, settings, run, workspace, segment, end, steps, max_steps,
+                 after_contact):
+    """chain_switches' next step in `segment` (exact, from the run's state): the phase switch
+    the opening aim found (aimed_switch), or where that step's end shows a landing or a
+    lift-off inside it, or the chain began the segment at one (`after_contact`), the first
+    landing or lift-off, or the phase switch with the approach certified by its march
+    (aimed_contact). (After a landing or a lift-off the loop located, the approach often
+    lies at zero without crossing: separation's, where a march from there cost a sixth of
+    the scene's time for no event.)
+    Returns (the event the step ends on, −1 where there is none to chain; its StepPlan; its
+    exact state in NEW_STATE)."""
+    contact_inside = False
+    if workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
+        taken, plan, contact_inside = aimed_switch(system, settings, run, workspace, segment,
+                                                   end, steps, max_steps)
+        if taken:
+            return Event.PHASE_END, plan
+    if not system.contact_loss or not (contact_inside or after_contact):
+        return -1, StepPlan(0.0, 0.0, False, False)
+    return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1757,22 +1799,98 @@ def aimed_switch(system, settings, run, workspace, segment, end, steps, max_step
     (step_allowed; before `end`, s), accept it (certified) and locate its phase end
     at its end with no trial (crossed by at most two location tolerances, as
     first_estimate reads it, and nothing else crossed: points_stay). Returns (whether it is
-    that step: False leaves it to the loop's own iteration; the StepPlan)."""
+    that step: False leaves it to aimed_contact or the loop's own iteration; the StepPlan;
+    whether its end shows a landing or a lift-off inside it, uncertified: the step is then
+    computed where plan_step did not aim it too, the phase switch lying further than the
+    step the controller wants, where contact can be lost)."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    if not plan.aimed or time + plan.h_step >= end or \
-            step_allowed(steps, max_steps, time, plan) != Status.OK:
-        return False, plan
+    if step_allowed(steps, max_steps, time, plan) != Status.OK or time + plan.h_step >= end \
+            or not (plan.aimed or system.contact_loss):
+        return False, plan, False
     state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
-    if exact_step(system, segment, state, workspace, plan.h_step,
-                  new_state) != exponential.CERTIFIED:
-        return False, plan
-    speed = new_state[state.shape[0] // 2 + system.pinion]
+    verdict = exact_step(system, segment, state, workspace, plan.h_step, new_state)
+    stay = not system.contact_loss or points_stay(system, segment, new_state,
+                                                  workspace.values[Values.APPROACH])
+    if verdict == exponential.CERTIFIED and plan.aimed and stay:
+        return switch_at_end(system, settings, segment, new_state, plan.h_step), plan, False
+    return False, plan, verdict == exponential.PHASE_SURE and (not stay or not plan.aimed)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def switch_at_end(system, settings, segment, new_state, h):
+    """Whether the step of h (s) that ends at `new_state` passed its segment's phase end by at
+    most two location tolerances, as first_estimate reads it (by φp's tangent there)."""
+    speed = new_state[new_state.shape[0] // 2 + system.pinion]
     past = (new_state[system.pinion] - segment.length) / speed
-    return (0.0 < past <= 2.0 * location_tolerance(settings, plan.h_step)
-            and (not system.contact_loss or points_stay(
-                system, segment, new_state, workspace.values[Values.APPROACH]))), plan
+    return 0.0 < past <= 2.0 * location_tolerance(settings, h)
+
+
+# a call of its own: inlined beside aimed_switch, the two copies of exact_step's inlined code
+# left numba's pedantic check of its IR warning at every compile
+@njit(**NUMBERS_ONLY)
+def aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps):
+    """next_chained's step where contact can be lost: within the step to the phase switch
+    (the opening aim's, or the modal solution's crossing aimed at here), the points'
+    approach (one function in an exact set) marched from the start for its first crossing
+    (exact_first_crossing). Where it crosses first, the step aimed just past that crossing,
+    taken where the angle stays inside its interval (its phase events sure, its end inside)
+    and every point has crossed at its end, by at most two location tolerances (as the
+    location reads it, by the approach's tangent there); where it does not cross, the phase
+    switch, its approach certified by the march, taken as aimed_switch takes it. Returns (the
+    event, −1: none to chain; the StepPlan; the exact state in NEW_STATE)."""
+    time, memory, none = run.clock[0], workspace.memory, (-1, StepPlan(0.0, 0.0, False, False))
+    ahead, aim = memory[Memory.MODAL_AHEAD], memory[Memory.MODAL_AIM]
+    if aim != exponential.CROSSING:
+        ahead, aim = exact_event_ahead(system, workspace, segment.exact, run.state,
+                                       segment.motor_torque, segment.load_torque,
+                                       segment.length, end - time)
+        if aim != exponential.CROSSING and ahead != math.inf:  # inf: it stays inside
+            return none
+    plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1], ahead,
+                     aim == exponential.CROSSING, settings)
+    if step_allowed(steps, max_steps, time, plan) != Status.OK:
+        return none
+    crossing = exact_first_crossing(system, segment, run.state, workspace, plan.h_step)
+    if math.isnan(crossing):
+        return none
+    event = Event.PHASE_END if crossing < 0.0 else Event.CONTACT
+    if event == Event.CONTACT:  # aimed just past the crossing
+        plan = StepPlan(crossing + location_tolerance(settings, crossing), plan.h_wanted,
+                        False, True)
+    if not plan.aimed or time + plan.h_step >= end:
+        return none
+    new_state = workspace.vectors[Vector.NEW_STATE]
+    verdict = exact_step(system, segment, run.state, workspace, plan.h_step, new_state)
+    if verdict == exponential.UNSURE:
+        return none
+    if event == Event.CONTACT:
+        ends_on_it = (0.0 < new_state[system.pinion] < segment.length) and contact_at_end(
+            system, settings, segment, workspace, new_state, plan.h_step)
+    else:  # the phase switch, its approach certified by the march
+        ends_on_it = switch_at_end(system, settings, segment, new_state, plan.h_step) and \
+            points_stay(system, segment, new_state, workspace.values[Values.APPROACH])
+    return (event if ends_on_it else -1), plan
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def contact_at_end(system, settings, segment, workspace, new_state, h):
+    """Whether at `new_state`, the end of a step of h (s), every point of `segment` lies across
+    zero from the side its load put it on, each by at most two location tolerances by its
+    approach's tangent there (the points of an exact set cross together)."""
+    approach, slopes = workspace.values[Values.APPROACH], workspace.values[Values.TRIAL]
+    rate = workspace.vectors[Vector.RATE_AFTER]
+    derivative(system, segment.points, segment.point_count, segment.loaded,
+               segment.motor_torque, segment.load_torque, new_state, rate)
+    approaches(system, segment.points, segment.point_count, new_state, approach)
+    approach_rates(system, segment.points, segment.point_count, new_state, rate, slopes)
+    tolerance = location_tolerance(settings, h)
+    for i in range(segment.point_count):
+        crossed = approach[i] < 0.0 if segment.loaded[i] != 0.0 else approach[i] > 0.0
+        if not crossed or not 0.0 < approach[i] / slopes[i] <= 2.0 * tolerance:
+            return False
+    return True
 
 
 @njit(cache=True, error_model="numpy", inline="always")
