@@ -1772,23 +1772,24 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
 def next_chained(system, settings, run, workspace, segment, end, steps, max_steps,
                  after_contact):
     """chain_switches' next step in `segment` (exact, from the run's state): the phase switch
-    the opening aim found (aimed_switch), or where that step's end shows a landing or a
-    lift-off inside it, or the chain began the segment at one (`after_contact`), the first
-    landing or lift-off, or the phase switch with the approach certified by its march
+    the opening aim found (aimed_switch), or where a landing or a lift-off comes inside the
+    step to it (contact_inside), or the chain began the segment at one (`after_contact`), the
+    first landing or lift-off, or the phase switch with the approach certified by its march
     (aimed_contact). (After a landing or a lift-off the loop located, the approach often
     lies at zero without crossing: separation's, where a march from there cost a sixth of
     the scene's time for no event.)
     Returns (the event the step ends on, −1 where there is none to chain; its StepPlan; its
     exact state in NEW_STATE)."""
-    contact_inside = False
-    if workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING:
-        taken, plan, contact_inside = aimed_switch(system, settings, run, workspace, segment,
-                                                   end, steps, max_steps)
+    crossing = workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING
+    if crossing:
+        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
+                                   max_steps)
         if taken:
             return Event.PHASE_END, plan
-    if not system.contact_loss or not (contact_inside or after_contact):
-        return -1, StepPlan(0.0, 0.0, False, False)
-    return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps)
+    if system.contact_loss and (after_contact or crossing and contact_inside(
+            system, settings, run, workspace, segment, end, steps, max_steps)):
+        return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps)
+    return -1, StepPlan(0.0, 0.0, False, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1799,23 +1800,42 @@ def aimed_switch(system, settings, run, workspace, segment, end, steps, max_step
     (step_allowed; before `end`, s), accept it (certified) and locate its phase end
     at its end with no trial (crossed by at most two location tolerances, as
     first_estimate reads it, and nothing else crossed: points_stay). Returns (whether it is
-    that step: False leaves it to aimed_contact or the loop's own iteration; the StepPlan;
-    whether its end shows a landing or a lift-off inside it, uncertified: the step is then
-    computed where plan_step did not aim it too, the phase switch lying further than the
-    step the controller wants, where contact can be lost)."""
+    that step: False leaves it to the loop's own iteration; the StepPlan)."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    if step_allowed(steps, max_steps, time, plan) != Status.OK or time + plan.h_step >= end \
-            or not (plan.aimed or system.contact_loss):
-        return False, plan, False
+    if not plan.aimed or time + plan.h_step >= end or \
+            step_allowed(steps, max_steps, time, plan) != Status.OK:
+        return False, plan
     state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
-    verdict = exact_step(system, segment, state, workspace, plan.h_step, new_state)
-    stay = not system.contact_loss or points_stay(system, segment, new_state,
-                                                  workspace.values[Values.APPROACH])
-    if verdict == exponential.CERTIFIED and plan.aimed and stay:
-        return switch_at_end(system, settings, segment, new_state, plan.h_step), plan, False
-    return False, plan, verdict == exponential.PHASE_SURE and (not stay or not plan.aimed)
+    if exact_step(system, segment, state, workspace, plan.h_step,
+                  new_state) != exponential.CERTIFIED:
+        return False, plan
+    return (switch_at_end(system, settings, segment, new_state, plan.h_step)
+            and (not system.contact_loss or points_stay(
+                system, segment, new_state, workspace.values[Values.APPROACH]))), plan
+
+
+# a call of its own, as aimed_contact: kept out of the chain's code for phase switches
+@njit(**NUMBERS_ONLY)
+def contact_inside(system, settings, run, workspace, segment, end, steps, max_steps):
+    """Whether the step the loop would take next from the run's state (plan_step towards the
+    opening aim's crossing, Memory.MODAL_AHEAD; aimed or, where the controller wants a
+    shorter one, not) shows a landing or a lift-off inside it: its certificate fails on the
+    points' approach and a point lies across zero at its end, or it ends short of the
+    switch (a lift-off 20 µs into jump_resonance's long set lies within the step the
+    controller holds its first one to)."""
+    time = run.clock[0]
+    plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
+                     workspace.memory[Memory.MODAL_AHEAD], True, settings)
+    if step_allowed(steps, max_steps, time, plan) != Status.OK or time + plan.h_step >= end:
+        return False
+    new_state = workspace.vectors[Vector.NEW_STATE]
+    if exact_step(system, segment, run.state, workspace, plan.h_step,
+                  new_state) != exponential.PHASE_SURE:
+        return False
+    return not plan.aimed or not points_stay(system, segment, new_state,
+                                             workspace.values[Values.APPROACH])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1836,8 +1856,7 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
     approach (one function in an exact set) marched from the start for its first crossing
     (exact_first_crossing). Where it crosses first, the step aimed just past that crossing,
     taken where the angle stays inside its interval (its phase events sure, its end inside)
-    and every point has crossed at its end, by at most two location tolerances (as the
-    location reads it, by the approach's tangent there); where it does not cross, the phase
+    and every point has crossed at its end (points_crossed); where it does not cross, the phase
     switch, its approach certified by the march, taken as aimed_switch takes it. Returns (the
     event, −1: none to chain; the StepPlan; the exact state in NEW_STATE)."""
     time, memory, none = run.clock[0], workspace.memory, (-1, StepPlan(0.0, 0.0, False, False))
@@ -1866,31 +1885,12 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
     if verdict == exponential.UNSURE:
         return none
     if event == Event.CONTACT:
-        ends_on_it = (0.0 < new_state[system.pinion] < segment.length) and contact_at_end(
-            system, settings, segment, workspace, new_state, plan.h_step)
+        ends_on_it = (0.0 < new_state[system.pinion] < segment.length) and points_crossed(
+            system, segment, new_state, workspace.values[Values.APPROACH])
     else:  # the phase switch, its approach certified by the march
         ends_on_it = switch_at_end(system, settings, segment, new_state, plan.h_step) and \
             points_stay(system, segment, new_state, workspace.values[Values.APPROACH])
     return (event if ends_on_it else -1), plan
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def contact_at_end(system, settings, segment, workspace, new_state, h):
-    """Whether at `new_state`, the end of a step of h (s), every point of `segment` lies across
-    zero from the side its load put it on, each by at most two location tolerances by its
-    approach's tangent there (the points of an exact set cross together)."""
-    approach, slopes = workspace.values[Values.APPROACH], workspace.values[Values.TRIAL]
-    rate = workspace.vectors[Vector.RATE_AFTER]
-    derivative(system, segment.points, segment.point_count, segment.loaded,
-               segment.motor_torque, segment.load_torque, new_state, rate)
-    approaches(system, segment.points, segment.point_count, new_state, approach)
-    approach_rates(system, segment.points, segment.point_count, new_state, rate, slopes)
-    tolerance = location_tolerance(settings, h)
-    for i in range(segment.point_count):
-        crossed = approach[i] < 0.0 if segment.loaded[i] != 0.0 else approach[i] > 0.0
-        if not crossed or not 0.0 < approach[i] / slopes[i] <= 2.0 * tolerance:
-            return False
-    return True
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1903,6 +1903,20 @@ def points_stay(system, segment, state, approach):
     approaches(system, segment.points, segment.point_count, state, approach)
     for i in range(segment.point_count):
         if (approach[i] < 0.0) if segment.loaded[i] != 0.0 else (approach[i] > 0.0):
+            return False
+    return True
+
+
+# a call of its own: only a chained landing or lift-off asks it
+@njit(**NUMBERS_ONLY)
+def points_crossed(system, segment, state, approach):
+    """Whether at `state`, a step's end, every point of `segment` is past zero in the
+    direction of its event, as points_stay reads it: the points of an exact set cross
+    together. (Where the step was aimed just past the modal solution's crossing, Newton's
+    method placed it within 1e-10 of the time to it, well inside the location tolerance.)"""
+    approaches(system, segment.points, segment.point_count, state, approach)
+    for i in range(segment.point_count):
+        if (approach[i] >= 0.0) if segment.loaded[i] != 0.0 else (approach[i] <= 0.0):
             return False
     return True
 
