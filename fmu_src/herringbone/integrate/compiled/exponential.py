@@ -917,11 +917,11 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
     tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
                                                load_torque, h)
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
-                            DIP_EVALUATIONS)
+                            DIP_EVALUATIONS, True)
     if not past > 0.0 or _approach_at(tables, exact, degree, sign, h)[0] >= 0.0:
         return past
     back = _first_past_zero(tables, exact, degree, -sign, curve, past, h, widest,
-                            DIP_EVALUATIONS)
+                            DIP_EVALUATIONS, True)
     return back if math.isnan(back) else (past if back > 0.0 else -1.0)
 
 
@@ -939,7 +939,7 @@ def approach_first_crossing(system, buffers, exact, state, motor_torque, load_to
     tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
                                                load_torque, h)
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
-                            FIRST_CROSSING_EVALUATIONS)
+                            FIRST_CROSSING_EVALUATIONS, False)
     if not past > 0.0:
         return past
     crossing = _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0,
@@ -966,14 +966,14 @@ def _dip_march(system, buffers, exact, state, motor_torque, load_torque, h):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest, most):
+def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest, most, touches):
     """The first time (s) in (start, end] at which sign times the approach is negative,
     marching from `start` by intervals at most `widest` (s) long on which _interval_low
     bounds it from its values and rates at their ends and its curvature bound `curve`, an
     interval that bound cannot clear halved (DIP_HALVINGS times at most) and passed there as
-    a touch; −1 where there is none, NaN past `most` evaluations, or at the first touch
-    where `most` is FIRST_CROSSING_EVALUATIONS (approach_first_crossing's: a touch is where
-    the loop's own steps look closer)."""
+    a touch where `touches` (else it ends the march: approach_first_crossing's, for which
+    the loop's own steps look closer); −1 where there is none, NaN past `most` evaluations
+    or at a touch that ends it."""
     narrowest = widest / 2.0 ** DIP_HALVINGS
     width = widest
     value0, rate0 = _approach_at(tables, exact, degree, sign, start)
@@ -985,7 +985,7 @@ def _first_past_zero(tables, exact, degree, sign, curve, start, end, widest, mos
         if value1 < 0.0:
             return stop
         cleared = _interval_low(value0, rate0, value1, rate1, curve, stop - start) > 0.0
-        if not cleared and width <= narrowest and most == FIRST_CROSSING_EVALUATIONS:
+        if not cleared and width <= narrowest and not touches:
             return math.nan
         if cleared or width <= narrowest:
             start, value0, rate0 = stop, value1, rate1
