@@ -1772,69 +1772,71 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
 def next_chained(system, settings, run, workspace, segment, end, steps, max_steps,
                  after_contact):
     """chain_switches' next step in `segment` (exact, from the run's state): the phase switch
-    the opening aim found (aimed_switch), or where a landing or a lift-off comes inside the
-    step to it (contact_inside), or the chain began the segment at one (`after_contact`), the
-    first landing or lift-off, or the phase switch with the approach certified by its march
-    (aimed_contact). (After a landing or a lift-off the loop located, the approach often
-    lies at zero without crossing: separation's, where a march from there cost a sixth of
-    the scene's time for no event.)
+    the opening aim found, where the opening step (opening_step) ends on it (switch_onto),
+    or where a landing or a lift-off comes inside that step (contact_inside), or the chain
+    began the segment at one (`after_contact`), the first landing or lift-off, or the phase
+    switch with the approach certified by its march (aimed_contact). (After a landing or a
+    lift-off the loop located, the approach often lies at zero without crossing:
+    separation's, where a march from there cost a sixth of the scene's time for no event.)
     Returns (the event the step ends on, −1 where there is none to chain; its StepPlan; its
     exact state in NEW_STATE)."""
     crossing = workspace.memory[Memory.MODAL_AIM] == exponential.CROSSING
-    if crossing:
-        taken, plan = aimed_switch(system, settings, run, workspace, segment, end, steps,
-                                   max_steps)
-        if taken:
-            return Event.PHASE_END, plan
-    if system.contact_loss and (after_contact or crossing and contact_inside(
-            system, settings, run, workspace, segment, end, steps, max_steps)):
-        return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps)
+    plan, verdict = opening_step(system, settings, run, workspace, segment, end, steps,
+                                 max_steps, crossing, after_contact)
+    if verdict == exponential.CERTIFIED and switch_onto(system, settings, workspace, segment,
+                                                        plan):
+        return Event.PHASE_END, plan
+    if system.contact_loss and (after_contact or verdict == exponential.PHASE_SURE
+                                and contact_inside(system, workspace, segment, plan)):
+        return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps,
+                             plan, verdict)
     return -1, StepPlan(0.0, 0.0, False, False)
 
 
+# what opening_step says of a step it did not take (the others: exponential.step's verdicts)
+NOT_TAKEN = -1
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def aimed_switch(system, settings, run, workspace, segment, end, steps, max_steps):
-    """chain_switches' step in `segment` (exact; the run's state its start, the modal
-    solution's crossing of its phase end in Memory.MODAL_AHEAD): the StepPlan that plan_step
-    aims just past the crossing, its exact state in NEW_STATE, where the loop would take it
-    (step_allowed; before `end`, s), accept it (certified) and locate its phase end
-    at its end with no trial (crossed by at most two location tolerances, as
-    first_estimate reads it, and nothing else crossed: points_stay). Returns (whether it is
-    that step: False leaves it to the loop's own iteration; the StepPlan)."""
+def opening_step(system, settings, run, workspace, segment, end, steps, max_steps, crossing,
+                 after_contact):
+    """The step the loop would take next from the run's state in `segment` (exact) where the
+    opening aim found the modal solution's crossing of the phase end (`crossing`;
+    Memory.MODAL_AHEAD): its StepPlan, aimed just past the crossing or, where the
+    controller wants a shorter one, not, and exponential.step's verdict on it, its exact
+    state in NEW_STATE; taken where the loop would take it (step_allowed; before `end`, s)
+    and it is aimed, or contact can be lost and the chain did not begin the segment at a
+    landing or a lift-off (`after_contact`: aimed_contact marches then): a step short of
+    the switch may show one inside it (contact_inside). NOT_TAKEN where it is not taken."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    if not plan.aimed or time + plan.h_step >= end or \
-            step_allowed(steps, max_steps, time, plan) != Status.OK:
-        return False, plan
-    state, new_state = run.state, workspace.vectors[Vector.NEW_STATE]
-    if exact_step(system, segment, state, workspace, plan.h_step,
-                  new_state) != exponential.CERTIFIED:
-        return False, plan
-    return (switch_at_end(system, settings, segment, new_state, plan.h_step)
-            and (not system.contact_loss or points_stay(
-                system, segment, new_state, workspace.values[Values.APPROACH]))), plan
+    if not crossing or not (plan.aimed or system.contact_loss and not after_contact) or \
+            time + plan.h_step >= end or step_allowed(steps, max_steps, time, plan) != Status.OK:
+        return plan, NOT_TAKEN
+    return plan, exact_step(system, segment, run.state, workspace, plan.h_step,
+                            workspace.vectors[Vector.NEW_STATE])
 
 
-# a call of its own, as aimed_contact: kept out of the chain's code for phase switches
-@njit(**NUMBERS_ONLY)
-def contact_inside(system, settings, run, workspace, segment, end, steps, max_steps):
-    """Whether the step the loop would take next from the run's state (plan_step towards the
-    opening aim's crossing, Memory.MODAL_AHEAD; aimed or, where the controller wants a
-    shorter one, not) shows a landing or a lift-off inside it: its certificate fails on the
-    points' approach and a point lies across zero at its end, or it ends short of the
-    switch (a lift-off 20 µs into jump_resonance's long set lies within the step the
-    controller holds its first one to)."""
-    time = run.clock[0]
-    plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
-                     workspace.memory[Memory.MODAL_AHEAD], True, settings)
-    if step_allowed(steps, max_steps, time, plan) != Status.OK or time + plan.h_step >= end:
-        return False
+@njit(cache=True, error_model="numpy", inline="always")
+def switch_onto(system, settings, workspace, segment, plan):
+    """Whether the opening step of `plan`, certified, is one the loop would locate its
+    phase end at with no trial: aimed, its end past the phase end by at most two location
+    tolerances (switch_at_end) and no point crossed (points_stay)."""
     new_state = workspace.vectors[Vector.NEW_STATE]
-    if exact_step(system, segment, run.state, workspace, plan.h_step,
-                  new_state) != exponential.PHASE_SURE:
-        return False
-    return not plan.aimed or not points_stay(system, segment, new_state,
+    return plan.aimed and switch_at_end(system, settings, segment, new_state, plan.h_step) \
+        and (not system.contact_loss or points_stay(system, segment, new_state,
+                                                    workspace.values[Values.APPROACH]))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def contact_inside(system, workspace, segment, plan):
+    """Whether the opening step of `plan`, whose certificate failed on the points' approach
+    (exponential.PHASE_SURE), shows a landing or a lift-off inside it: a point lies across
+    zero at its end, or it ends short of the switch (a lift-off 20 µs into jump_resonance's
+    long set lies within the step the controller holds its first one to)."""
+    return not plan.aimed or not points_stay(system, segment,
+                                             workspace.vectors[Vector.NEW_STATE],
                                              workspace.values[Values.APPROACH])
 
 
@@ -1847,28 +1849,33 @@ def switch_at_end(system, settings, segment, new_state, h):
     return 0.0 < past <= 2.0 * location_tolerance(settings, h)
 
 
-# a call of its own: inlined beside aimed_switch, the two copies of exact_step's inlined code
+# a call of its own: inlined beside opening_step, the two copies of exact_step's inlined code
 # left numba's pedantic check of its IR warning at every compile
 @njit(**NUMBERS_ONLY)
-def aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps):
+def aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps, opening,
+                  verdict):
     """next_chained's step where contact can be lost: within the step to the phase switch
-    (the opening aim's, or the modal solution's crossing aimed at here), the points'
-    approach (one function in an exact set) marched from the start for its first crossing
-    (exact_first_crossing). Where it crosses first, the step aimed just past that crossing,
-    taken where the angle stays inside its interval (its phase events sure, its end inside)
-    and every point has crossed at its end (points_crossed); where it does not cross, the phase
-    switch, its approach certified by the march, taken as aimed_switch takes it. Returns (the
-    event, −1: none to chain; the StepPlan; the exact state in NEW_STATE)."""
+    (the opening step's, `opening`, where the opening aim found the crossing; else the
+    modal solution's crossing aimed at here), the points' approach (one function in an
+    exact set) marched from the start for its first crossing (exact_first_crossing). Where
+    it crosses first, the step aimed just past that crossing, taken where the angle stays
+    inside its interval (its phase events sure, its end inside) and every point has crossed
+    at its end (points_crossed); where it does not cross, the phase switch, its approach
+    certified by the march, taken as switch_onto takes it: the opening step itself where
+    opening_step took it (`verdict`, its exact state still in NEW_STATE; NOT_TAKEN where it
+    did not). Returns (the event, −1: none to chain; the StepPlan; the exact state in
+    NEW_STATE)."""
     time, memory, none = run.clock[0], workspace.memory, (-1, StepPlan(0.0, 0.0, False, False))
-    ahead, aim = memory[Memory.MODAL_AHEAD], memory[Memory.MODAL_AIM]
-    if aim != exponential.CROSSING:
+    plan = opening
+    if memory[Memory.MODAL_AIM] != exponential.CROSSING:
         ahead, aim = exact_event_ahead(system, workspace, segment.exact, run.state,
                                        segment.motor_torque, segment.load_torque,
                                        segment.length, end - time)
         if aim != exponential.CROSSING and ahead != math.inf:  # inf: it stays inside
             return none
-    plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1], ahead,
-                     aim == exponential.CROSSING, settings)
+        plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1], ahead,
+                         aim == exponential.CROSSING, settings)
+        verdict = NOT_TAKEN
     if step_allowed(steps, max_steps, time, plan) != Status.OK:
         return none
     crossing = exact_first_crossing(system, segment, run.state, workspace, plan.h_step)
@@ -1878,10 +1885,12 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
     if event == Event.CONTACT:  # aimed just past the crossing
         plan = StepPlan(crossing + location_tolerance(settings, crossing), plan.h_wanted,
                         False, True)
+        verdict = NOT_TAKEN
     if not plan.aimed or time + plan.h_step >= end:
         return none
     new_state = workspace.vectors[Vector.NEW_STATE]
-    verdict = exact_step(system, segment, run.state, workspace, plan.h_step, new_state)
+    if verdict == NOT_TAKEN:
+        verdict = exact_step(system, segment, run.state, workspace, plan.h_step, new_state)
     if verdict == exponential.UNSURE:
         return none
     if event == Event.CONTACT:
