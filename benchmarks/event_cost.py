@@ -78,16 +78,19 @@ def exact_state_inside(scene, stepper, span):
 def call_costs(scene, stepper, span, calls):
     """{what: CPU µs a call} of the compiled loops (_kernels) from a state of the run, and
     whether its points are loaded there."""
+    from herringbone.integrate.compiled import exponential
+
     state, exact, length, sign, interval = exact_state_inside(scene, stepper, span)
     system, buffers = stepper.model.system, stepper.exact_buffers
+    train = exponential.exact_train(system)
     motor, load = scene.inputs.at(0.0)
     points, count = stepper.tables[interval], int(stepper.counts[interval])
     loaded = np.full(count, 1.0 if sign > 0.0 else 0.0)
     out, rate, slopes = np.empty_like(state), np.empty_like(state), np.empty(points.shape[1])
     aim, exact_steps, rates = _kernels()
-    stepping = (system, buffers, exact, state, motor, load, length, bool(system.contact_loss),
+    stepping = (train, buffers, exact, state, motor, load, length, bool(system.contact_loss),
                 sign, out)
-    cases = {"aim": (aim, (system, buffers, exact, state, motor, load, length)),
+    cases = {"aim": (aim, (train, buffers, exact, state, motor, load, length)),
              "aim and step": (exact_steps, (*stepping, True)),
              "step, kept start": (exact_steps, (*stepping, False)),
              "rate": (rates, (system, points, count, loaded, motor, load, state, rate, slopes,
@@ -113,27 +116,27 @@ def _kernels():
     from herringbone.integrate.compiled import equations, exponential
 
     @njit
-    def aim(system, buffers, exact, state, motor, load, length, count):
+    def aim(train, buffers, exact, state, motor, load, length, count):
         total = 0.0
         for _ in range(count):
             state[0] += 1e-15  # a new start
-            total += exponential.modal_phase_event_ahead(system, buffers, exact, state, motor,
+            total += exponential.modal_phase_event_ahead(train, buffers, exact, state, motor,
                                                          load, length, 1.0)[0]
         return total
 
     @njit
-    def exact_steps(system, buffers, exact, state, motor, load, length, contact_loss, sign,
+    def exact_steps(train, buffers, exact, state, motor, load, length, contact_loss, sign,
                     out, aimed, count):
         total = 0.0
         for k in range(count):
             if aimed:  # from a new start, aimed just past the crossing
                 state[0] += 1e-15
-                ahead = exponential.modal_phase_event_ahead(system, buffers, exact, state,
+                ahead = exponential.modal_phase_event_ahead(train, buffers, exact, state,
                                                             motor, load, length, 1.0)[0]
                 h = ahead * (1.0 + 1e-12) if math.isfinite(ahead) else 1e-5
             else:  # the start kept, the time new
                 h = 1e-5 * (1.0 + 1e-3 * (k & 7))
-            total += exponential.step(system, buffers, exact, state, motor, load, h,
+            total += exponential.step(train, buffers, exact, state, motor, load, h,
                                       contact_loss, sign, length, out) + out[0]
         return total
 

@@ -110,7 +110,7 @@ def compiled_cost(repeats=200_000):
     """Print the CPU µs of a DOP853 step, an exact step from a new start and the two modal
     products, in compiled loops (reference scene, 1e-3 s in, half the step bound)."""
     import herringbone
-    from herringbone.integrate.compiled import walk
+    from herringbone.integrate.compiled import exponential, walk
     from herringbone.integrate.compiled.equations import derivative
     from herringbone.integrate.compiled_stepper import CompiledStepper
     from herringbone.integrate.contract import start_position
@@ -136,8 +136,8 @@ def compiled_cost(repeats=200_000):
               (model.system, segment, state, rate, h, stepper.absolute_tolerance,
                stepper.step_tolerance, np.zeros((14, size)), np.zeros(size), np.zeros(size))),
              ("exponential.step, new start", kernels[1],
-              (model.system, stepper.exact_buffers, exact, state, torques[0], torques[1], h,
-               np.zeros(size))),
+              (exponential.exact_train(model.system), stepper.exact_buffers, exact, state,
+               torques[0], torques[1], h, np.zeros(size))),
              ("L (acceleration rows) and R", kernels[2],
               (tables, exact, state, np.zeros(size))),
              ("np.linalg.eig of the set's Â (complex)", kernels[3],
@@ -172,11 +172,11 @@ def _cost_kernels():
         return total
 
     @njit
-    def exact_steps(system, buffers, exact, state, motor, load, h, out, count):
+    def exact_steps(train, buffers, exact, state, motor, load, h, out, count):
         total = 0.0
         for _ in range(count):
             state[0] += 1e-15  # a new start: the product by L and the exponentials again
-            exponential.step(system, buffers, exact, state, motor, load, h, False, 1.0,
+            exponential.step(train, buffers, exact, state, motor, load, h, False, 1.0,
                              math.inf, out)
             total += out[0]
         return total

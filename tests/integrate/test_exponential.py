@@ -489,13 +489,14 @@ def test_the_approachs_march_clears_a_loaded_step_and_gives_up_on_one_without_lo
     crawling through the step by its narrowest intervals."""
     stepper = CompiledStepper(reference_model, 1e-7, "exponential")
     count, loaded = int(stepper.counts[0]), np.ones(stepper.tables.shape[2])
-    system, tables, h = reference_model.system, stepper.exact_buffers, stepper.exact_floor
+    train, tables = exponential.exact_train(reference_model.system), stepper.exact_buffers
+    h = stepper.exact_floor
     for state, torques, expected in (
             (start_position(reference_model, 500.0).state, (500.0, 1800.0), -1.0),
             (np.zeros(2 * reference_model.size), (0.0, 0.0), math.nan)):
         exact = exponential.variant_of(tables, 0, count, loaded, state)
         assert exact >= 0
-        dip = exponential.approach_dip(system, tables, exact, state, *torques, h, 1.0)
+        dip = exponential.approach_dip(train, tables, exact, state, *torques, h, 1.0)
         assert dip == expected or (math.isnan(expected) and math.isnan(dip))
 
 
@@ -557,19 +558,20 @@ def angle_verdicts(model, stepper, run, state, torques, interval, steps, samples
     """For exact steps of each length in `steps` (s) from `state` in contact interval
     `interval`: exponential.angle_inside's verdict, and whether the angle sampled at
     `samples` times of the step stays above 0 and below the interval's length."""
-    system, buffers, pinion = model.system, stepper.exact_buffers, model.system.pinion
+    train, buffers = exponential.exact_train(model.system), stepper.exact_buffers
+    pinion = train.pinion
     length = stepper.lengths[interval]
     exact = exponential.variant_of(buffers, interval, stepper.counts[interval], run.loaded,
                                    state)
     assert exact >= 0
     out, verdicts, inside = np.empty_like(state), [], []
     for h in steps:
-        exponential.step(system, buffers, exact, state, *torques, h, True, 1.0, length, out)
-        verdicts.append(exponential.angle_inside(system, buffers, exact, h, state[pinion],
+        exponential.step(train, buffers, exact, state, *torques, h, True, 1.0, length, out)
+        verdicts.append(exponential.angle_inside(train, buffers, exact, h, state[pinion],
                                                  out[pinion], length))
         angles = []
         for t in np.linspace(0.0, h, samples)[1:]:
-            exponential.state_after(system, buffers, exact, state, *torques, t, out)
+            exponential.state_after(train, buffers, exact, state, *torques, t, out)
             angles.append(out[pinion])
         inside.append(0.0 < min(angles) and max(angles) < length)
     return np.array(verdicts), np.array(inside)
@@ -771,8 +773,8 @@ def test_the_modal_solution_gives_the_phase_event_to_rounding(reference_model):
     model, torques = reference_model, (500.0, 1800.0)
     stepper = CompiledStepper(model, 1e-7, "exponential")
     for position, exact, length in states_inside_intervals(stepper, torques):
-        arguments = (model.system, stepper.exact_buffers, exact, position.state, *torques,
-                     length)
+        arguments = (exponential.exact_train(model.system), stepper.exact_buffers, exact,
+                     position.state, *torques, length)
         ahead, aim = exponential.modal_phase_event_ahead(*arguments, 1.0)
         crossing = interval_left(stepper, position, torques, 1.01 * ahead, halvings=48)
         assert aim == exponential.CROSSING
@@ -819,7 +821,8 @@ def test_a_step_aimed_at_the_crossing_takes_the_aim_s_exponentials(reference_mod
     stepper = CompiledStepper(model, 1e-7, "exponential")
     tables, scales = exponential.unpack_tables(stepper.exact_buffers), model.state_scales()
     for position, exact, length in states_inside_intervals(stepper, torques):
-        arguments = (model.system, stepper.exact_buffers, exact, position.state, *torques)
+        arguments = (exponential.exact_train(model.system), stepper.exact_buffers, exact,
+                     position.state, *torques)
         ahead, aim = exponential.modal_phase_event_ahead(*arguments, length, 1.0)
         h = ahead + stepper.event_time_tolerance
         rates = tables.rates[exact, :tables.fast_count[exact]]
@@ -892,7 +895,8 @@ def test_the_modal_solution_gives_a_lift_off_and_a_landing_to_rounding():
     after a lift-off; the first crossing is the event)."""
     scene = herringbone.load_scene(MODELS / "jump_resonance.toml")
     model, torques = GearTrainModel(scene), scene.inputs.at(0.0)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
+    stepper, train = CompiledStepper(model, 1e-7, "exponential"), exponential.exact_train(
+        model.system)
     position, checked = stepper.advance(start_position(model, torques[0]), 0.01, torques), 0
     while checked < 6:
         by = 2e-5  # the next event, by doubling then bisection
@@ -909,11 +913,11 @@ def test_the_modal_solution_gives_a_lift_off_and_a_landing_to_rounding():
             assert exact >= 0
             rising = not position.segment.loaded.any()
             crossing = exponential.approach_crossing(
-                model.system, stepper.exact_buffers, exact, position.state, *torques,
+                train, stepper.exact_buffers, exact, position.state, *torques,
                 1.001 * high, rising, 1.001 * high)
             assert abs(crossing - high) <= 4.0 * stepper.event_time_tolerance
             first = exponential.approach_first_crossing(
-                model.system, stepper.exact_buffers, exact, position.state, *torques,
+                train, stepper.exact_buffers, exact, position.state, *torques,
                 10.0 * high, -1.0 if rising else 1.0)
             assert abs(first - high) <= 4.0 * stepper.event_time_tolerance
             checked += 1
@@ -945,10 +949,11 @@ def test_the_modal_phase_event_is_a_smooth_function_of_the_state(name):
     map's forward differences read as a multiplier 5e-5 off."""
     scene = herringbone.load_scene(MODELS / f"{name}.toml")
     model, torques = GearTrainModel(scene), scene.inputs.at(0.0)
-    stepper = CompiledStepper(model, 1e-7, "exponential")
+    stepper, train = CompiledStepper(model, 1e-7, "exponential"), exponential.exact_train(
+        model.system)
     for position, exact, length in states_inside_intervals(stepper, torques):
         ahead = np.array([exponential.modal_phase_event_ahead(
-            model.system, stepper.exact_buffers, exact,
+            train, stepper.exact_buffers, exact,
             position.state + k * 1e-12 * model.state_scales(), *torques, length, 1.0)[0]
             for k in range(-20, 21)])
         assert np.all(np.isfinite(ahead))

@@ -49,6 +49,9 @@ shortened further (walk.TURN_BACK_FLOOR). The first step after a segment's entry
 start is aimed where the angle's modal solution leaves its interval (`modal_phase_event_ahead`),
 and where that cannot be found, where the slow motion carries it out, or no later.
 
+The kernels the loop calls take the train as an ExactTrain (`train`: the few fields of its
+System they read), since a call's records are handed over word by word.
+
 Units: time in s; the state as equations.py lays it out; torques in N·m.
 """
 from __future__ import annotations
@@ -62,7 +65,7 @@ from numba import njit
 
 from .buffers import cube_view as _cube
 from .buffers import matrix_view as _matrix
-from .counting import NUMBERS_ONLY
+from .counting import COUNTED, NUMBERS_ONLY
 from .equations import (
     LEAD_ERROR0,
     LEAD_ERROR_SLOPE,
@@ -630,11 +633,11 @@ def variant_of(buffers, interval, count, loaded, state):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _start_from(system, tables, exact, state, motor_torque, load_torque):
+def _start_from(train, tables, exact, state, motor_torque, load_torque):
     """Make `state` the start whose modal coordinates tables.start_* hold (_prepare), unless
     they hold it already (_prepared)."""
     if not _prepared(tables, exact, state, motor_torque, load_torque):
-        _prepare(system, tables, exact, state, motor_torque, load_torque)
+        _prepare(train, tables, exact, state, motor_torque, load_torque)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -653,7 +656,7 @@ def _prepared(tables, exact, state, motor_torque, load_torque):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _prepare(system, tables, exact, state, motor_torque, load_torque):
+def _prepare(train, tables, exact, state, motor_torque, load_torque):
     """The step's start into tables.start (X = [state; u], the exact form's index + 1, the
     momentum and moment, no aimed_fast yet), and L·X into start_slow and start_fast, the fast
     coordinates' magnitudes into start_size."""
@@ -677,28 +680,55 @@ def _prepare(system, tables, exact, state, motor_torque, load_torque):
             imaginary += entry.imag * start[j]
         tables.start_fast[k] = complex(real, imaginary)
         tables.start_size[k] = math.sqrt(real * real + imaginary * imaginary)
-    momentum, moment = _momentum(system, state)
+    momentum, moment = _momentum(train, state)
     start[width], start[width + 1], start[width + 2] = exact + 1, momentum, moment
     start[AIMED_AT] = math.nan
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _momentum(system, state):
+def _momentum(train, state):
     """Σ m·r·q̇ and Σ m·r·q over the coordinates (q from the contact set's start): the train's
     momentum and its integral along the rigid rotation r, which only the external torques
     change (every element's row is orthogonal to r)."""
-    n = system.mass.shape[0]
-    pinion = system.pinion
+    n = train.mass.shape[0]
+    pinion = train.pinion
     momentum = moment = 0.0
     for j in range(n):
-        weight = system.mass[j] * system.rigid_rotation[j]
+        weight = train.mass[j] * train.rigid_rotation[j]
         if j == pinion:
             momentum += weight * state[n + j]
             moment += weight * state[j]
         else:
-            momentum += weight * (state[n + j] + system.rigid_rotation[j] * state[n + pinion])
-            moment += weight * (state[j] + system.rigid_rotation[j] * state[pinion])
+            momentum += weight * (state[n + j] + train.rigid_rotation[j] * state[n + pinion])
+            moment += weight * (state[j] + train.rigid_rotation[j] * state[pinion])
     return momentum, moment
+
+
+class ExactTrain(NamedTuple):
+    """What the kernels of exact segments read of a train's System (equations.System: the
+    same fields, the same units), handed to them in its place (exact_train). A call hands
+    its records over field by field, on the stack where the registers run out: the System
+    is 113 words, this a third of it, and the words pushed at every exact step and aim were
+    most of the chain's own time (docs/exponential-measurements.md, "A call's records")."""
+
+    pinion: int
+    wheel: int
+    mass: np.ndarray
+    rigid_rotation: np.ndarray
+    contact_row_base_relative: np.ndarray
+    contact_row_tilt_relative: np.ndarray
+    axial_travel_per_radian: float
+    mesh_damping_factor: float
+    contact_loss: bool
+
+
+@njit(**COUNTED, inline="always")
+def exact_train(system):
+    """The ExactTrain of a System: views of its arrays, nothing copied."""
+    return ExactTrain(system.pinion, system.wheel, system.mass, system.rigid_rotation,
+                      system.contact_row_base_relative, system.contact_row_tilt_relative,
+                      system.axial_travel_per_radian, system.mesh_damping_factor,
+                      system.contact_loss)
 
 
 # exp(λ·h) of a mode whose decay exponent Re(λ)·h is below this is taken as 0: it is below
@@ -730,59 +760,59 @@ UNSURE = 2  # the pinion may turn back across an end of its contact interval and
 
 
 @njit(**NUMBERS_ONLY)
-def step(system, buffers, exact, state, motor_torque, load_torque, h, contact_loss,
+def step(train, buffers, exact, state, motor_torque, load_torque, h, contact_loss,
          loaded_variant_sign, length, out):
     """The exact state after h (s) from `state` in the segment of exact form `exact`
-    (variant_of's index) of the train `system` with the torques (N·m) held, into `out`, its
-    momentum along the rigid rotation kept exact; returns what the step's certificate says
-    (module docstring): CERTIFIED, PHASE_SURE or UNSURE. The phase events are sure where
-    over the whole step the pinion speed keeps its sign (each phase event function is then
-    monotone) or the pinion angle stays inside its contact interval of `length` (rad); and
-    where `contact_loss`, the step is certified where also the points' approach keeps the
-    sign `loaded_variant_sign` (+1 loaded, −1 unloaded). `buffers`: the tables as pack_tables
-    packs them."""
+    (variant_of's index) of the train (`train`, its ExactTrain) with the torques (N·m) held,
+    into `out`, its momentum along the rigid rotation kept exact; returns what the step's
+    certificate says (module docstring): CERTIFIED, PHASE_SURE or UNSURE. The phase events
+    are sure where over the whole step the pinion speed keeps its sign (each phase event
+    function is then monotone) or the pinion angle stays inside its contact interval of
+    `length` (rad); and where `contact_loss`, the step is certified where also the points'
+    approach keeps the sign `loaded_variant_sign` (+1 loaded, −1 unloaded). `buffers`: the
+    tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(train, tables, exact, state, motor_torque, load_torque)
     speed_swing, approach_swing = _fast_modes(tables, exact, h)
     speed_slow, approach_slow = _slow_series(tables, exact, h)
     _from_modal(tables, exact, out)
-    _keep_momentum(system, tables, state, motor_torque, load_torque, h, out)
-    if not _phase_sure(system, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
+    _keep_momentum(train, tables, state, motor_torque, load_torque, h, out)
+    if not _phase_sure(train, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
                        length):
         return UNSURE
     if contact_loss and not keeps_sign(tables, exact, h, tables.approach_size,
                                        tables.approach_fast, approach_slow, approach_swing,
-                                       loaded_variant_sign, _approach(system, state),
-                                       _approach(system, out)):
+                                       loaded_variant_sign, _approach(train, state),
+                                       _approach(train, out)):
         return PHASE_SURE
     return CERTIFIED
 
 
 @njit(**NUMBERS_ONLY)
-def state_after(system, buffers, exact, state, motor_torque, load_torque, h, out):
+def state_after(train, buffers, exact, state, motor_torque, load_torque, h, out):
     """The exact state after h (s) from `state`, into `out`, as `step` computes it, without
     the certificate: for what lies inside a step already taken (the event location's trial
     steps, the samples), where only the state is asked for. `buffers`: the tables as
     pack_tables packs them."""
     tables = unpack_tables(buffers)
-    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(train, tables, exact, state, motor_torque, load_torque)
     _fast_modes(tables, exact, h)
     _slow_series(tables, exact, h)
     _from_modal(tables, exact, out)
-    _keep_momentum(system, tables, state, motor_torque, load_torque, h, out)
+    _keep_momentum(train, tables, state, motor_torque, load_torque, h, out)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _phase_sure(system, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
+def _phase_sure(train, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
                 length):
     """Whether no phase event function can cross zero unseen within the step from `state` to
     `out` just taken: the pinion speed keeps its sign over it (its SlowBound and fast swing
     given; keeps_sign), or else its angle stays inside its interval (angle_inside)."""
-    speed = system.mass.shape[0] + system.pinion
+    speed = train.mass.shape[0] + train.pinion
     if keeps_sign(tables, exact, h, tables.speed_size, tables.speed_fast, speed_slow,
                   speed_swing, 1.0 if state[speed] >= 0.0 else -1.0, state[speed], out[speed]):
         return True
-    return angle_inside(system, buffers, exact, h, state[system.pinion], out[system.pinion],
+    return angle_inside(train, buffers, exact, h, state[train.pinion], out[train.pinion],
                         length)
 
 
@@ -790,14 +820,14 @@ def _phase_sure(system, buffers, tables, exact, h, state, out, speed_slow, speed
 # inlined into every step it cost separation and high_speed 4 to 7 % of their time, as a
 # call 2 to 4 %
 @njit(**NUMBERS_ONLY)
-def angle_inside(system, buffers, exact, h, at_start, at_end, length):
+def angle_inside(train, buffers, exact, h, at_start, at_end, length):
     """Whether over the step of h (s) just taken (the tables' start and its modal state at
     the end) the pinion angle, `at_start` and `at_end` (rad) at its ends, stays above 0 and
     below `length` (rad): keeps_sign's bounds for φp and for φp − length, or where they
     cannot tell, the finer bounds of a grid over the step (inside_on_grid). `buffers`: the
     tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    pinion = system.pinion
+    pinion = train.pinion
     swing = _angle_swing(tables, exact)
     slow = _angle_bound(tables, exact, h)
     rows = tables.fast_right[:, pinion, :]
@@ -902,7 +932,7 @@ FIRST_CROSSING_EVALUATIONS = 48
 
 
 @njit(**NUMBERS_ONLY)
-def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, sign):
+def approach_dip(train, buffers, exact, state, motor_torque, load_torque, h, sign):
     """Where (s) inside the step of h (s) from `state` the approach of the segment's points
     (one function: the tilt is zero, they have no lead error) first lies past zero, on the
     side opposite to `sign` (+1: loaded, a lift-off; −1: unloaded, a landing), where the
@@ -914,7 +944,7 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
     lift-off and a landing a tenth as long can lie between its ends unseen by the cubic
     through their values and slopes (tests/regression/found_e759bc9542.toml). `buffers`: the
     tables as pack_tables packs them."""
-    tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
+    tables, degree, curve, widest = _dip_march(train, buffers, exact, state, motor_torque,
                                                load_torque, h)
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
                             DIP_EVALUATIONS, True)
@@ -926,7 +956,7 @@ def approach_dip(system, buffers, exact, state, motor_torque, load_torque, h, si
 
 
 @njit(**NUMBERS_ONLY)
-def approach_first_crossing(system, buffers, exact, state, motor_torque, load_torque, h,
+def approach_first_crossing(train, buffers, exact, state, motor_torque, load_torque, h,
                             sign):
     """Where (s from `state`) the approach of the segment's points (one function, as
     approach_dip takes it) first crosses zero from the side `sign` (+1: loaded, a lift-off;
@@ -936,7 +966,7 @@ def approach_first_crossing(system, buffers, exact, state, motor_torque, load_to
     side over all of h; NaN where the march gives up or Newton does not converge. A step aimed
     just past the crossing then ends on the event (walk.aimed_contact). `buffers`: the tables
     as pack_tables packs them."""
-    tables, degree, curve, widest = _dip_march(system, buffers, exact, state, motor_torque,
+    tables, degree, curve, widest = _dip_march(train, buffers, exact, state, motor_torque,
                                                load_torque, h)
     past = _first_past_zero(tables, exact, degree, sign, curve, 0.0, h, widest,
                             FIRST_CROSSING_EVALUATIONS, False)
@@ -948,13 +978,13 @@ def approach_first_crossing(system, buffers, exact, state, motor_torque, load_to
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _dip_march(system, buffers, exact, state, motor_torque, load_torque, h):
+def _dip_march(train, buffers, exact, state, motor_torque, load_torque, h):
     """What approach_dip's march over a step of h (s) from `state` needs: (the tables, their
     modal start and the approach's slow polynomial made; its degree; the bound on the
     approach's curvature over the step; the widest interval, s, one that turns the fastest
     mode by DIP_TURN)."""
     tables = unpack_tables(buffers)
-    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(train, tables, exact, state, motor_torque, load_torque)
     degree = _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
     fastest = curve = 0.0
     for k in range(tables.fast_count[exact]):
@@ -1035,7 +1065,7 @@ def _interval_low(value0, rate0, value1, rate1, curve, width):
 
 
 @njit(**NUMBERS_ONLY)
-def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_torque, length,
+def modal_phase_event_ahead(train, buffers, exact, state, motor_torque, load_torque, length,
                             horizon):
     """When (s from `state`) the pinion angle leaves its contact interval of `length` (rad) in
     the segment of exact form `exact` with the torques (N·m) held, and what kind of time that
@@ -1053,8 +1083,8 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
     pinion accelerating at 1e6 rad/s² and more), and neither the slow part nor the whole
     solution is misled by it. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    _start_from(system, tables, exact, state, motor_torque, load_torque)
-    pinion = system.pinion
+    _start_from(train, tables, exact, state, motor_torque, load_torque)
+    pinion = train.pinion
     swing = _angle_swing(tables, exact)
     degree = _slow_polynomial(tables, exact, tables.angle_polynomial[exact])
     terms = tables.modal_slow  # (scratch: the polynomial's coefficients, by power of t)
@@ -1073,7 +1103,7 @@ def modal_phase_event_ahead(system, buffers, exact, state, motor_torque, load_to
 
 
 @njit(**NUMBERS_ONLY)
-def approach_crossing(system, buffers, exact, state, motor_torque, load_torque, high, rising,
+def approach_crossing(train, buffers, exact, state, motor_torque, load_torque, high, rising,
                       guess):
     """Where (s from `state`) a point's approach crosses zero, `rising` (a landing) or falling
     (a lift-off), inside a step to `high` (s) that crossed it, in the segment of exact form
@@ -1084,7 +1114,7 @@ def approach_crossing(system, buffers, exact, state, motor_torque, load_torque, 
     estimate (walk.locate_event): its first trial then ends the bracket just past the
     crossing. `buffers`: the tables as pack_tables packs them."""
     tables = unpack_tables(buffers)
-    _start_from(system, tables, exact, state, motor_torque, load_torque)
+    _start_from(train, tables, exact, state, motor_torque, load_torque)
     degree = _slow_polynomial(tables, exact, tables.approach_polynomial[exact])
     return _modal_crossing(tables, exact, tables.approach_fast[exact], degree, 0.0, rising,
                            high, guess if 0.0 < guess < high else high, False)
@@ -1370,7 +1400,7 @@ def _near_exponential(x):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _keep_momentum(system, tables, state, motor_torque, load_torque, h, out):
+def _keep_momentum(train, tables, state, motor_torque, load_torque, h, out):
     """Put the step's end `out` back on the train's momentum along the rigid rotation and on
     its integral, which the net torque alone changes, exactly. The rounding of the modal
     round trip, about 1e-13 of Â, leaves the rigid rotation a bias where the torques' large
@@ -1378,20 +1408,20 @@ def _keep_momentum(system, tables, state, motor_torque, load_torque, h, out):
     the force scale after 0.3 s)."""
     width = state.shape[0] + INPUTS
     momentum, moment = tables.start[width + 1], tables.start[width + 2]
-    net = motor_torque - load_torque * system.rigid_rotation[system.wheel]
-    momentum_after, moment_after = _momentum(system, out)
-    n = system.mass.shape[0]
-    out[n + system.pinion] += (momentum + net * h - momentum_after) / tables.inertia
-    out[system.pinion] += (moment + momentum * h + 0.5 * net * h * h
+    net = motor_torque - load_torque * train.rigid_rotation[train.wheel]
+    momentum_after, moment_after = _momentum(train, out)
+    n = train.mass.shape[0]
+    out[n + train.pinion] += (momentum + net * h - momentum_after) / tables.inertia
+    out[train.pinion] += (moment + momentum * h + 0.5 * net * h * h
                            - moment_after) / tables.inertia
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _approach(system, state):
+def _approach(train, state):
     """A point's approach δ + η·δ̇ (m) at `state` in an exact segment (equations.point_approach
     with no lever arm and no lead error): the tilt is zero there, so the lever arm drops out,
     and the set has no lead error (it is dβ·z, and its slope dβ makes a set not exact)."""
-    return point_approach(system, contact_motion(system, state), 0.0, 0.0)
+    return point_approach(train, contact_motion(train, state), 0.0, 0.0)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -419,7 +419,7 @@ def _exact_step(system, segment, state, workspace, h, out):
     if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, h, out: exponential.UNSURE
     return lambda system, segment, state, workspace, h, out: exponential.step(
-        system, workspace.exact, segment.exact, state,
+        exponential.exact_train(system), workspace.exact, segment.exact, state,
         segment.motor_torque, segment.load_torque, h,
         system.contact_loss, 1.0 if segment.exact % exponential.VARIANTS
         == exponential.ALL_LOADED else -1.0, segment.length, out)
@@ -435,8 +435,8 @@ def _exact_state(system, segment, state, workspace, h, out):
     if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, h, out: None
     return lambda system, segment, state, workspace, h, out: exponential.state_after(
-        system, workspace.exact, segment.exact, state, segment.motor_torque,
-        segment.load_torque, h, out)
+        exponential.exact_train(system), workspace.exact, segment.exact, state,
+        segment.motor_torque, segment.load_torque, h, out)
 
 
 def exact_monotone(workspace, segment, h):
@@ -466,8 +466,9 @@ def _exact_dip(system, segment, state, workspace, h):
     def dip(system, segment, state, workspace, h):
         if segment.exact < 0:
             return math.nan
-        at = exponential.approach_dip(system, workspace.exact, segment.exact, state,
-                                      segment.motor_torque, segment.load_torque, h,
+        at = exponential.approach_dip(exponential.exact_train(system), workspace.exact,
+                                      segment.exact, state, segment.motor_torque,
+                                      segment.load_torque, h,
                                       1.0 if segment.loaded[0] != 0.0 else -1.0)
         return at / h if at > 0.0 else at
     return dip
@@ -485,8 +486,8 @@ def _exact_crossing(system, segment, state, workspace, high, guess):
     if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, high, guess: -1.0
     return lambda system, segment, state, workspace, high, guess: exponential.approach_crossing(
-        system, workspace.exact, segment.exact, state, segment.motor_torque,
-        segment.load_torque, high,
+        exponential.exact_train(system), workspace.exact, segment.exact, state,
+        segment.motor_torque, segment.load_torque, high,
         segment.exact % exponential.VARIANTS == exponential.NONE_LOADED, guess)
 
 
@@ -501,8 +502,8 @@ def _exact_first_crossing(system, segment, state, workspace, h):
     if _lacks(workspace, "exact"):
         return lambda system, segment, state, workspace, h: math.nan
     return lambda system, segment, state, workspace, h: exponential.approach_first_crossing(
-        system, workspace.exact, segment.exact, state, segment.motor_torque,
-        segment.load_torque, h,
+        exponential.exact_train(system), workspace.exact, segment.exact, state,
+        segment.motor_torque, segment.load_torque, h,
         -1.0 if segment.exact % exponential.VARIANTS == exponential.NONE_LOADED else 1.0)
 
 
@@ -519,8 +520,9 @@ def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torqu
         return (lambda system, workspace, exact, state, motor_torque, load_torque, length,
                 horizon: (-1.0, exponential.NO_AIM))
     return (lambda system, workspace, exact, state, motor_torque, load_torque, length, horizon:
-            exponential.modal_phase_event_ahead(system, workspace.exact, exact, state,
-                                                motor_torque, load_torque, length, horizon))
+            exponential.modal_phase_event_ahead(exponential.exact_train(system),
+                                                workspace.exact, exact, state, motor_torque,
+                                                load_torque, length, horizon))
 
 
 def stop_at(samples, k, end, exact):
@@ -1788,8 +1790,8 @@ def next_chained(system, settings, run, workspace, segment, end, steps, max_step
         return Event.PHASE_END, plan
     if system.contact_loss and (after_contact or verdict == exponential.PHASE_SURE
                                 and contact_inside(system, workspace, segment, plan)):
-        return aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps,
-                             plan, verdict)
+        return aimed_contact(exponential.exact_train(system), settings, run, workspace, segment,
+                             end, steps, max_steps, plan, verdict)
     return -1, StepPlan(0.0, 0.0, False, False)
 
 
@@ -1852,7 +1854,7 @@ def switch_at_end(system, settings, segment, new_state, h):
 # a call of its own: inlined beside opening_step, the two copies of exact_step's inlined code
 # left numba's pedantic check of its IR warning at every compile
 @njit(**NUMBERS_ONLY)
-def aimed_contact(system, settings, run, workspace, segment, end, steps, max_steps, opening,
+def aimed_contact(train, settings, run, workspace, segment, end, steps, max_steps, opening,
                   verdict):
     """next_chained's step where contact can be lost: within the step to the phase switch
     (the opening step's, `opening`, where the opening aim found the crossing; else the
@@ -1863,12 +1865,12 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
     at its end (points_crossed); where it does not cross, the phase switch, its approach
     certified by the march, taken as switch_onto takes it: the opening step itself where
     opening_step took it (`verdict`, its exact state still in NEW_STATE; NOT_TAKEN where it
-    did not). Returns (the event, −1: none to chain; the StepPlan; the exact state in
-    NEW_STATE)."""
+    did not). `train`: the train's exponential.ExactTrain, which serves as its System here.
+    Returns (the event, −1: none to chain; the StepPlan; the exact state in NEW_STATE)."""
     time, memory, none = run.clock[0], workspace.memory, (-1, StepPlan(0.0, 0.0, False, False))
     plan = opening
     if memory[Memory.MODAL_AIM] != exponential.CROSSING:
-        ahead, aim = exact_event_ahead(system, workspace, segment.exact, run.state,
+        ahead, aim = exact_event_ahead(train, workspace, segment.exact, run.state,
                                        segment.motor_torque, segment.load_torque,
                                        segment.length, end - time)
         if aim != exponential.CROSSING and ahead != math.inf:  # inf: it stays inside
@@ -1878,7 +1880,7 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
         verdict = NOT_TAKEN
     if step_allowed(steps, max_steps, time, plan) != Status.OK:
         return none
-    crossing = exact_first_crossing(system, segment, run.state, workspace, plan.h_step)
+    crossing = exact_first_crossing(train, segment, run.state, workspace, plan.h_step)
     if math.isnan(crossing):
         return none
     event = Event.PHASE_END if crossing < 0.0 else Event.CONTACT
@@ -1890,15 +1892,15 @@ def aimed_contact(system, settings, run, workspace, segment, end, steps, max_ste
         return none
     new_state = workspace.vectors[Vector.NEW_STATE]
     if verdict == NOT_TAKEN:
-        verdict = exact_step(system, segment, run.state, workspace, plan.h_step, new_state)
+        verdict = exact_step(train, segment, run.state, workspace, plan.h_step, new_state)
     if verdict == exponential.UNSURE:
         return none
     if event == Event.CONTACT:
-        ends_on_it = (0.0 < new_state[system.pinion] < segment.length) and points_crossed(
-            system, segment, new_state, workspace.values[Values.APPROACH])
+        ends_on_it = (0.0 < new_state[train.pinion] < segment.length) and points_crossed(
+            train, segment, new_state, workspace.values[Values.APPROACH])
     else:  # the phase switch, its approach certified by the march
-        ends_on_it = switch_at_end(system, settings, segment, new_state, plan.h_step) and \
-            points_stay(system, segment, new_state, workspace.values[Values.APPROACH])
+        ends_on_it = switch_at_end(train, settings, segment, new_state, plan.h_step) and \
+            points_stay(train, segment, new_state, workspace.values[Values.APPROACH])
     return (event if ends_on_it else -1), plan
 
 
@@ -1918,12 +1920,13 @@ def points_stay(system, segment, state, approach):
 
 # a call of its own: only a chained landing or lift-off asks it
 @njit(**NUMBERS_ONLY)
-def points_crossed(system, segment, state, approach):
+def points_crossed(train, segment, state, approach):
     """Whether at `state`, a step's end, every point of `segment` is past zero in the
     direction of its event, as points_stay reads it: the points of an exact set cross
     together. (Where the step was aimed just past the modal solution's crossing, Newton's
-    method placed it within 1e-10 of the time to it, well inside the location tolerance.)"""
-    approaches(system, segment.points, segment.point_count, state, approach)
+    method placed it within 1e-10 of the time to it, well inside the location tolerance.)
+    `train`: as aimed_contact's."""
+    approaches(train, segment.points, segment.point_count, state, approach)
     for i in range(segment.point_count):
         if (approach[i] >= 0.0) if segment.loaded[i] != 0.0 else (approach[i] <= 0.0):
             return False
