@@ -182,6 +182,33 @@ class ExactTables(NamedTuple):
     series: np.ndarray  # (2, S): the slow block's series
 
 
+class ExactTrain(NamedTuple):
+    """What the kernels of exact segments read of a train's System (equations.System: the
+    same fields, the same units), handed to them in its place (exact_train). A call hands
+    its records over field by field, on the stack where the registers run out: the System
+    is 113 words, this a third of it, and the words pushed before the chain's calls were
+    most of its own time (docs/exponential-measurements.md, "A call's records")."""
+
+    pinion: int
+    wheel: int
+    mass: np.ndarray
+    rigid_rotation: np.ndarray
+    contact_row_base_relative: np.ndarray
+    contact_row_tilt_relative: np.ndarray
+    axial_travel_per_radian: float
+    mesh_damping_factor: float
+    contact_loss: bool
+
+
+@njit(**COUNTED, inline="always")
+def exact_train(system):
+    """The ExactTrain of a System: views of its arrays, nothing copied."""
+    return ExactTrain(system.pinion, system.wheel, system.mass, system.rigid_rotation,
+                      system.contact_row_base_relative, system.contact_row_tilt_relative,
+                      system.axial_travel_per_radian, system.mesh_damping_factor,
+                      system.contact_loss)
+
+
 # --- the tables (once per stepper, numpy) ------------------------------------------------------
 
 def linear_system(system: System, points: np.ndarray, count: int,
@@ -702,33 +729,6 @@ def _momentum(train, state):
             momentum += weight * (state[n + j] + train.rigid_rotation[j] * state[n + pinion])
             moment += weight * (state[j] + train.rigid_rotation[j] * state[pinion])
     return momentum, moment
-
-
-class ExactTrain(NamedTuple):
-    """What the kernels of exact segments read of a train's System (equations.System: the
-    same fields, the same units), handed to them in its place (exact_train). A call hands
-    its records over field by field, on the stack where the registers run out: the System
-    is 113 words, this a third of it, and the words pushed at every exact step and aim were
-    most of the chain's own time (docs/exponential-measurements.md, "A call's records")."""
-
-    pinion: int
-    wheel: int
-    mass: np.ndarray
-    rigid_rotation: np.ndarray
-    contact_row_base_relative: np.ndarray
-    contact_row_tilt_relative: np.ndarray
-    axial_travel_per_radian: float
-    mesh_damping_factor: float
-    contact_loss: bool
-
-
-@njit(**COUNTED, inline="always")
-def exact_train(system):
-    """The ExactTrain of a System: views of its arrays, nothing copied."""
-    return ExactTrain(system.pinion, system.wheel, system.mass, system.rigid_rotation,
-                      system.contact_row_base_relative, system.contact_row_tilt_relative,
-                      system.axial_travel_per_radian, system.mesh_damping_factor,
-                      system.contact_loss)
 
 
 # exp(λ·h) of a mode whose decay exponent Re(λ)·h is below this is taken as 0: it is below
