@@ -31,9 +31,8 @@ from .compiled import cache
 
 CARRIED_FOLDER = "numba_cache"  # in an FMU's resources: a kernels-<digest> of the build machine's
 RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, "cpu": name}}
-# Compile time of the whole integrator when nothing is recorded: 96 s for the reference scene
-# with every cache empty on this project's 2-core machine (AMD EPYC, numba 0.68, 2026-11-29;
-# 83 s before landings and lift-offs were chained; docs/integrator.md)
+# Compile time of the whole integrator announced when nothing is recorded: what it takes with
+# every cache empty on this project's 2-core machine (measured: docs/integrator.md)
 DEFAULT_COMPILE_SECONDS = 90.0
 FMI_WARNING = 1
 
