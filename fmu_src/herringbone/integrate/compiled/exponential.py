@@ -149,6 +149,10 @@ class ExactTables(NamedTuple):
     slow_left: np.ndarray  # (P, S, M): L's rows of the slow block
     slow_right: np.ndarray  # (P, N, S): R's columns of the slow block, the state's rows
     slow: np.ndarray  # (P, S, S): the slow block T_slow (s⁻¹)
+    # (P, S, S + 1) int: per row of T_slow, how many of its entries are not zero, then their
+    # columns, rising: the block is sparse (3 to 14 of 25 to 49 entries on the shipped
+    # scenes), and its series is in every exact step
+    slow_columns: np.ndarray
     # (P, S, S): the pinion angle's and a point's approach's rows of the slow columns times
     # T_slow^n/n!, n < S: their slow part's coefficient of t^n is the n-th row · L_slow·X(0)
     angle_polynomial: np.ndarray
@@ -474,6 +478,7 @@ def _empty_arrays(places: int, size: int, width: int, slow_width: int, fast_widt
         "slow_left": np.zeros(shape + (slow_width, width)),
         "slow_right": np.zeros(shape + (size, slow_width)),
         "slow": np.zeros(shape + (slow_width, slow_width)),
+        "slow_columns": np.zeros(shape + (slow_width, slow_width + 1), dtype=np.int64),
         "angle_polynomial": np.zeros(shape + (slow_width, slow_width)),
         "approach_polynomial": np.zeros(shape + (slow_width, slow_width)),
         "fast_left": np.zeros(shape + (fast_width, width), dtype=complex),
@@ -505,6 +510,9 @@ def _fill_place(arrays: dict[str, np.ndarray], place: int, form, rows: np.ndarra
     for name, value in entries.items():
         arrays[name][place][tuple(slice(0, extent) for extent in value.shape)] = value
     arrays["slow_count"][place], arrays["fast_count"][place] = slow, fast
+    for i, row in enumerate(t_slow.real):
+        columns = np.flatnonzero(row)
+        arrays["slow_columns"][place][i, :len(columns) + 1] = [len(columns), *columns]
     arrays["speed_slow"][place][:slow] = right[n + system.pinion, :slow].real
     arrays["approach_slow"][place][:slow] = base @ right[:size, :slow].real
     # tabulated, since the mesh repeats: the aim at every switch then takes its polynomial
@@ -556,7 +564,7 @@ FLOAT_FIELDS = ("slow_left", "slow_right", "slow", "angle_polynomial", "approach
                 "tilt_rows", "speed_slow", "approach_slow",
                 "speed_size", "approach_size", "angle_size", "start", "start_slow", "start_size",
                 "modal_slow", "series")
-INT_FIELDS = ("valid", "slow_count", "fast_count", "tilt_count")
+INT_FIELDS = ("valid", "slow_count", "fast_count", "tilt_count", "slow_columns")
 
 
 def pack_tables(tables: ExactTables) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -617,11 +625,13 @@ def unpack_tables(buffers):
     modal_slow = floats[at:at + slow]
     series = _matrix(floats, at + slow, 2, slow)
     header = 6
+    slow_columns = _cube(ints, header + 4 * places, places, slow, slow + 1)
     return ExactTables(
         ints[header:header + places], ints[header + places:header + 2 * places],
         ints[header + 2 * places:header + 3 * places],
         ints[header + 3 * places:header + 4 * places], slow_left, slow_right, slow_block,
-        polynomials[:places], polynomials[places:], fast_left, fast_right, rates, rows,
+        slow_columns, polynomials[:places], polynomials[places:], fast_left, fast_right, rates,
+        rows,
         rows_of_slow[0], rows_of_slow[1], rows_of_fast[0], rows_of_fast[1], rows_of_fast[2],
         rows_of_fast_complex[0], rows_of_fast_complex[1],
         floats[floats.shape[0] - 2], floats[floats.shape[0] - 1], start,
@@ -1264,11 +1274,14 @@ def _slow_polynomial(tables, exact, rows):
 @njit(cache=True, error_model="numpy", inline="always")
 def _next_term(tables, exact, slow_count, factor):
     """The slow block's series, one term on: tables.series[1] = T_slow·series[0]·factor (h/n
-    for the n-th term of exp(T_slow·h))."""
-    block, series = tables.slow, tables.series
+    for the n-th term of exp(T_slow·h)), over the block's entries that are not zero
+    (slow_columns): each row's sum is the whole row's, in the same order, to the bit, since
+    the entries left out add only zeros to it."""
+    block, series, columns = tables.slow, tables.series, tables.slow_columns
     for i in range(slow_count):
         total = 0.0
-        for j in range(slow_count):
+        for k in range(1, columns[exact, i, 0] + 1):
+            j = columns[exact, i, k]
             total += block[exact, i, j] * series[0, j]
         series[1, i] = total * factor
 
