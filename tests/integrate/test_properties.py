@@ -231,10 +231,46 @@ def regression_cases():
     return cases
 
 
-def check_tight(scene):
-    """Compiled at 1e-9 against the reference at 1e-12: within 1e-6 of the force scale."""
-    checks.check_scene(scene, checks.TIGHT_TOLERANCE, checks.TIGHT_BOUND,
-                       reference_tolerance=1e-12)
+def check_tight(scene, bound=checks.TIGHT_BOUND):
+    """Compiled at 1e-9 against the reference at 1e-12: within `bound` (1e-6) of the force
+    scale."""
+    checks.check_scene(scene, checks.TIGHT_TOLERANCE, bound, reference_tolerance=1e-12)
+
+
+# Regression scenes whose forces at the tight tolerance rounding decides: a relative 1e-13 on
+# the initial pinion speed moves the checked reference by about the tight bound, so the
+# compiled run falls on either side of it by machine (its BLAS and libm round otherwise).
+# Each is judged at twice that measured spread (rounding_spread), and only while it lasts.
+ROUNDING_DECIDED = {
+    "found_ac909a1c90": "an undamped gear pair alone (no bearings, motor or load rotor) at "
+                        "2 322 rad/s for 15.6 ms, found with the compiled run 6.4e-6 off: the "
+                        "1e-13 moves the reference 1.07e-6; DOP853, Radau IIA and the "
+                        "exponential method at 1e-12 lie 5e-7 to 2.1e-6 apart; the compiled "
+                        "run at 1e-9 lies 1.2e-6 off on a Zen 4 EPYC (2026-11-29), within 1e-6 "
+                        "on the machine before it",
+}
+
+
+def rounding_spread(scene):
+    """How far (of the force scale) the checked reference at 1e-12 moves for a relative
+    1e-13 on the initial pinion speed: what rounding alone can move the scene's forces by."""
+    speed = scene.parameters["w0_pinion"]
+    moved = scene.with_parameters(w0_pinion=speed * (1.0 + 1e-13))
+    return force_error(checks.checked_reference(scene, 1e-12)[0],
+                       checks.checked_reference(moved, 1e-12)[0], scene)
+
+
+def tight_bound(name, scene):
+    """The tight check's bound for the regression scene `name`: TIGHT_BOUND, or for one that
+    ROUNDING_DECIDED names, twice its rounding_spread, which must still reach half the tight
+    bound (else the entry has outlived its reason)."""
+    if name not in ROUNDING_DECIDED:
+        return checks.TIGHT_BOUND
+    spread = rounding_spread(scene)
+    assert spread >= 0.5 * checks.TIGHT_BOUND, (
+        f"{name}: rounding moves its forces by {spread:.3g} only; take it out of "
+        f"ROUNDING_DECIDED")
+    return max(checks.TIGHT_BOUND, 2.0 * spread)
 
 
 def check_loose(scene):
@@ -375,7 +411,7 @@ def test_many_random_scenes_at_a_tight_tolerance(drawn, exact):
 def test_regression_scene(path, tight):
     scene = herringbone.load_scene(path)
     if tight:
-        check_tight(scene)
+        check_tight(scene, tight_bound(path.stem, scene))
     else:
         checks.check_scene(scene)
 
