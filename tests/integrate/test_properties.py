@@ -239,7 +239,7 @@ def check_tight(scene, bound=checks.TIGHT_BOUND):
 
 # Regression scenes whose forces at the tight tolerance rounding decides: a relative 1e-13 on
 # the initial pinion speed moves the checked reference by about the tight bound, so the
-# compiled run falls on either side of it by machine (its BLAS and libm round otherwise).
+# compiled run falls on either side of it from one machine to another.
 # Each is judged at twice that measured spread (rounding_spread), and only while it lasts.
 ROUNDING_DECIDED = {
     "found_ac909a1c90": "an undamped gear pair alone (no bearings, motor or load rotor) at "
