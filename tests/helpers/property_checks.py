@@ -169,6 +169,15 @@ def resolved_by_the_reference(scene, tolerance: float, bound: float) -> bool:
     return can_judge(check.estimate, bound)
 
 
+def rounding_spread(scene, tolerance: float) -> float:
+    """How far (of the force scale) the checked reference at `tolerance` moves for a relative
+    1e-13 on the initial pinion speed (some 500 units of double precision): the train's
+    sensitivity, what rounding alone can move its forces by."""
+    moved = scene.with_parameters(w0_pinion=scene.parameters["w0_pinion"] * (1.0 + 1e-13))
+    return force_error(checked_reference(scene, tolerance)[0],
+                       checked_reference(moved, tolerance)[0], scene)
+
+
 def per_step_holds(scene, tolerance: float, bound: float) -> bool:
     """Whether the recorded reference at `tolerance`, each step held to it, lies within
     `bound` of the force scale from force_judge's run. Where it does not, the train amplifies

@@ -240,7 +240,8 @@ def check_tight(scene, bound=checks.TIGHT_BOUND):
 # Regression scenes whose forces at the tight tolerance rounding decides: a relative 1e-13 on
 # the initial pinion speed moves the checked reference by about the tight bound, so the
 # compiled run falls on either side of it from one machine to another.
-# Each is judged at twice that measured spread (rounding_spread), and only while it lasts.
+# Each is judged at twice that measured spread (checks.rounding_spread), and only while it
+# lasts.
 ROUNDING_DECIDED = {
     "found_ac909a1c90": "an undamped gear pair alone (no bearings, motor or load rotor) at "
                         "2 322 rad/s for 15.6 ms, found with the compiled run 6.4e-6 off: the "
@@ -251,22 +252,13 @@ ROUNDING_DECIDED = {
 }
 
 
-def rounding_spread(scene):
-    """How far (of the force scale) the checked reference at 1e-12 moves for a relative
-    1e-13 on the initial pinion speed: what rounding alone can move the scene's forces by."""
-    speed = scene.parameters["w0_pinion"]
-    moved = scene.with_parameters(w0_pinion=speed * (1.0 + 1e-13))
-    return force_error(checks.checked_reference(scene, 1e-12)[0],
-                       checks.checked_reference(moved, 1e-12)[0], scene)
-
-
 def tight_bound(name, scene):
     """The tight check's bound for the regression scene `name`: TIGHT_BOUND, or for one that
-    ROUNDING_DECIDED names, twice its rounding_spread, which must still reach half the tight
+    ROUNDING_DECIDED names, twice its checks.rounding_spread, which must reach half the tight
     bound (else the entry has outlived its reason)."""
     if name not in ROUNDING_DECIDED:
         return checks.TIGHT_BOUND
-    spread = rounding_spread(scene)
+    spread = checks.rounding_spread(scene, 1e-12)
     assert spread >= 0.5 * checks.TIGHT_BOUND, (
         f"{name}: rounding moves its forces by {spread:.3g} only; take it out of "
         f"ROUNDING_DECIDED")
