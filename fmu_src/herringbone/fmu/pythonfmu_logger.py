@@ -14,13 +14,13 @@ the one described here; anything else answers None ("not known").
 from __future__ import annotations
 
 import ctypes
+import logging
 import sys
 import weakref
 from collections.abc import Callable
 from types import FrameType
 
 FLAG, NAME, FUNCTIONS = 8, 16, 72
-FMI_OK = 0
 # fmi2CallbackLogger(environment, instance name, status, category, message)
 _CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
                              ctypes.c_char_p, ctypes.c_char_p)
@@ -71,7 +71,8 @@ def host_logger(address: int | None, instance_name: str) -> Callable[[int, bytes
 
 class HostLine:
     """A direct line to the host's logger, for messages that cannot wait for the FMI call to
-    return. `say(message, status)` calls the host's fmi2CallbackLogger at once where it can,
+    return. `say(message, level)` (a `logging` level: WARNING and above reach the host as a
+    warning, the rest as OK) calls the host's fmi2CallbackLogger at once where it can,
     else writes to stderr and queues the message with the slave's log as well.
 
     pythonfmu queues a slave's log messages and hands them over only when the FMI call returns
@@ -86,20 +87,21 @@ class HostLine:
         self._name = str(slave.instance_name).encode()
         self._call = host_logger(logger_address, str(slave.instance_name))
 
-    def say(self, message: str, status: int = FMI_OK) -> None:
+    def say(self, message: str, level: int = logging.INFO) -> None:
         """Show `message` to the host: through its logger callback while it instantiates the
         FMU, else on stderr (and in the slave's log, where there is a slave)."""
+        from pythonfmu.enums import Fmi2Status
+
+        status = Fmi2Status.warning if level >= logging.WARNING else Fmi2Status.ok
         text = f"{self._name.decode()}: {message}"
         if self._call is not None and self._instantiating():
             # hosts format the message printf-style
-            self._call(status, text.replace("%", "%%").encode())
+            self._call(status.value, text.replace("%", "%%").encode())
             return
         print(f"herringbone FMU {text}", file=sys.stderr, flush=True)
         slave = self._slave()
         if slave is not None:
-            from pythonfmu.enums import Fmi2Status
-
-            slave.log(text.replace("%", "%%"), Fmi2Status(status))
+            slave.log(text.replace("%", "%%"), status)
 
     def _instantiating(self) -> bool:
         frame: FrameType | None = sys._getframe(1)

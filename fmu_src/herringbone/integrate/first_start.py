@@ -19,6 +19,7 @@ waits rather than when the FMI call returns.
 from __future__ import annotations
 
 import json
+import logging
 import shutil
 import sys
 import threading
@@ -34,15 +35,14 @@ RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, 
 # Compile time of the whole integrator announced when nothing is recorded: what it takes with
 # every cache empty on this project's 2-core machine (measured: docs/integrator.md)
 DEFAULT_COMPILE_SECONDS = 90.0
-FMI_WARNING = 1
 
 
 def prepare(resources, say) -> None:
     """Called once as an FMU's slave is instantiated, before anything is compiled: adds the
     compiled code the FMU carries (in its `resources` folder, None where it has none) to the
     user's cache folder where that lacks it (cache.seed_from), and makes any compile that
-    remains announce itself first, through `say(message, status)` (status an FMI status: 0 OK,
-    1 warning)."""
+    remains announce itself first, through `say(message, level)` (level a `logging` level:
+    the FMU maps it to the host's status)."""
     carried = Path(resources) / CARRIED_FOLDER if resources else None
     if carried is not None and carried.is_dir():
         try:
@@ -50,7 +50,7 @@ def prepare(resources, say) -> None:
         except OSError as error:
             say(f"cannot copy the compiled integrator the FMU carries into "
                 f"{cache.kernels_folder()} ({error}); it will be compiled instead. Set "
-                "HERRINGBONE_CACHE_DIR to a writable folder to keep it", FMI_WARNING)
+                "HERRINGBONE_CACHE_DIR to a writable folder to keep it", logging.WARNING)
     announce_compiles(say)
 
 
