@@ -61,7 +61,7 @@ def test_a_run_unpacks_to_views_of_its_position_and_workspace(name):
     run.workspace.values[:] = -np.arange(run.workspace.values.size).reshape(
         run.workspace.values.shape)
     run.workspace.counters[:] = np.arange(len(walk.Counter))
-    run.workspace.memory[:] = [0.5, 1.5, 2.5]
+    run.workspace.memory[:] = np.arange(len(walk.Memory)) + 0.5
     before = [array.copy() for array in (run.clock, run.place, run.state, run.loaded,
                                          run.first_steps, run.outputs)]
     compiled = run_back(run.buffers)

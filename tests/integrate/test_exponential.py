@@ -721,8 +721,10 @@ def test_landings_and_lift_offs_chained_lie_where_the_loop_locates_them(in_one_c
     segment's start), where the loop located each by its steps and trials: over 20 ms (both
     drives of drive_every_ms) the forces every 1 ms lie within 1e-9 of the force scale of a
     debug run's, which chains nothing (measured 8.5e-13), with the same events; the chain
-    takes 0.85 of them at least (measured 0.92 by calls of 1 ms, 0.98 in one call), and a
-    fifth at least are landings and lift-offs (0.25 and 0.31)."""
+    takes 0.95 of them at least (measured 0.97 by calls of 1 ms, 0.98 in one call), and
+    0.28 at least are landings and lift-offs (0.30 and 0.31). A call's last step is chained
+    too: left to the loop, the lift-off and the landing of a 1 ms call's last mesh period
+    brought the calls' share down to 0.92 and 0.25."""
     chained = drive_with_a_check("jump_resonance", 0.02, in_one_call, check_contact=False)
     checked = drive_with_a_check("jump_resonance", 0.02, in_one_call, check_contact=True)
     model = model_of("jump_resonance")
@@ -731,7 +733,7 @@ def test_landings_and_lift_offs_chained_lie_where_the_loop_locates_them(in_one_c
                        {force: checked[1][:, column] for force, column in columns.items()},
                        model) <= 1e-9
     assert chained[4] == checked[4] and checked[5] == checked[6] == 0
-    assert chained[5] + chained[6] >= 0.85 * chained[4] and chained[6] >= 0.2 * chained[4]
+    assert chained[5] + chained[6] >= 0.95 * chained[4] and chained[6] >= 0.28 * chained[4]
 
 
 def interval_left(stepper, position, torques, by, halvings=30, changed=None):

@@ -194,6 +194,10 @@ class Memory(IntEnum):
     MODAL_AHEAD = 1
     # what kind of time MODAL_AHEAD is (exponential.CROSSING, NEAR, BOUND, or NO_AIM: none)
     MODAL_AIM = 2
+    # s: an exact step from the run's state that chain_switches took and did not chain, its
+    # state in NEW_STATE and its verdict in TAKEN_VERDICT, for the loop's next step (0: none)
+    TAKEN_H = 3
+    TAKEN_VERDICT = 4
 
 
 class Workspace(NamedTuple):
@@ -1622,7 +1626,9 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
     to keep its sign is certified where the approach is monotone over it
     (exponential.approach_monotone): it crosses at most once, as the step's ends show.
     Returns (certified; accepted; the step size to try next, s; the Controller)."""
-    verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
+    verdict = taken_step(workspace, plan.h_step)
+    if verdict < 0:
+        verdict = exact_step(system, segment, state, workspace, plan.h_step, rows.new_state)
     # (asked here, not inside exponential.step: a call there slows every exact step)
     if verdict == exponential.PHASE_SURE and plan.h_step > settings[Setting.EXACT_FLOOR] \
             and exact_monotone(workspace, segment, plan.h_step):
@@ -1632,6 +1638,19 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
     return (verdict == exponential.CERTIFIED, accepted, h_next,
             Controller(controller.previous_error, not accepted))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def taken_step(workspace, h):
+    """The verdict (exponential.step's) on the step of h (s) from the run's state where
+    chain_switches took that step and left it to the loop (Memory.TAKEN_H: its state is in
+    NEW_STATE, the same to the bit as taking it again), −1 where it did not; forgotten either
+    way. The chain's opening step short of the switch and a call's last step, where it chains
+    no landing or lift-off, are the loop's next step: taken again, each an exact step more."""
+    memory = workspace.memory
+    taken = memory[Memory.TAKEN_H] == h
+    memory[Memory.TAKEN_H] = 0.0
+    return int(memory[Memory.TAKEN_VERDICT]) if taken else -1
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1806,6 +1825,9 @@ def next_chained(system, settings, run, workspace, segment, end, steps, max_step
                                 and contact_inside(system, workspace, segment, plan)):
         return aimed_contact(exponential.exact_train(system), settings, run, workspace, segment,
                              end, steps, max_steps, plan, verdict)
+    if verdict != NOT_TAKEN:  # the loop's next step: take_exact_step takes it from here
+        workspace.memory[Memory.TAKEN_H] = plan.h_step
+        workspace.memory[Memory.TAKEN_VERDICT] = verdict
     return -1, StepPlan(0.0, 0.0, False, False)
 
 
@@ -1820,15 +1842,18 @@ def opening_step(system, settings, run, workspace, segment, end, steps, max_step
     opening aim found the modal solution's crossing of the phase end (`crossing`;
     Memory.MODAL_AHEAD): its StepPlan, aimed just past the crossing or, where the
     controller wants a shorter one, not, and exponential.step's verdict on it, its exact
-    state in NEW_STATE; taken where the loop would take it (step_allowed; before `end`, s)
-    and it is aimed, or contact can be lost and the chain did not begin the segment at a
-    landing or a lift-off (`after_contact`: aimed_contact marches then): a step short of
-    the switch may show one inside it (contact_inside). NOT_TAKEN where it is not taken."""
+    state in NEW_STATE; taken where the loop would take it (step_allowed) and it is aimed
+    (then it ends before `end`, s, where the call stops), or contact can be lost and the
+    chain did not begin the segment at a landing or a lift-off (`after_contact`:
+    aimed_contact marches then): a step short of the switch may show one inside it
+    (contact_inside), the call's last step too (left to the loop, the lift-off and the
+    landing that fall there cost each of jump_resonance's 1 ms calls two trial steps).
+    NOT_TAKEN where it is not taken."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
     if not crossing or not (plan.aimed or system.contact_loss and not after_contact) or \
-            time + plan.h_step >= end or step_allowed(steps, max_steps, time, plan) != Status.OK:
+            step_allowed(steps, max_steps, time, plan) != Status.OK:
         return plan, NOT_TAKEN
     return plan, exact_step(system, segment, run.state, workspace, plan.h_step,
                             workspace.vectors[Vector.NEW_STATE])
@@ -1963,7 +1988,7 @@ def begin_walk(workspace):
     counters[:Counter.TRIAL_STEPS] = 0
     counters[Counter.OPENING] = counters[Counter.JACOBIAN_SEGMENT] = -1
     counters[Counter.LAST_PHASE_EVENT] = -1
-    workspace.memory[Memory.FACTORED_H] = 0.0
+    workspace.memory[Memory.FACTORED_H] = workspace.memory[Memory.TAKEN_H] = 0.0
     workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
 
 
