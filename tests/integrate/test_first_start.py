@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from helpers import MODELS
+from numba.core import types
 
 import herringbone
 from herringbone.integrate import first_start
@@ -117,6 +118,8 @@ def test_two_fmus_seeding_a_kernel_at_once_never_name_each_others_code(tmp_path,
 COMPILE_FOR_SCENE = """
 import sys
 from herringbone.integrate import first_start
+from numba.core import types
+
 from herringbone.integrate.compiled import cache
 first_start.compile_for_scene(sys.argv[1], say=lambda message: None)
 print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder().glob("*.nbi"))))
@@ -231,3 +234,37 @@ def test_an_fmu_on_another_cpu_says_why_and_how_long_before_it_compiles(scene_fm
     assert "the code was compiled for a pentium4 CPU, and this is a" in announced[0][1]
     assert announced[0][0] - started < ANNOUNCEMENT_BOUND  # said at the start, not after
     assert done[0][0] - announced[0][0] > 5.0  # ... of a compile that took a while
+
+
+# Pickles an index's entry as an FMU carries it (CarriedIndexFile) and as numba writes its own
+# (numba.core.serialize.dumps), after making `sys.argv[1]` other numba types first
+PICKLE_AN_ENTRY = """
+import sys
+from numba.core import serialize, types
+from numba.core import types
+
+from herringbone.integrate.compiled import cache
+count = int(sys.argv[1])
+made = [types.Array(types.float64, 1 + k % 3, "C", readonly=k % 2 == 1) for k in range(count)]
+made += [types.UniTuple(types.int64, k + 2) for k in range(count)]
+key = ((types.Array(types.float64, 1, "C"), types.UniTuple(types.int64, 3)), ("x86_64", "cpu", ""))
+carried = cache.CarriedIndexFile.__new__(cache.CarriedIndexFile)._dump(("stamp", {key: "k.nbc"}))
+sys.stdout.write(carried.hex() + " " + serialize.dumps(("stamp", {key: "k.nbc"})).hex())
+"""
+
+
+def test_the_index_an_fmu_carries_does_not_depend_on_the_types_its_builder_made_before():
+    """An index entry pickled as an FMU carries it (cache.CarriedIndexFile) is the same bytes
+    in a process that made forty other numba types first as in one that made none, and reads
+    back to an equal key; numba's own pickle differs there (each type carries the number the
+    process gave it), which once made two builds of one scene different FMUs."""
+    def pickled(others):
+        run = subprocess.run([sys.executable, "-c", PICKLE_AN_ENTRY, str(others)],
+                             capture_output=True, text=True, check=True)
+        return [bytes.fromhex(text) for text in run.stdout.split()]
+
+    (carried, numbas), (carried_after, numbas_after) = pickled(0), pickled(20)
+    assert carried == carried_after and numbas != numbas_after
+    stamp, entries = pickle.loads(carried)
+    [(signature, _)] = entries
+    assert signature == (types.Array(types.float64, 1, "C"), types.UniTuple(types.int64, 3))

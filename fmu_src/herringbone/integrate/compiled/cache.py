@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import os
 import pickle
 import secrets
@@ -21,7 +22,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from numba.core import caching
+from numba.core import caching, serialize, types
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 # The data files of seeded entries are numbered from here (_merge_index), far above numba's
@@ -145,7 +146,8 @@ def carry_loaded(folder: Path) -> list[str]:
         target.mkdir(parents=True, exist_ok=True)
         for key in keys:
             _copy_into(source / overloads[key], target)
-        _index_file(target, name)._save_index({key: overloads[key] for key in keys})
+        _index_file(target, name, CarriedIndexFile)._save_index(
+            {key: overloads[key] for key in keys})
         written.append(name)
     return written
 
@@ -160,10 +162,35 @@ def require_on_disk(dispatcher) -> None:
                            f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
 
 
-def _index_file(folder: Path, name: str):
+def _index_file(folder: Path, name: str, kind=caching.IndexDataCacheFile):
     """numba's reader and writer of the index `name` (a kernel's .nbi) in `folder`, as this
-    version of the package stamps it."""
-    return caching.IndexDataCacheFile(str(folder), name[:-len(".nbi")], package_digest())
+    version of the package stamps it (`kind`: numba's, or CarriedIndexFile)."""
+    return kind(str(folder), name[:-len(".nbi")], package_digest())
+
+
+class CarriedIndexFile(caching.IndexDataCacheFile):
+    """numba's index file, written without the number numba gives each type in the process
+    that made it (`Type._code`, a counter): pickled with it, the index an FMU carries depended
+    on how many types its builder had made before, which the other entries of the user's
+    index (unpickled with it) changed, and two builds of one scene differed. Unpickling
+    numbers a type anew where the process has none like it (numba's _type_reconstructor)."""
+
+    def _dump(self, obj):
+        with io.BytesIO() as buffer:
+            _UnnumberedPickler(buffer, protocol=4).dump(obj)
+            return buffer.getvalue()
+
+
+class _UnnumberedPickler(serialize.NumbaPickler):
+    """numba's pickler, numba types pickled without their `_code`."""
+
+    def reducer_override(self, obj):
+        if isinstance(obj, types.Type):
+            function, (reconstructor, arguments, state) = obj.__reduce__()
+            if isinstance(state, dict):
+                state = {key: value for key, value in state.items() if key != "_code"}
+            return function, (reconstructor, arguments, state)
+        return super().reducer_override(obj)
 
 
 def _loaded_kernels() -> list:
