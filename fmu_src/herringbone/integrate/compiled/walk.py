@@ -1847,8 +1847,8 @@ def opening_step(system, settings, run, workspace, segment, end, steps, max_step
     chain did not begin the segment at a landing or a lift-off (`after_contact`:
     aimed_contact marches then): a step short of the switch may show one inside it
     (contact_inside), the call's last step too (left to the loop, the lift-off and the
-    landing that fall there cost each of jump_resonance's 1 ms calls two trial steps).
-    NOT_TAKEN where it is not taken."""
+    landing that fall there were located with trial steps: 85 against one call's 19 over
+    jump_resonance's fifty calls of 1 ms). NOT_TAKEN where it is not taken."""
     time = run.clock[0]
     plan = plan_step(settings[Setting.EXACT_MAX_STEP], time, end, run.clock[1],
                      workspace.memory[Memory.MODAL_AHEAD], True, settings)
