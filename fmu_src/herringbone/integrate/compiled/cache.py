@@ -185,6 +185,7 @@ class _UnnumberedPickler(serialize.NumbaPickler):
     """numba's pickler, numba types pickled without their `_code`."""
 
     def reducer_override(self, obj):
+        """A numba type's reduction with its state less `_code`; numba's for the rest."""
         if isinstance(obj, types.Type):
             function, (reconstructor, arguments, state) = obj.__reduce__()
             if isinstance(state, dict):
