@@ -118,8 +118,6 @@ def test_two_fmus_seeding_a_kernel_at_once_never_name_each_others_code(tmp_path,
 COMPILE_FOR_SCENE = """
 import sys
 from herringbone.integrate import first_start
-from numba.core import types
-
 from herringbone.integrate.compiled import cache
 first_start.compile_for_scene(sys.argv[1], say=lambda message: None)
 print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder().glob("*.nbi"))))
@@ -241,8 +239,6 @@ def test_an_fmu_on_another_cpu_says_why_and_how_long_before_it_compiles(scene_fm
 PICKLE_AN_ENTRY = """
 import sys
 from numba.core import serialize, types
-from numba.core import types
-
 from herringbone.integrate.compiled import cache
 count = int(sys.argv[1])
 made = [types.Array(types.float64, 1 + k % 3, "C", readonly=k % 2 == 1) for k in range(count)]
