@@ -113,7 +113,8 @@ def _kernels():
     """call_costs' compiled loops (compiled here, when asked for)."""
     from numba import njit
 
-    from herringbone.integrate.compiled import equations, exponential
+    from herringbone.integrate.compiled import exponential
+    from herringbone.model import equations
 
     @njit
     def aim(train, buffers, exact, state, motor, load, length, count):

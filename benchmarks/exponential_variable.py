@@ -111,10 +111,10 @@ def compiled_cost(repeats=200_000):
     products, in compiled loops (reference scene, 1e-3 s in, half the step bound)."""
     import herringbone
     from herringbone.integrate.compiled import exponential, walk
-    from herringbone.integrate.compiled.equations import derivative
     from herringbone.integrate.compiled_stepper import CompiledStepper
     from herringbone.integrate.contract import start_position
     from herringbone.model.assembly import GearTrainModel
+    from herringbone.model.equations import derivative
 
     scene = herringbone.load_scene(common.MODELS / "reference.toml")
     model = GearTrainModel(scene)

@@ -117,6 +117,28 @@ def test_the_library_imports_nothing_of_the_command_line():
     assert not importers, importers
 
 
+# The package's floors, lowest first: a module imports from its own floor and those below it
+FLOORS = ("compiling", "model", "integrate", "fmu", "analysis", "cli")
+
+
+def test_no_subpackage_imports_from_a_floor_above_its_own():
+    """How kernels are compiled (compiling) under the model and its equations, under the
+    integrators, under the FMU, under the analysis that runs it, under the command line."""
+    upward = []
+    for path in PACKAGE.rglob("*.py"):
+        relative = path.relative_to(PACKAGE)
+        if relative.parts[0] not in FLOORS:
+            continue
+        floor = FLOORS.index(relative.parts[0])
+        package = ".".join(["herringbone", *relative.parent.parts])
+        for name in module_imports(path, package):
+            parts = name.split(".")
+            if len(parts) > 1 and parts[0] == "herringbone" and parts[1] in FLOORS \
+                    and FLOORS.index(parts[1]) > floor:
+                upward.append(f"{relative} imports {name}")
+    assert not upward, upward
+
+
 def _undocumented(tree, path, nested=False):
     for node in ast.iter_child_nodes(tree):
         if isinstance(node, (ast.FunctionDef, ast.ClassDef)):

@@ -3,6 +3,7 @@ import subprocess
 import sys
 import zipfile
 
+from herringbone.compiling import sources
 from herringbone.fmu import carried
 
 # A host process that has never imported herringbone runs the FMU (a state round trip, then a
@@ -54,20 +55,22 @@ def test_an_fmu_carries_the_modules_its_run_imports_and_not_the_analysis(built_f
         expected = {carried._file_of(module).relative_to(carried.PACKAGE.parent).as_posix()
                     for module in carried.runtime_modules()}
         assert names == expected
-    # the compiled code's key is every file of integrate/compiled/, whatever a run imports
-    assert {path.name for path in carried.KEYED_FOLDER.glob("*.py")} == {
-        name.rsplit("/", 1)[1] for name in names
-        if name.startswith("herringbone/integrate/compiled/")}
+    # the compiled code's key is every kernel file, whatever a run imports
+    keyed = {path.relative_to(carried.PACKAGE.parent).as_posix()
+             for path in sources.kernel_files()}
+    assert {"herringbone/model/equations.py", "herringbone/compiling/counting.py",
+            "herringbone/integrate/compiled/walk.py"} <= keyed
+    assert keyed <= names
     assert not {name.split("/")[1] for name in names} & {"analysis", "cli"}
     assert "herringbone/integrate/reference.py" not in names
 
 
 def test_an_import_names_its_module_and_the_packages_above_it_inside_functions_too():
-    # integrate/first_start.py: `from .compiled import cache` at the top, `from
+    # integrate/first_start.py: `from ..compiling import cache` at the top, `from
     # ..model.assembly import GearTrainModel` and `from ..model.scene import load_scene`
     # inside a function (names imported from a module are not modules)
     imported = carried._imported("herringbone.integrate.first_start")
-    assert {"herringbone.integrate.compiled", "herringbone.integrate.compiled.cache",
+    assert {"herringbone.compiling", "herringbone.compiling.cache",
             "herringbone.model.assembly", "herringbone.model.scene",
             "herringbone", "herringbone.model"} <= imported
     assert not any(name.endswith(("load_scene", "GearTrainModel")) for name in imported)

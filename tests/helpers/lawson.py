@@ -35,10 +35,10 @@ from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import RK45
 
 from herringbone.integrate.compiled import exponential
-from herringbone.integrate.compiled.equations import derivative
 from herringbone.integrate.compiled_stepper import CompiledStepper
 from herringbone.integrate.contract import start_position
 from herringbone.model.assembly import GearTrainModel
+from herringbone.model.equations import derivative
 
 INPUTS = exponential.INPUTS
 # Hairer's controller as compiled/dop853.py has it (safety, bounds, β of the stabilized rule)

@@ -33,12 +33,12 @@ from pathlib import Path
 import numpy as np
 
 from helpers import REGRESSION, force_error, force_errors
-from herringbone.integrate.compiled import equations
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import IntegrationError, simulate_with
 from herringbone.integrate.global_error import ReferenceAccuracyWarning, can_judge
 from herringbone.integrate.reference import checked_reference_run
 from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model import equations
 from herringbone.model.assembly import GearTrainModel
 
 REFERENCE_TOLERANCE = 1e-10  # reference_simulate's default

@@ -8,10 +8,10 @@ from numba import njit
 
 import herringbone
 from herringbone.integrate.compiled import buffers, walk
-from herringbone.integrate.compiled.equations import System
 from herringbone.integrate.compiled_stepper import CompiledStepper
 from herringbone.integrate.contract import start_position
 from herringbone.model.assembly import GearTrainModel
+from herringbone.model.equations import System
 
 
 @njit

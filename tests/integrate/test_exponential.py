@@ -23,7 +23,7 @@ from helpers import (
 from helpers import communication_run as run
 
 import herringbone
-from herringbone.integrate.compiled import equations, exponential
+from herringbone.integrate.compiled import exponential
 from herringbone.integrate.compiled_stepper import (
     CompiledStepper,
     StepBudgetExceeded,
@@ -31,6 +31,7 @@ from herringbone.integrate.compiled_stepper import (
 )
 from herringbone.integrate.contract import simulate_with, start_position
 from herringbone.integrate.stepping import ScipyStepper
+from herringbone.model import equations
 from herringbone.model.assembly import GearTrainModel
 
 
@@ -1232,8 +1233,9 @@ def test_a_step_ends_with_the_approach_slopes_of_its_end():
     approach rates at the run's state (equations.approach_rates), to rounding, or marked not
     taken (NaN: after an exact step, which needs none; the next check takes them), never an
     older step's."""
-    from herringbone.integrate.compiled import equations, walk
+    from herringbone.integrate.compiled import walk
     from herringbone.integrate.compiled_stepper import StepBudgetExceeded
+    from herringbone.model import equations
 
     scene = herringbone.load_scene(MODELS / "separation.toml")
     model = GearTrainModel(scene)

@@ -13,8 +13,8 @@ from helpers import MODELS
 from numba.core import types
 
 import herringbone
+from herringbone.compiling import cache
 from herringbone.integrate import first_start
-from herringbone.integrate.compiled import cache
 
 # s of wall time, process start included: a compile's announcement comes within it of the start
 ANNOUNCEMENT_BOUND = 5.0
@@ -118,7 +118,7 @@ def test_two_fmus_seeding_a_kernel_at_once_never_name_each_others_code(tmp_path,
 COMPILE_FOR_SCENE = """
 import sys
 from herringbone.integrate import first_start
-from herringbone.integrate.compiled import cache
+from herringbone.compiling import cache
 first_start.compile_for_scene(sys.argv[1], say=lambda message: None)
 print(" ".join(sorted(index.name.split("-")[0] for index in cache.kernels_folder().glob("*.nbi"))))
 """
@@ -146,7 +146,8 @@ PROBE = """
 import json, pickle, sys
 from pathlib import Path
 from numba import typeof
-from herringbone.integrate.compiled import cache, walk
+from herringbone.compiling import cache
+from herringbone.integrate.compiled import walk
 from herringbone.integrate import first_start
 
 said = []
@@ -239,7 +240,7 @@ def test_an_fmu_on_another_cpu_says_why_and_how_long_before_it_compiles(scene_fm
 PICKLE_AN_ENTRY = """
 import sys
 from numba.core import serialize, types
-from herringbone.integrate.compiled import cache
+from herringbone.compiling import cache
 count = int(sys.argv[1])
 made = [types.Array(types.float64, 1 + k % 3, "C", readonly=k % 2 == 1) for k in range(count)]
 made += [types.UniTuple(types.int64, k + 2) for k in range(count)]

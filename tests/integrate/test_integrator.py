@@ -237,22 +237,48 @@ def test_implicit_method_steps_over_overdamped_stiff_modes(reference_scene):
 
 def test_compiled_cache_is_keyed_on_every_kernel_file(tmp_path, monkeypatch):
     """numba checks only a function's own file; walk.advance compiles dop853.step and the
-    equations into itself, so a change to any kernel file must move the whole cache."""
+    model's equations into itself, and counting.py sets how they are compiled, so a change to
+    any of those files must move the whole cache, and a change elsewhere must not."""
     import shutil
 
-    from herringbone.integrate.compiled import cache
+    from herringbone.compiling import cache, sources
 
-    copy = tmp_path / "compiled"
-    shutil.copytree(cache.PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(cache, "PACKAGE_DIR", copy)
+    copy = tmp_path / "herringbone"
+    shutil.copytree(sources.ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(sources, "ROOT", copy)
+    assert {"model/equations.py", "compiling/counting.py", "integrate/compiled/dop853.py"} <= {
+        path.relative_to(copy).as_posix() for path in sources.kernel_files()}
+    digests = []
+    for changed in ("model/scene.py", "model/equations.py", "compiling/counting.py",
+                    "integrate/compiled/dop853.py"):
+        cache.package_digest.cache_clear()
+        digests.append(cache.package_digest())
+        (copy / changed).write_text((copy / changed).read_text() + "\n# changed\n")
     cache.package_digest.cache_clear()
-    before = cache.package_digest()
-    equations = copy / "equations.py"
-    equations.write_text(equations.read_text() + "\n# changed\n")
-    cache.package_digest.cache_clear()
-    assert cache.package_digest() != before
+    digests.append(cache.package_digest())
+    assert digests[0] == digests[1]  # the scene's loader holds no kernel
+    assert len(set(digests[1:])) == 4
     cache.package_digest.cache_clear()  # the real package's digest again for later tests
     monkeypatch.undo()
+
+
+def test_every_kernel_is_cached_by_its_source_text():
+    """A kernel module that defined its kernels before the locator was in place (one that did
+    not import compiling.counting first) would be cached beside its file, by numba's own
+    locator: an FMU, unpacked to a new folder at every start, would compile it every time."""
+    import importlib
+
+    from numba.core.dispatcher import Dispatcher
+
+    from herringbone.compiling import cache, sources
+
+    kernels = [value for name in sources.kernel_modules()
+               for value in vars(importlib.import_module(name)).values()
+               if isinstance(value, Dispatcher) and value.py_func.__module__ == name]
+    assert {kernel.py_func.__module__.rpartition(".")[2] for kernel in kernels} >= {
+        "equations", "dop853", "radau", "exponential", "walk", "variational"}
+    assert all(isinstance(kernel._cache._impl.locator, cache.SourceTextCacheLocator)
+               for kernel in kernels)
 
 
 @pytest.mark.parametrize("scene_name", ["reference", "torsional", "contact_loss"])
@@ -261,7 +287,7 @@ def test_packed_system_unpacks_to_the_same_arrays(scene_name):
     System field for field, exactly: values, shapes, entry types, and arrays as views of the
     buffers (a field added to the declaration and not to unpack_system's readers, or read from
     the wrong buffer or with the wrong shape, fails here)."""
-    from herringbone.integrate.compiled.equations import System, pack_system, unpack_system
+    from herringbone.model.equations import System, pack_system, unpack_system
 
     system = GearTrainModel(herringbone.load_scene(MODELS / f"{scene_name}.toml")).system
     floats, ints = pack_system(system)
@@ -281,7 +307,7 @@ def test_packed_system_unpacks_to_the_same_arrays(scene_name):
 def test_packing_refuses_a_field_of_the_wrong_shape(reference_model):
     """pack_system checks every field against System's declaration: a vector given as a matrix,
     or two fields that disagree on a size, are refused, not packed into a wrong layout."""
-    from herringbone.integrate.compiled.equations import pack_system
+    from herringbone.model.equations import pack_system
 
     system = reference_model.system
     with pytest.raises(ValueError, match="mass"):
@@ -414,7 +440,8 @@ def test_a_contact_events_slope_is_its_approach_rate():
     derivative of the point's approach: along DOP853's motion of contact_loss at 5 ms, the
     central difference of every point's approach over ±1 µs agrees with it within 0.1 % of
     the largest slope (measured: 1.7e-5 of it)."""
-    from herringbone.integrate.compiled import equations, walk
+    from herringbone.integrate.compiled import walk
+    from herringbone.model import equations
 
     scene = herringbone.load_scene(MODELS / "contact_loss.toml")
     model = GearTrainModel(scene)

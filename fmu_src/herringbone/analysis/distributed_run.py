@@ -6,7 +6,7 @@ the point and the protocol, and each process runs the same compiled code single-
 (BLAS threads are set to one before workers start: small matrices only, and thread counts
 must not change rounding between a serial and a parallel run).
 
-Workers load the compiled integrator from the numba cache (compiled/cache.py) rather than each
+Workers load the compiled integrator from the numba cache (compiling/cache.py) rather than each
 compiling it: the integrator is made ready here first (compiled into the cache if it is not
 there), then every worker loads it once before the points are handed out. On a cluster whose
 machines do not share this machine's cache, one worker compiles first and the rest of that

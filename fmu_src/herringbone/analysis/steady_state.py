@@ -43,11 +43,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..arguments import check_scene
-from ..integrate.compiled import equations
 from ..integrate.compiled_stepper import EXPLICIT_STEP_BOUND, CompiledStepper
 from ..integrate.contract import IntegrationError, Position, start_position
 from ..integrate.segments import Segment, begin, contact_band, point_approaches
 from ..integrate.variational import VariationalFlow, multiplier_step
+from ..model import equations
 from ..model.assembly import GearTrainModel
 from ..model.geometry import GearGeometry
 from .sweep_point import static_mesh_force, window_figures

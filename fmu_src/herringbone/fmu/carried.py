@@ -3,9 +3,9 @@
 A host unpacks an FMU at every instance (fmpy at every `simulate_fmu`) and deletes it after,
 file by file, so the FMU carries the modules its slave imports, directly or through others
 (the closure of their import statements, those inside functions included: `runtime_modules`),
-and every file of integrate/compiled/, whose text is the key of the compiled code it carries
-(compiled.cache.package_digest). The analysis, the command line, the builder and the scipy
-reference stay behind.
+and every kernel file, whose text is the key of the compiled code it carries
+(compiling.sources, compiling.cache.package_digest). The analysis, the command line, the builder
+and the scipy reference stay behind.
 """
 from __future__ import annotations
 
@@ -13,18 +13,19 @@ import ast
 import shutil
 from pathlib import Path
 
+from ..compiling import sources
+
 PACKAGE = Path(__file__).resolve().parents[1]  # herringbone
 # the slaves' modules: what pythonfmu's script (a copy of slave.py or slave3.py) imports
 ENTRY_MODULES = ("herringbone.fmu.slave", "herringbone.fmu.slave3")
-KEYED_FOLDER = PACKAGE / "integrate" / "compiled"  # carried whole: the compiled code's key
 
 
 def runtime_modules() -> set[str]:
-    """The names of the package's modules an FMU's run can import: ENTRY_MODULES, every module
-    of KEYED_FOLDER, and every module their import statements name, followed through, with the
-    packages that hold them."""
+    """The names of the package's modules an FMU's run can import: ENTRY_MODULES, every kernel
+    module (carried whole: their text is the compiled code's key), and every module their
+    import statements name, followed through, with the packages that hold them."""
     found: set[str] = set()
-    waiting = [*ENTRY_MODULES, *(_module_name(path) for path in KEYED_FOLDER.glob("*.py"))]
+    waiting = [*ENTRY_MODULES, *sources.kernel_modules()]
     while waiting:
         name = waiting.pop()
         if name not in found:
@@ -84,8 +85,3 @@ def _file_of(name: str) -> Path:
     if path is None:
         raise ValueError(f"{name} is not a module of {PACKAGE}")
     return path
-
-
-def _module_name(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)

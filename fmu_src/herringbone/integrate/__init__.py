@@ -4,5 +4,5 @@ initial condition and the one run loop every caller uses), the scipy reference (
 over the numba kernels in `compiled/`), and `first_start` (compiled code carried by an FMU, a
 word before compiling).
 
-Kept free of imports: the model's modules import `compiled.equations` (the one home of the
-physics) through this package."""
+The equations they integrate are the model's (`herringbone.model.equations`); this package
+sits above the model and imports from it, never the other way."""

@@ -34,8 +34,8 @@ import numpy as np
 
 from ..arguments import COMPILED_DEFAULT_TOLERANCE, COMPILED_METHODS, check_compiled_run
 from ..model.assembly import GearTrainModel
+from ..model.equations import PeriodTable
 from .compiled import buffers, dop853, exponential, walk
-from .compiled.equations import PeriodTable
 from .contract import IntegrationError, Position
 from .segments import Segment
 

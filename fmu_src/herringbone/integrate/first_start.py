@@ -1,7 +1,7 @@
 """The integrator's first start on a machine: compiled code carried in, a word before compiling.
 
 numba compiles the integrator's loop (compiled/walk.py) once per machine, numba version and
-version of the package, and caches it (compiled/cache.py). An FMU carries the compiled code
+version of the package, and caches it (compiling/cache.py). An FMU carries the compiled code
 a run of its scene loads (`carry_for_scene`, in resources/numba_cache: `CARRIED_FOLDER`);
 `prepare`, called as the slave is instantiated, adds to the user's cache folder what that
 lacks of it (cache.seed_from), so an FMU started on a machine of the build machine's kind
@@ -28,7 +28,7 @@ from pathlib import Path
 
 from numba.core import event
 
-from .compiled import cache
+from ..compiling import cache, sources
 
 CARRIED_FOLDER = "numba_cache"  # in an FMU's resources: a kernels-<digest> of the build machine's
 RECORD = "compile_seconds.json"  # in a kernels folder: {kernel: {"seconds": s, "cpu": name}}
@@ -105,7 +105,7 @@ class _Announcer(event.Listener):
         """numba begins to compile a kernel: the first of this package's announces it."""
         self.depth += 1
         dispatcher = ev.data["dispatcher"]
-        if self.depth > 1 or not dispatcher.py_func.__module__.startswith(_COMPILED):
+        if self.depth > 1 or dispatcher.py_func.__module__ not in _KERNEL_MODULES:
             return
         self.kernel_started = time.perf_counter()
         if self.started is None:
@@ -129,7 +129,7 @@ class _Announcer(event.Listener):
                      f"{cache.kernels_folder()}")
 
 
-_COMPILED = cache.__name__.rsplit(".", 1)[0]  # herringbone.integrate.compiled
+_KERNEL_MODULES = frozenset(sources.kernel_modules())
 _announcer = None
 _announcer_lock = threading.Lock()
 

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import equations
 from ..model.assembly import GearTrainModel
+from ..model.equations import Event
 from ..model.mesh import ContactSet
-from .compiled import equations
-from .compiled.equations import Event
 
 # plain ints: numpy asks an index that is an IntEnum for its array interfaces, through the
 # enum's own attribute lookup, every time it indexes with one

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ..integrate.compiled import equations
+from . import equations
 from .geometry import GearGeometry
 from .mesh import ContactSet, Mesh
 from .parameters import outputs_of
@@ -199,7 +199,7 @@ class GearTrainModel:
                                                    p[f"h_brg_{gear}_{side}"]))
         return elements
 
-    # --- the equations (compiled: compiled/equations.py) ------------------------------------
+    # --- the equations (compiled: equations.py) ---------------------------------------------
 
     def contact_geometry(self, y: np.ndarray, contact_set: ContactSet):
         """Stiffness, lever arm and lead error of each point at the state's pinion angle."""

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..integrate.compiled import equations
+from . import equations
 from .geometry import HALVES, GearGeometry
 
 # Phases closer than this (in pitches; 3e-12 m of axial travel on the reference gear) are one
@@ -87,7 +87,7 @@ class ContactSet:
     """The contact points of one phase interval, as linear functions of the pinion angle.
 
     `table` holds one column a point, its rows named by the constants of
-    integrate/compiled/equations.py (HALF: 0 left, 1 right; the others in N/m, m, rad). For a
+    model/equations.py (HALF: 0 left, 1 right; the others in N/m, m, rad). For a
     pinion angle φp inside the interval, with Δ = φp − `pinion_angle` (the angle at which the
     interval starts) and the axial travel s = v·Δ (v = Rp cot β, m/rad):
         c = STIFFNESS0 + STIFFNESS_SLOPE·s  (N/m),  ζ = LEVER_ARM0 + LEVER_ARM_SLOPE·s  (m),

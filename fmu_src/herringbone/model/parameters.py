@@ -211,7 +211,7 @@ class Output:
     description: str
     kind: type = float
     component: str | None = None  # None: every scene has it
-    slot: str | None = None  # the constant of integrate/compiled/equations.py naming its entry
+    slot: str | None = None  # the constant of model/equations.py naming its entry
     rate_of: str | None = None  # the coordinate whose rate it is (speeds)
 
 

@@ -6,9 +6,9 @@ costs a few µs. So the stepper's constants travel as two buffers (`pack_constan
 packed System, the mesh period and the settings), and a run as two more (`pack_run`: its
 position and its scratch); the exponential method's tables as exponential.pack_tables' three,
 and Radau IIA's factors as their own three arrays. In compiled code `unpack_constants` and
-`unpack_run` hand back views of them, with no copy and no count of references (counting.py);
-in Python `run_views` gives the same views as numpy arrays, so that the run's position can be
-read and set where advance reads and writes it.
+`unpack_run` hand back views of them, with no copy and no count of references
+(compiling.counting); in Python `run_views` gives the same views as numpy arrays, so that the
+run's position can be read and set where advance reads and writes it.
 
 Layouts. The constants' floats are the packed System's floats (equations.pack_system), then
 the intervals' lengths (rad), the point tables (intervals × POINT_FIELDS × the widest set's
@@ -29,7 +29,7 @@ from numba.core.imputils import impl_ret_borrowed
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from .equations import POINT_FIELDS, PeriodTable, unpack_system
+from ...model.equations import POINT_FIELDS, PeriodTable, unpack_system
 
 
 class RunPart(IntEnum):
@@ -122,7 +122,7 @@ def _c_ordered_view(typing_context, buffer, shape, strides):
 
 # Not a reshape: numba's checks the layout through a call of its runtime, and each kernel
 # takes its buffers apart at every call; nor as_strided, a compiled function returning an
-# array, which code compiled without reference counts (counting.py) may not call.
+# array, which code compiled without reference counts (compiling.counting) may not call.
 
 @njit(cache=True, error_model="numpy", inline="always")
 def matrix_view(buffer, at, rows, columns):

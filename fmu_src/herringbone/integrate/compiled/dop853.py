@@ -21,7 +21,7 @@ from numba import njit
 from numpy.typing import ArrayLike
 from scipy.integrate._ivp.dop853_coefficients import E3, E5, N_STAGES, A, B
 
-from .equations import derivative
+from ...model.equations import derivative
 
 ERROR_EXPONENT = -1.0 / 8.0  # the step-size controller's exponent: −1/(order of E5 + 1)
 # SAFETY below Hairer's 0.9: the error estimate swings 0.03-0.6 from step to step at one h while

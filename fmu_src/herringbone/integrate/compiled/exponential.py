@@ -63,10 +63,8 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from .buffers import cube_view as _cube
-from .buffers import matrix_view as _matrix
-from .counting import COUNTED, NUMBERS_ONLY
-from .equations import (
+from ...compiling.counting import COUNTED, NUMBERS_ONLY
+from ...model.equations import (
     LEAD_ERROR0,
     LEAD_ERROR_SLOPE,
     LEVER_ARM0,
@@ -77,6 +75,8 @@ from .equations import (
     contact_motion,
     point_approach,
 )
+from .buffers import cube_view as _cube
+from .buffers import matrix_view as _matrix
 
 INPUTS = 3  # u = (motor torque, load torque, 1)
 # An eigenvalue of Â below this fraction of the largest belongs to the slow block

@@ -31,8 +31,8 @@ from scipy.integrate._ivp.radau import (
     T,
 )
 
-from .counting import COUNTED
-from .equations import derivative
+from ...compiling.counting import COUNTED
+from ...model.equations import derivative
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 _TI_REAL, _TI_COMPLEX, _T, _E = (np.ascontiguousarray(a) for a in (TI_REAL, TI_COMPLEX, T, E))

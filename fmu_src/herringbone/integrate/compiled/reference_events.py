@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .counting import COUNTED
+from ...compiling.counting import COUNTED
 
 
 @njit(**COUNTED)

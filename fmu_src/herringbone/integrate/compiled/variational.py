@@ -34,8 +34,8 @@ import numpy as np
 from numba import njit
 from scipy.integrate._ivp.dop853_coefficients import N_STAGES, A, B
 
-from .counting import COUNTED
-from .equations import (
+from ...compiling.counting import COUNTED
+from ...model.equations import (
     LEAD_ERROR_SLOPE,
     LEVER_ARM_SLOPE,
     STIFFNESS_SLOPE,

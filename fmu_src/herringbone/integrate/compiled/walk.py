@@ -73,15 +73,15 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from . import buffers, dop853, exponential, radau
-from .counting import NUMBERS_ONLY, UNCOUNTED
-from .equations import (
+from ...compiling.counting import NUMBERS_ONLY, UNCOUNTED
+from ...model.equations import (
     Event,
     approach_rates,
     approaches,
     derivative,
     outputs,
 )
+from . import buffers, dop853, exponential, radau
 
 # How far past its contact interval (a fraction of its length) a run's pinion may end: the
 # event rules place it within 1e-12 of a pitch. A state past that is one so large that its
@@ -313,7 +313,7 @@ NEVER = math.inf  # s: the time to an event that is not ahead
 
 # Inlining and speed. The helpers the loop runs at every step are inlined (inline="always")
 # into `advance` and `advance_sampled`, which are compiled without numba's reference counts
-# (counting.py): a compiled call would cost its call and, compiled with counts, an atomic
+# (compiling.counting): a compiled call would cost its call and, compiled with counts, an atomic
 # count of every array of every record it is handed, on the way in and out (the System alone
 # has 15 arrays). What runs once per event or less (cross_event, locate_event, probe_inside,
 # contact_violated_inside, trial_step, exact_samples) stays a call, and returns numbers only,
@@ -1503,8 +1503,8 @@ def advance(constants, exact, implicit, run, end, motor_torque, load_torque, max
     (the System, the mesh period, the settings); exact, exponential.pack_tables' (None but
     for the exponential method); implicit, allocate_implicit's; run, pack_run's (the run's
     position, read and written back, also where the run fails, its `outputs` getting
-    equations.outputs there, and its workspace). Compiled UNCOUNTED (counting.py): its body
-    neither allocates nor copies by slices."""
+    equations.outputs there, and its workspace). Compiled UNCOUNTED (compiling.counting): its
+    body neither allocates nor copies by slices."""
     status, steps, _ = advance_to(constants, exact, implicit, run, end,
                                   (motor_torque, load_torque), max_steps, None, 0)
     return status, steps
@@ -1736,9 +1736,9 @@ def cross_event(system, mesh, settings, run, workspace, segment, plan, end, even
     in an exact segment, with a step no longer than the exact floor (the approach starts at
     zero, where a longer one is not certified). Returns (Status; the next sample's index;
     the exact form of the segment it entered, −1 where it entered none). It returns numbers
-    only, so it is compiled without reference counts (counting.py): it runs at every event,
-    and counting every array of the records it is handed cost a fifth of the exponential
-    method's time."""
+    only, so it is compiled without reference counts (compiling.counting): it runs at every
+    event, and counting every array of the records it is handed cost a fifth of the
+    exponential method's time."""
     state, h_step, time = run.state, plan.h_step, run.clock[0]
     event, high = locate_event(system, segment, settings, state, workspace, event, high, h_step)
     workspace.counters[Counter.EVENTS] += 1

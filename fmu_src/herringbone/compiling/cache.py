@@ -3,11 +3,12 @@
 numba's own locators put the cache beside the source (`__pycache__`) or in a folder named after
 the source's path. An FMU is unpacked to a fresh temporary folder for every instance, so either
 way each start would compile again (a minute). This locator keys the cache on the source text
-of the whole package (numba alone would miss a change to a kernel that another file's kernel
-compiled in), in a per-user folder: $HERRINGBONE_CACHE_DIR, else
-$XDG_CACHE_HOME/herringbone/numba, else ~/.cache/herringbone/numba. numba itself keeps apart
-the Python and numba versions and the CPU. Each version of the package adds a folder there
-(a few MB); deleting the folder is always safe.
+of every file that holds kernels or says how they are compiled (sources.py: numba alone
+would miss a change to a kernel that another file's kernel compiled in), in a per-user
+folder: $HERRINGBONE_CACHE_DIR, else $XDG_CACHE_HOME/herringbone/numba, else
+~/.cache/herringbone/numba. numba itself keeps apart the Python and numba versions and the
+CPU. Each version of the package adds a folder there (a few MB); deleting the folder is
+always safe.
 """
 from __future__ import annotations
 
@@ -24,19 +25,22 @@ from pathlib import Path
 
 from numba.core import caching, serialize, types
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+from . import sources
+
 # The data files of seeded entries are numbered from here (_merge_index), far above numba's
 SEEDED_NUMBERS = 1 << 64
 
 
 @functools.cache
 def package_digest() -> str:
-    """The hash of every source file of this package, in name order, and of the package's
-    module name: numba's index pickles objects by their modules' names, so a copy of the same
-    files under another name (the package moved) cannot read it and needs its own."""
-    digest = hashlib.sha256(__name__.rpartition(".")[0].encode() + b"\0")
-    for source in sorted(PACKAGE_DIR.glob("*.py")):
-        digest.update(source.name.encode() + b"\0" + source.read_bytes())
+    """The hash of every kernel source file (sources.kernel_files), by its path in the
+    package, and of the package's module name: numba's index pickles objects by their
+    modules' names, so a copy of the same files under another name (the package moved)
+    cannot read it and needs its own."""
+    digest = hashlib.sha256(sources.package_name().encode() + b"\0")
+    for source in sources.kernel_files():
+        digest.update(source.relative_to(sources.ROOT).as_posix().encode() + b"\0"
+                      + source.read_bytes())
     return digest.hexdigest()[:20]
 
 
@@ -61,7 +65,7 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
         return self._cache_path
 
     def get_source_stamp(self):
-        """The hash of the whole package, not of the one file: see below."""
+        """The hash of every kernel file, not of the one file: see below."""
         # numba checks only the function's own file; a kernel compiled into another (walk.py
         # holds dop853.step and the equations) must be compiled anew when any of them changes
         return package_digest()
@@ -69,7 +73,7 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
     @classmethod
     def from_function(cls, py_func, py_file):
         """The locator for a kernel of this package; None for anyone else's."""
-        if Path(py_file).resolve().parent != PACKAGE_DIR:
+        if Path(py_file).resolve() not in sources.kernel_files():
             return None  # not ours: numba's own locators decide
         return super().from_function(py_func, py_file)  # None if the folder is not writable
 
@@ -199,9 +203,8 @@ def _loaded_kernels() -> list:
     compiled code in this process."""
     from numba.core.dispatcher import Dispatcher
 
-    package = __name__.rpartition(".")[0]
-    return [value for name, module in sorted(sys.modules.items())
-            if name.startswith(package + ".") for value in vars(module).values()
+    return [value for name in sources.kernel_modules() if name in sys.modules
+            for value in vars(sys.modules[name]).values()
             if isinstance(value, Dispatcher) and value.py_func.__module__ == name
             and value.overloads]
 

@@ -24,7 +24,7 @@ from typing import Annotated, NamedTuple, get_origin, get_type_hints
 import numpy as np
 from numba import njit
 
-from .counting import COUNTED
+from ..compiling.counting import COUNTED
 
 # rows of a contact-point table: HALF 0 (left) or 1 (right); stiffness (N/m), lever arm (m) and
 # lead error (m) each as its value where the set began plus its slope per m of axial travel
