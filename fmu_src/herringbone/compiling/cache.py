@@ -199,8 +199,8 @@ class _UnnumberedPickler(serialize.NumbaPickler):
 
 
 def _loaded_kernels() -> list:
-    """This package's kernels (numba dispatchers defined at the top of its modules) that hold
-    compiled code in this process."""
+    """The package's kernels (numba dispatchers defined at the top of its kernel modules,
+    sources.kernel_modules) that hold compiled code in this process."""
     from numba.core.dispatcher import Dispatcher
 
     return [value for name in sources.kernel_modules() if name in sys.modules

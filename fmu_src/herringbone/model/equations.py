@@ -14,7 +14,7 @@ Contact points come as a table, one column a point, rows as named by the constan
 entry is linear in the axial travel v·y_pinion (m) of the points since the set began
 (model/mesh.py). A kernel takes the table with `count`, the number of its columns in use, and
 where it asks for `loaded`, one entry a point: 1.0 where the point carries load in the current
-segment, 0.0 where not (walk.py decides).
+segment, 0.0 where not (integrate/compiled/walk.py decides).
 """
 from __future__ import annotations
 
@@ -41,7 +41,8 @@ FIRST_ELEMENT_FORCE = 8
 
 class Event(IntEnum):
     """The events that end a segment, numbered alike by both integrators (each locates them by
-    its own rule: integrate/segments.py for the reference, compiled/walk.py for the FMU's)."""
+    its own rule: integrate/segments.py for the reference, integrate/compiled/walk.py for the
+    FMU's)."""
 
     PHASE_END = 0  # φp reaches the end of the contact set's interval: the next set follows
     PHASE_START = 1  # φp falls back to the interval's start: the previous set follows

@@ -1,7 +1,7 @@
 """The exponential method: a segment whose equations are linear and time-invariant, propagated
 exactly by its modal solution.
 
-Between two events the equations (equations.py) are linear in every coordinate but the pinion
+Between two events the equations (model/equations.py) are linear in every coordinate but the pinion
 angle, which moves the contact points: a point's stiffness, lever arm and lead error follow the
 axial travel. Where none of that motion reaches the forces, the segment is x' = A·x + B·u with A
 and B constant and the inputs u = (motor torque, load torque, 1) held, and its solution at any
@@ -52,7 +52,7 @@ and where that cannot be found, where the slow motion carries it out, or no late
 The kernels the loop calls take the train as an ExactTrain (`train`: the few fields of its
 System they read), since a call's records are handed over word by word.
 
-Units: time in s; the state as equations.py lays it out; torques in N·m.
+Units: time in s; the state as model/equations.py lays it out; torques in N·m.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The variational equations of the gear train through its segments, compiled: a state and its
 sensitivity Φ = ∂x(t)/∂x(0)·D to the initial state along directions D, over a fixed time.
 
-Within a segment (contact set and loaded points fixed) the equations (equations.py) are smooth
+Within a segment (contact set and loaded points fixed) the equations (model/equations.py) are smooth
 and Φ obeys Φ' = J(x)·Φ, J = ∂f/∂x the Jacobian of equations.derivative (`sensitivity_rate`,
 analytic: the contact points' forces F_i = c_i·(δ_i + η·δ̇_i) are sums of products of the state
 with the points' stiffness c, lever arm ζ and lead error e, each linear in the pinion's travel).
@@ -22,7 +22,7 @@ grazes, ∇g·f⁻ → 0, so adds no spurious jump). Events are located by regul
 ends just past the crossing, as walk.py ends it; what follows is walk.next_segment's (every
 point loaded by the sign of its approach).
 
-Units: time in s, the state as equations.py lays it out, Φ in the state's units per unit of
+Units: time in s, the state as model/equations.py lays it out, Φ in the state's units per unit of
 the directions, torques in N·m.
 """
 from __future__ import annotations

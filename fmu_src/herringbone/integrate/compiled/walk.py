@@ -155,7 +155,7 @@ class CompiledSegment(NamedTuple):
     """A segment (segments.Segment: a contact set and its loaded points) as the loop holds it:
     its equations as equations.derivative takes them, with the torques, and its events."""
 
-    points: np.ndarray  # the contact set's point table (equations.py's rows)
+    points: np.ndarray  # the contact set's point table (model/equations.py's rows)
     point_count: int  # its number of points
     loaded: np.ndarray  # per point: 1 loaded, 0 not (the run's array)
     motor_torque: float  # N·m
