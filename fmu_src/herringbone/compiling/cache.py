@@ -73,9 +73,17 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
     @classmethod
     def from_function(cls, py_func, py_file):
         """The locator for a kernel of this package; None for anyone else's."""
-        if Path(py_file).resolve() not in sources.kernel_files():
+        if Path(py_file).resolve() not in _claimed_files():
             return None  # not ours: numba's own locators decide
         return super().from_function(py_func, py_file)  # None if the folder is not writable
+
+
+@functools.cache
+def _claimed_files() -> frozenset[Path]:
+    """sources.kernel_files, read once a process: numba asks the locator about each of the
+    package's 180 kernels as their modules load, and a glob of the folders each time cost a
+    start 18 ms."""
+    return frozenset(sources.kernel_files())
 
 
 def install() -> None:
@@ -141,7 +149,7 @@ def carry_loaded(folder: Path) -> list[str]:
     (require_on_disk)."""
     target = Path(folder) / kernels_folder().name
     written = []
-    for dispatcher in _loaded_kernels():
+    for dispatcher in (kernel for kernel in kernels() if kernel.overloads):
         require_on_disk(dispatcher)
         cache, source = dispatcher._cache, Path(dispatcher._cache._cache_path)
         name, overloads = cache._cache_file._index_name, cache._cache_file._load_index()
@@ -198,15 +206,14 @@ class _UnnumberedPickler(serialize.NumbaPickler):
         return super().reducer_override(obj)
 
 
-def _loaded_kernels() -> list:
+def kernels() -> list:
     """The package's kernels (numba dispatchers defined at the top of its kernel modules,
-    sources.kernel_modules) that hold compiled code in this process."""
+    sources.kernel_modules) among the modules this process has imported."""
     from numba.core.dispatcher import Dispatcher
 
     return [value for name in sources.kernel_modules() if name in sys.modules
             for value in vars(sys.modules[name]).values()
-            if isinstance(value, Dispatcher) and value.py_func.__module__ == name
-            and value.overloads]
+            if isinstance(value, Dispatcher) and value.py_func.__module__ == name]
 
 
 def _copy_into(source: Path, folder: Path, name: str | None = None) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..compiling import sources
 
-PACKAGE = Path(__file__).resolve().parents[1]  # herringbone
+PACKAGE = sources.ROOT  # herringbone
 # the slaves' modules: what pythonfmu's script (a copy of slave.py or slave3.py) imports
 ENTRY_MODULES = ("herringbone.fmu.slave", "herringbone.fmu.slave3")
 
