@@ -17,9 +17,9 @@
 
 A scene that both integrators refuse with the chatter message (IntegrationError naming
 "edge_ramp > 0": sharp face edges at low speed) passes; one refused by one integrator only fails.
-`run_recorded` runs what herringbone.simulate runs, and the scipy reference with each step held
-to the tolerance, keeping the state at every sample so that the per-point checks can see the
-contact points.
+The reference of every check is reference_simulate's run (force_judge); `run_recorded` runs what
+herringbone.simulate runs, and the scipy reference with each step held to the tolerance; both
+keep the state at every sample so that the per-point checks can see the contact points.
 """
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ MOMENTUM_BOUND = 1e-9
 # pitches): a pitch of 1e-6 is where the two runs' pinion angles may differ at 1e-4 force error.
 PHASE_HAIR = 1e-6
 CHATTER_CURE = "edge_ramp > 0"
-# checked_reference's and recorded_reference's runs, by (the scene's regression name, tolerance)
+# checked_and_recorded's and recorded_reference's runs, by (the scene's regression name, tolerance)
 _CHECKED: dict = {}
 _RECORDED: dict = {}
 
@@ -91,12 +91,16 @@ def run_recorded(scene, integrator: str, tolerance: float) -> RecordedRun:
                else _SampledAtPositions(CompiledStepper(model, tolerance)))
     run.outputs = simulate_with(stepper, scene)
     run.landings = stepper.landings if integrator == "reference" else 0
+    _drop_overwritten_sample(run)
+    return run
+
+
+def _drop_overwritten_sample(run: RecordedRun) -> None:
+    """Where the last output time fell a rounding short of stop_time, it was sampled on the
+    way and then overwritten by the state at stop_time itself: keep the sample stored."""
     if len(run.samples) == len(run.outputs["time"]) + 1:
-        # the last output time fell a rounding short of stop_time, so it was sampled on the way
-        # and then overwritten by the state at stop_time itself: keep what was stored
         del run.samples[-2]
     assert len(run.samples) == len(run.outputs["time"])
-    return run
 
 
 class _SampledAtPositions:
@@ -130,12 +134,57 @@ def checked_reference(scene, tolerance: float):
     """reference_simulate's run of the scene at `tolerance` and its global_error.Check, once
     per scene and tolerance in a process (the drawn tests ask for it twice), its
     ReferenceAccuracyWarning left to whoever reads the Check's estimate."""
+    return checked_and_recorded(scene, tolerance)[:2]
+
+
+def checked_and_recorded(scene, tolerance: float):
+    """checked_reference's run and Check, and beside them the delivered run as a RecordedRun
+    (its state at every sample kept, as run_recorded keeps it), made once per scene and
+    tolerance in a process: check_scene judges the compiled run by it and reads its samples
+    for the per-point checks, so the reference runs once (its check's runs) and not once more
+    for the samples."""
     key = (regression_name(scene), tolerance)
     if key not in _CHECKED:
+        recorder = _RunRecorder()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ReferenceAccuracyWarning)
-            _CHECKED[key] = checked_reference_run(scene, tolerance=tolerance)
+            result, check = checked_reference_run(scene, tolerance=tolerance,
+                                                  wrap=recorder.wrap)
+        _CHECKED[key] = (result, check, recorder.delivered(result, check))
     return _CHECKED[key]
+
+
+class _RunRecorder:
+    """Keeps the samples of each run a check makes (`wrap`, checked_reference_run's hook: the
+    model's outputs recorded as run_recorded records them), to hand over those of the run the
+    check delivers (`delivered`)."""
+
+    def __init__(self):
+        self.runs: list[tuple[ScipyStepper, RecordedRun]] = []
+
+    def wrap(self, stepper: ScipyStepper) -> ScipyStepper:
+        """Record the run `stepper` is about to make, by its step tolerance."""
+        model = stepper.model
+        if not self.runs:
+            plain = model.outputs
+
+            def outputs_kept(state, contact_set, loaded):
+                self.runs[-1][1].samples.append((np.array(state), contact_set,
+                                                 np.array(loaded)))
+                return plain(state, contact_set, loaded)
+
+            model.outputs = outputs_kept  # one model serves all the check's runs
+        self.runs.append((stepper, RecordedRun(model, {}, name="checked reference")))
+        return stepper
+
+    def delivered(self, result, check) -> RecordedRun:
+        """The run the check delivered (`result`, made at check.step_tolerance) with its
+        samples."""
+        stepper, run = next(made for made in self.runs
+                            if made[0].tolerance == check.step_tolerance)
+        run.outputs, run.landings = result, stepper.landings
+        _drop_overwritten_sample(run)
+        return run
 
 
 def recorded_reference(scene, tolerance: float) -> RecordedRun:
@@ -187,16 +236,17 @@ def per_step_holds(scene, tolerance: float, bound: float) -> bool:
     scene the reference refuses is left to check_scene."""
     try:
         reference = recorded_reference(scene, tolerance)
-        judge = force_judge(scene, reference, tolerance)
+        judge = force_judge(scene, tolerance)
     except IntegrationError:
         return True
     return force_error(reference.outputs, judge.outputs, scene) <= bound
 
 
-def force_judge(scene, reference: RecordedRun, tolerance: float) -> RecordedRun:
-    """The run (a) judges the compiled forces against: reference_simulate's at the same
-    tolerance, not the recorded `reference`, whose steps are each held to the tolerance
-    itself. reference_simulate holds each step to what holds the whole run to the tolerance
+def force_judge(scene, tolerance: float) -> RecordedRun:
+    """The reference run of check_scene: (a) judges the compiled forces against it, and (b)
+    to (e) read its samples. It is reference_simulate's at `tolerance` (checked_and_recorded),
+    not run_recorded's reference, whose steps are each held to the tolerance itself:
+    reference_simulate holds each step to what holds the whole run to the tolerance
     (stepping.step_tolerance: cut by the radians a lightly damped train rings, on every
     shipped and seeded scene at 1e-10), and where the train lifts off and lands it checks its
     error over the run and tightens its steps until it holds. A step's error adds up over the
@@ -205,8 +255,7 @@ def force_judge(scene, reference: RecordedRun, tolerance: float) -> RecordedRun:
     from itself at 1e-12) and grows from landing to landing (5.5e-4 on found_302cde7a53 at
     1e-10, 1.7e-6 on found_1b70095ae3 at 1e-12, where the compiled runs lay 8.7e-4 and 3.9e-8
     from the checked one)."""
-    return RecordedRun(reference.model, checked_reference(scene, tolerance)[0],
-                       name="checked reference")
+    return checked_and_recorded(scene, tolerance)[2]
 
 
 def forces_agree(run: RecordedRun, reference: RecordedRun, bound: float) -> None:
@@ -307,11 +356,11 @@ def check_scene(scene, tolerance=DEFAULT_TOLERANCE, bound=DEFAULT_BOUND,
         if runs is None:
             return  # both refused the scene with the chatter message: an accepted outcome
         reference, compiled = runs
-        for run, label in ((reference, "reference"), (compiled, "compiled")):
-            outputs_finite(run, label)
-            no_tension(run, label)
-            momentum_follows_torques(run, label)
-        forces_agree(compiled, force_judge(scene, reference, reference_tolerance), bound)
+        for run in (reference, compiled):
+            outputs_finite(run, run.name)
+            no_tension(run, run.name)
+            momentum_follows_torques(run, run.name)
+        forces_agree(compiled, reference, bound)
         contact_counts_agree(compiled, reference, bound)
     except Exception as failure:
         save_if_final(scene, f"compiled at {tolerance:g}, reference at {reference_tolerance:g}: "
@@ -320,11 +369,12 @@ def check_scene(scene, tolerance=DEFAULT_TOLERANCE, bound=DEFAULT_BOUND,
 
 
 def _run_both(scene, tolerance, reference_tolerance):
-    """(reference, compiled) runs, or None where both stop with the chatter message."""
+    """(force_judge's reference, compiled) runs, or None where both stop with the chatter
+    message."""
     outcomes = {}
     for integrator, tol in (("reference", reference_tolerance), ("compiled", tolerance)):
         try:
-            outcomes[integrator] = (recorded_reference(scene, tol) if integrator == "reference"
+            outcomes[integrator] = (force_judge(scene, tol) if integrator == "reference"
                                     else run_recorded(scene, integrator, tol))
         except IntegrationError as error:
             if CHATTER_CURE not in str(error):

@@ -462,10 +462,24 @@ def test_a_train_that_lands_is_judged_against_the_checked_reference():
     scene = regression_scene("found_1b70095ae3")
     reference = checks.run_recorded(scene, "reference", 1e-12)
     assert reference.landings > 0
-    judge = checks.force_judge(scene, reference, 1e-12)
+    judge = checks.force_judge(scene, 1e-12)
     assert force_error(reference.outputs, judge.outputs, scene) > checks.TIGHT_BOUND
     compiled = checks.run_recorded(scene, "compiled", checks.TIGHT_TOLERANCE)
     assert force_error(compiled.outputs, judge.outputs, scene) < 0.1 * checks.TIGHT_BOUND
+
+
+def test_the_judge_keeps_the_samples_of_the_run_its_check_delivers():
+    """found_1b70095ae3 lands, so the check of reference_simulate's run makes two runs or more
+    at different step tolerances; the judge's samples are those of the run it delivers: the
+    outputs computed afresh from every state kept are that run's outputs to the bit."""
+    scene = regression_scene("found_1b70095ae3")
+    _, check = checks.checked_reference(scene, 1e-12)
+    judge = checks.force_judge(scene, 1e-12)
+    assert check.runs >= 2 and judge.landings > 0
+    fresh = GearTrainModel(scene)
+    for k, sample in enumerate(judge.samples):
+        outputs = fresh.outputs(*sample)
+        assert all(outputs[name] == judge.outputs[name][k] for name in outputs), k
 
 
 def test_a_train_that_rings_long_is_judged_against_reference_simulates_run():
@@ -476,7 +490,7 @@ def test_a_train_that_rings_long_is_judged_against_reference_simulates_run():
     scene = regression_scene("found_b94916f10b")
     reference = checks.run_recorded(scene, "reference", checks.REFERENCE_TOLERANCE)
     assert reference.landings == 0
-    judge = checks.force_judge(scene, reference, checks.REFERENCE_TOLERANCE)
+    judge = checks.force_judge(scene, checks.REFERENCE_TOLERANCE)
     assert force_error(reference.outputs, judge.outputs, scene) > 1e-5
     compiled = compiled_run(scene, 1e-11, "dop853")
     assert force_error(compiled, judge.outputs, scene) < 1e-7
