@@ -23,14 +23,14 @@ def torsional_scene():
 
 
 @pytest.fixture(scope="session")
-def built_fmus(tmp_path_factory):
-    """The gear FMUs of the shipped scenes and the example drive-train FMUs, built once."""
+def built_fmus(tmp_path_factory, scene_fmu):
+    """The gear FMUs of four shipped scenes (scene_fmu's: a worker builds each once) and the
+    example drive-train FMUs, built once."""
     from herringbone.fmu import builder
 
-    folder = tmp_path_factory.mktemp("fmus")
-    fmus = {name: builder.build_gear_fmu(MODELS / f"{name}.toml", folder / f"{name}.fmu")
-            for name in ("reference", "torsional", "staggered", "lead_error")}
-    motor, fan = builder.build_example_fmus(folder)
+    fmus = {name: scene_fmu(name) for name in ("reference", "torsional", "staggered",
+                                                "lead_error")}
+    motor, fan = builder.build_example_fmus(tmp_path_factory.mktemp("fmus"))
     return {**fmus, "motor": motor, "fan": fan}
 
 
