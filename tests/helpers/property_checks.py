@@ -161,27 +161,29 @@ class _RunRecorder:
 
     def __init__(self):
         self.runs: list[tuple[ScipyStepper, RecordedRun]] = []
+        self.plain_outputs = None
 
     def wrap(self, stepper: ScipyStepper) -> ScipyStepper:
-        """Record the run `stepper` is about to make, by its step tolerance."""
+        """Record the run `stepper` is about to make (one model serves all the check's runs)."""
         model = stepper.model
-        if not self.runs:
-            plain = model.outputs
+        if self.plain_outputs is None:
+            self.plain_outputs = plain = model.outputs
 
             def outputs_kept(state, contact_set, loaded):
                 self.runs[-1][1].samples.append((np.array(state), contact_set,
                                                  np.array(loaded)))
                 return plain(state, contact_set, loaded)
 
-            model.outputs = outputs_kept  # one model serves all the check's runs
+            model.outputs = outputs_kept
         self.runs.append((stepper, RecordedRun(model, {}, name="checked reference")))
         return stepper
 
     def delivered(self, result, check) -> RecordedRun:
         """The run the check delivered (`result`, made at check.step_tolerance) with its
-        samples."""
+        samples; its model's outputs no longer recorded."""
         stepper, run = next(made for made in self.runs
                             if made[0].tolerance == check.step_tolerance)
+        run.model.outputs = self.plain_outputs
         run.outputs, run.landings = result, stepper.landings
         _drop_overwritten_sample(run)
         return run
