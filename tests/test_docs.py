@@ -13,9 +13,12 @@ continued with a backslash is one command, and `a && b` is two. Checked:
   words) and no placeholder (an upper-case word).
 
 The command line's own parser decides what a command means, so this file names no option.
+The Python examples of the README and the pages PYTHON_EXAMPLES names run too, statement by
+statement from another folder, and give the numbers they show (`# [2427.9, 2349.6]`).
 """
 from __future__ import annotations
 
+import ast
 import re
 import shlex
 import subprocess
@@ -258,3 +261,47 @@ def test_readme_links_lead_to_files_of_the_repository():
     local = [t for t in targets if "://" not in t]
     assert len(local) >= 10
     assert [t for t in local if not (ROOT / t).exists()] == []
+
+
+# The pages whose Python examples a reader pastes as they stand: how many of each page's
+# blocks (```python), run in order in one namespace, as the page builds them up (the
+# steady-state page's last block times two continuations of a test scene: not run here).
+PYTHON_EXAMPLES = {"README.md": 1, "docs/api.md": 1, "docs/steady-state.md": 3}
+# an example's line that shows what its expression gives: `expression   # [1.5, -2.25] unit`
+SHOWN = re.compile(r"#\s*\[(?P<numbers>[-+0-9.e, ]+)\]")
+
+
+def python_blocks(page: Path) -> list[str]:
+    """The page's ```python blocks, in order."""
+    return re.findall(r"^```python\n(.*?)^```", page.read_text(encoding="utf-8"), re.S | re.M)
+
+
+def assert_shown(value, numbers: str, where: str) -> None:
+    """`value`, a sequence of numbers, is what the example shows (`numbers`, comma-separated),
+    each to half a unit of its last digit shown."""
+    shown = numbers.split(",")
+    assert len(value) == len(shown), f"{where}: {list(value)} against [{numbers}]"
+    for got, text in zip(value, shown):
+        text = text.strip()
+        decimals = len(text.split(".")[1]) if "." in text else 0
+        assert abs(got - float(text)) <= 0.5 * 10.0 ** -decimals, (
+            f"{where}: {list(value)} against [{numbers}]")
+
+
+@pytest.mark.parametrize("page", sorted(PYTHON_EXAMPLES))
+def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_path, monkeypatch):
+    """Each statement of the page's examples run in turn, from a folder of the reader's own
+    (a shipped scene by its name), and every expression the page shows the numbers of gives
+    those numbers."""
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for k, block in enumerate(python_blocks(ROOT / page)[:PYTHON_EXAMPLES[page]]):
+        lines = block.splitlines()
+        for statement in ast.parse(block).body:
+            where = f"{page}, block {k + 1}, line {statement.lineno}"
+            shown = SHOWN.search(lines[statement.end_lineno - 1])
+            if isinstance(statement, ast.Expr) and shown:
+                value = eval(compile(ast.Expression(statement.value), where, "eval"), namespace)
+                assert_shown(value, shown.group("numbers"), where)
+            else:
+                exec(compile(ast.Module([statement], []), where, "exec"), namespace)
