@@ -382,6 +382,21 @@ def test_a_parameter_branch_picture_names_its_unit_and_only_the_lines_it_has(tmp
     plt.close(drawn["figure"])
 
 
+def test_the_summary_counts_the_points_no_orbit_converged_on(reference_scene):
+    """Points where shooting found no orbit (run by time integration instead) are counted
+    apart from the orbits, and only where there are any."""
+    from herringbone.analysis.sweep_report import describe
+
+    table = pd.DataFrame({"w0_pinion": [500.0, 550.0, 600.0], "speed_rpm": [4775.0] * 3,
+                          "K_v": [1.4, 1.5, 1.6], "stability": ["stable", "time", "time"],
+                          "mesh_periods": [1, 1, 1], "event": [""] * 3,
+                          "contact_lost_share": [0.0] * 3})
+    table.attrs.update(continued="w0_pinion", folds=[])
+    line = describe(reference_scene, table, 1.0).splitlines()[1]
+    assert line.endswith("1 stable, 0 unstable orbits; 2 points where no orbit converged, run "
+                         "by time integration"), line
+
+
 def test_the_summary_of_a_branch_reads_k_v_on_what_a_run_settles_on(reference_scene):
     """A branch whose largest K_v is on an unstable orbit: the summary's K_v range and peak are
     those of the stable orbits, and the period doublings and their 2T branches are named."""
@@ -395,7 +410,7 @@ def test_the_summary_of_a_branch_reads_k_v_on_what_a_run_settles_on(reference_sc
     table.attrs.update(continued="zeta_mesh", folds=[], period_doublings=[0.0305],
                        folds_2T=[0.031])
     lines = describe(reference_scene, table, 1.0).splitlines()
-    assert "3 stable, 0 unstable orbits" in lines[1]
+    assert lines[1].endswith("3 stable, 0 unstable orbits")  # no time integration to report
     assert lines[2] == "period doublings in zeta_mesh at 0.0305"
     assert lines[3] == "their 2T branches: 1 stable, 1 unstable orbits"
     assert lines[4] == "folds of the 2T branches at 0.031"

@@ -93,9 +93,11 @@ def _branch_lines(table) -> list[str]:
                else np.zeros(len(table), dtype=bool))
     counts = table["stability"][~doubled].value_counts()
     name = table.attrs.get("continued", SPEED)
+    unconverged = counts.get("time", 0)
     lines = [f"periodic steady state by shooting and continuation: {counts.get('stable', 0)} "
-             f"stable, {counts.get('unstable', 0)} unstable orbits, "
-             f"{counts.get('time', 0)} points by time integration (no orbit converged)"]
+             f"stable, {counts.get('unstable', 0)} unstable orbits"
+             + (f"; {unconverged} points where no orbit converged, run by time integration"
+                if unconverged else "")]
     lines += _values_line(f"folds (jumps) in {name}", table.attrs.get("folds", []), name)
     doublings = table.attrs.get("period_doublings", [])
     if len(doublings):
