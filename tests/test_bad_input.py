@@ -19,7 +19,8 @@ Routes (a row takes every route that can carry its value):
 - cli:  `herringbone run FILE` (and for some rows `herringbone info FILE` and
         `python build_fmu.py FILE`) exits with code 2 and one line on stderr, no traceback;
 - call: a run argument handed to the API functions the row names (simulate,
-        reference_simulate, simulate_with, stability_chart, monodromy) raises ValueError
+        reference_simulate, simulate_with, stability_chart, monodromy, sweep,
+        continue_in_parameter) raises ValueError
         (SceneError for the scene) with a one-line message, before any model is built;
 - argv: a command line with a bad option or argument (`herringbone run|info|
         stability|benchmark`, `python build_fmu.py`) exits with code 2, nothing on stdout,
@@ -262,7 +263,14 @@ def _call_cases():
     for label, value in (("negative", [100.0, -1.0]), ("zero", [0.0, 100.0]),
                          ("nan", [NAN]), ("plus-inf", [100.0, INF]), ("empty", [])):
         rows.append((f"speeds-{label}", "speeds", {"speeds": value}, ("speeds", "> 0"),
-                     ("stability_chart",)))
+                     ("stability_chart", "sweep")))
+    for label, value in (("empty", []), ("nan", [0.02, NAN]), ("minus-inf", [-INF]),
+                         ("string", ["low"]), ("a-table", [[0.02, 0.03]])):
+        swept = ("zeta_mesh", "one or more finite numbers")
+        rows.append((f"swept-values-{label}", "zeta_mesh", {"params": {"zeta_mesh": value}},
+                     swept, ("sweep",)))
+        rows.append((f"continued-values-{label}", "zeta_mesh",
+                     {"name": "zeta_mesh", "values": value}, swept, ("continue_in_parameter",)))
     for label, value in (("zero", 0.0), ("negative", -5.0), ("plus-inf", INF),
                          ("string", "fast")):
         rows.append((f"pinion_speed-{label}", "pinion_speed", {"pinion_speed": value},
@@ -658,6 +666,7 @@ def no_work(monkeypatch):
 
 
 def _api_function(name):
+    from herringbone.analysis.continuation import continue_in_parameter
     from herringbone.analysis.stability import monodromy, stability_chart
     from herringbone.analysis.sweep_point import Protocol
     from herringbone.integrate.contract import simulate_with
@@ -666,7 +675,10 @@ def _api_function(name):
             "reference_simulate": herringbone.reference_simulate,
             "simulate_with": lambda scene, **kwargs: simulate_with(Untouchable(), scene, **kwargs),
             "stability_chart": stability_chart, "monodromy": monodromy,
-            "Protocol": lambda scene, **kwargs: Protocol(**kwargs)}[name]
+            "Protocol": lambda scene, **kwargs: Protocol(**kwargs),
+            "sweep": lambda scene, **kwargs: herringbone.sweep(scene, workers=0, progress=False,
+                                                               **kwargs),
+            "continue_in_parameter": continue_in_parameter}[name]
 
 
 @pytest.mark.parametrize("function, case", [

@@ -209,6 +209,26 @@ def check_speeds(speeds, name="speeds"):
     return values
 
 
+SWEPT_VALUES = "one or more finite numbers, in the quantity's unit"
+
+
+def check_values(values, name):
+    """A non-empty one-dimensional array of finite numbers (what a quantity `name` is swept or
+    continued over); else ValueError naming `name`."""
+    import numpy as np
+
+    try:
+        array = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers, got {values!r}; allowed: "
+                         f"{SWEPT_VALUES}") from None
+    if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
+        what = ("is empty" if array.size == 0 else f"has the shape {array.shape}"
+                if array.ndim != 1 else f"holds {float(array[~np.isfinite(array)][0])!r}")
+        raise ValueError(f"{name} {what}; allowed: {SWEPT_VALUES}")
+    return array
+
+
 class SpeedSweep(NamedTuple):
     """`--speeds FROM TO COUNT`: COUNT evenly spaced pinion speeds from FROM to TO, in rad/s
     (or rpm, `in_rpm`)."""

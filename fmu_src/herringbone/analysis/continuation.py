@@ -782,16 +782,14 @@ def continue_in_parameter(scene, name: str, values, pinion_speed: float | None =
     fails. A torque is the transmitted torque: the other one follows it so that the train
     stays balanced (M_load = u·M_motor), and the table shows it (M_load_Nm or M_motor_Nm).
     Branch.folds are values of the parameter; doubling as continue_in_speed's."""
-    from ..arguments import check_scene, check_speeds
+    from ..arguments import check_scene, check_speeds, check_values
 
     check_scene(scene)
     problem = continued_problem(scene, name) if name != SPEED else (
         "w0_pinion is the pinion speed; allowed: continue_in_speed")
     if problem:
         raise ValueError(problem)
-    grid = np.sort(np.atleast_1d(np.asarray(values, dtype=float)))
-    if grid.ndim != 1 or not len(grid) or not np.all(np.isfinite(grid)):
-        raise ValueError(f"{name}: values must be finite numbers, got {values!r}")
+    grid = np.sort(check_values(values, name))
     if name in INPUTS and not (np.all(grid > 0) or np.all(grid < 0)):
         raise ValueError(f"{name}: values {', '.join(f'{v:g}' for v in grid)} N·m; allowed: "
                          "all > 0 or all < 0 (at 0 there is no static mesh force to measure "

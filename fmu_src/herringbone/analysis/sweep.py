@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arguments import SWEEP_METHODS
+from ..arguments import SWEEP_METHODS, check_speeds, check_values
 from ..model.parameters import INPUTS, unit_of, with_unit
 from ..optional import require
 from ..suggest import did_you_mean
@@ -61,10 +61,8 @@ def sweep_axes(scene, speeds=None, params=None) -> dict[str, np.ndarray]:
             raise ValueError(f"{name} is not a parameter of scene {scene.name}"
                              f"{did_you_mean(name, known)}; allowed: "
                              f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
-        values = np.atleast_1d(np.asarray(values, dtype=float))
-        if values.ndim != 1 or not len(values) or not np.all(np.isfinite(values)):
-            raise ValueError(f"{name}: values must be finite numbers, got {values!r}")
-        checked[name] = values
+        checked[name] = (check_values(check_speeds(values), "speeds") if name == SPEED
+                         else check_values(values, name))
     return checked
 
 
