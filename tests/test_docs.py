@@ -21,6 +21,7 @@ from __future__ import annotations
 import ast
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -266,7 +267,10 @@ def test_readme_links_lead_to_files_of_the_repository():
 # The pages whose Python examples a reader pastes as they stand: how many of each page's
 # blocks (```python), run in order in one namespace, as the page builds them up (the
 # steady-state page's last block times two continuations of a test scene: not run here).
-PYTHON_EXAMPLES = {"README.md": 1, "docs/api.md": 1, "docs/steady-state.md": 3}
+# The hosts page's example runs the FMU that `build-fmu` writes (scene_fmu builds it here).
+PYTHON_EXAMPLES = {"README.md": 1, "docs/api.md": 1, "docs/steady-state.md": 3,
+                   "docs/hosts.md": 1}
+BUILT_FMUS = {"dist/reference-fmi2.fmu": "reference"}
 # an example's line that shows what its expression gives: `expression   # [1.5, -2.25] unit`
 SHOWN = re.compile(r"#\s*\[(?P<numbers>[-+0-9.e, ]+)\]")
 
@@ -289,13 +293,18 @@ def assert_shown(value, numbers: str, where: str) -> None:
 
 
 @pytest.mark.parametrize("page", sorted(PYTHON_EXAMPLES))
-def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_path, monkeypatch):
+def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_path, monkeypatch,
+                                                                    scene_fmu):
     """Each statement of the page's examples run in turn, from a folder of the reader's own
-    (a shipped scene by its name), and every expression the page shows the numbers of gives
-    those numbers."""
+    (a shipped scene by its name, an FMU where build-fmu put it), and every expression the
+    page shows the numbers of gives those numbers."""
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
     for k, block in enumerate(python_blocks(ROOT / page)[:PYTHON_EXAMPLES[page]]):
+        for path, scene in BUILT_FMUS.items():
+            if path in block:
+                (tmp_path / path).parent.mkdir(exist_ok=True)
+                shutil.copy(scene_fmu(scene), tmp_path / path)
         lines = block.splitlines()
         for statement in ast.parse(block).body:
             where = f"{page}, block {k + 1}, line {statement.lineno}"
