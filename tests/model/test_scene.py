@@ -54,6 +54,14 @@ def test_missing_scene_file(tmp_path):
         herringbone.load_scene(tmp_path / "absent.toml")
 
 
+def test_a_folder_is_not_taken_for_a_missing_scene_file(tmp_path):
+    with pytest.raises(SceneError) as error:
+        herringbone.load_scene(tmp_path)
+    message = str(error.value)
+    assert message.startswith(f"{tmp_path}: a folder, not a scene file; allowed: a scene file")
+    assert "\n" not in message
+
+
 def test_defaults_are_the_reference_values(tmp_path, reference_scene):
     path = tmp_path / "empty.toml"
     path.write_text("")

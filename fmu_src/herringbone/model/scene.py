@@ -134,6 +134,9 @@ def load_scene(path) -> Scene:
         or parameter for a misspelt one).
     """
     given, path = path, resolve_scene(path)
+    if path.is_dir():
+        raise SceneError("a folder, not a scene file; allowed: a scene file (TOML) or the name "
+                         "of a shipped scene (`herringbone scenes`)", str(path))
     if not path.is_file():
         names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
                  f"{', '.join(scene_files())} (`herringbone scenes`)"
