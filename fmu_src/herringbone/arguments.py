@@ -194,19 +194,10 @@ def check_compiled_run(scene, stop_time=None, output_interval=None, tolerance=1e
 
 
 def check_speeds(speeds, name="speeds"):
-    """A non-empty array of pinion speeds, each finite and > 0 rad/s; else ValueError."""
-    import numpy as np
-
-    try:
-        values = np.asarray(speeds, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, got {speeds!r}; allowed: "
-                         f"{PINION_SPEED.describe()}") from None
-    bad = values[~(np.isfinite(values) & (values > 0.0))]
-    if values.size == 0 or bad.size:
-        what = "is empty" if values.size == 0 else f"holds {float(bad.flat[0])!r}"
-        raise ValueError(f"{name} {what}; allowed: {PINION_SPEED.describe()}")
-    return values
+    """A non-empty array of pinion speeds (of their own shape), each finite and > 0 rad/s;
+    else ValueError."""
+    return _numbers(speeds, name, PINION_SPEED.describe(),
+                    lambda values: (values > 0.0) & (values < float("inf")))
 
 
 SWEPT_VALUES = "one or more finite numbers, in the quantity's unit"
@@ -217,15 +208,25 @@ def check_values(values, name):
     continued over); else ValueError naming `name`."""
     import numpy as np
 
+    array = np.atleast_1d(_numbers(values, name, SWEPT_VALUES, np.isfinite))
+    if array.ndim != 1:
+        raise ValueError(f"{name} has the shape {array.shape}; allowed: {SWEPT_VALUES}")
+    return array
+
+
+def _numbers(values, name, allowed, admissible):
+    """`values` as an array of floats of its own shape, not empty and each `admissible` (an
+    elementwise test of the array); else ValueError naming `name` and what is `allowed`."""
+    import numpy as np
+
     try:
-        array = np.atleast_1d(np.asarray(values, dtype=float))
+        array = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, got {values!r}; allowed: "
-                         f"{SWEPT_VALUES}") from None
-    if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
-        what = ("is empty" if array.size == 0 else f"has the shape {array.shape}"
-                if array.ndim != 1 else f"holds {float(array[~np.isfinite(array)][0])!r}")
-        raise ValueError(f"{name} {what}; allowed: {SWEPT_VALUES}")
+        raise ValueError(f"{name} must be numbers, got {values!r}; allowed: {allowed}") from None
+    bad = array[~admissible(array)]
+    if array.size == 0 or bad.size:
+        what = "is empty" if array.size == 0 else f"holds {float(bad.flat[0])!r}"
+        raise ValueError(f"{name} {what}; allowed: {allowed}")
     return array
 
 
