@@ -321,8 +321,9 @@ def plot(rows, path) -> None:
     plt.close(figure)
 
 
-def main(argv=None) -> int:
-    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
+def main(argv=None, prog="error_vs_runtime.py") -> int:
+    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run).
+    `prog`: the command as the user typed it, which usage and messages name."""
     from herringbone.arguments import (
         COMPILED_TOLERANCE_ARGUMENT,
         POSITIVE,
@@ -337,7 +338,7 @@ def main(argv=None) -> int:
     step = Argument("step", None, "seconds", POSITIVE).option_type
     budget = Argument("budget", None, "wall seconds", POSITIVE).option_type
     repeat = Argument("repeat", None, "runs", Range(1.0), whole=True).option_type
-    parser = OneLineParser(prog="error_vs_runtime", description=__doc__.split("\n")[0],
+    parser = OneLineParser(prog=prog, description=__doc__.split("\n")[0],
                            help_command="herringbone benchmark error-vs-runtime --help",
                            epilog="Defaults: the shipped scenes (reference, torsional, "
                            "staggered, lead_error), 0.2 s, steps 1e-5 1e-4 1e-3 1e-2, "

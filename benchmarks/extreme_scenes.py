@@ -230,8 +230,9 @@ def markdown_report(rows, long, command, reference_tolerance) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv=None) -> int:
-    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run)."""
+def main(argv=None, prog="extreme_scenes.py") -> int:
+    """Exit code 0; 2, with one line on stderr, for a bad option (checked before any run).
+    `prog`: the command as the user typed it, which usage and messages name."""
     from herringbone.arguments import (
         POSITIVE,
         REFERENCE_TOLERANCE_ARGUMENT,
@@ -244,7 +245,7 @@ def main(argv=None) -> int:
     def positive(meaning, infinite=False):
         return Argument(meaning, None, meaning, POSITIVE, infinite=infinite).option_type
 
-    parser = OneLineParser(prog="extreme_scenes", description=__doc__.split("\n")[0],
+    parser = OneLineParser(prog=prog, description=__doc__.split("\n")[0],
                            help_command="herringbone benchmark extreme-scenes --help")
     parser.add_argument("--scenes", nargs="+", default=["models/*.toml"],
                         help="scene names, files or globs (default: models/*.toml)")

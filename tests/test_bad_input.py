@@ -716,6 +716,25 @@ def _argv(case, folder):
     return [str(Path(sys.executable).parent / "herringbone"), *values]
 
 
+def typed_command(case):
+    """The command as the user typed it, which the message must begin with: `herringbone` for
+    a command line it cannot read a command from, `herringbone COMMAND` for the rest,
+    `herringbone benchmark NAME` for a benchmark's own options (the default benchmark's where
+    none is named), `build_fmu` for build_fmu.py."""
+    from herringbone.cli import benchmark, parser
+
+    if case.commands == ("build_fmu",):
+        return "build_fmu: "
+    command, rest = (case.value[0], case.value[1:]) if case.value else ("", ())
+    if command not in parser()[1]:
+        return "herringbone: "
+    unknown = rest and not rest[0].startswith("-") and rest[0] not in benchmark.SCRIPTS
+    if command == benchmark.NAME and not unknown:
+        name = rest[0] if rest and rest[0] in benchmark.SCRIPTS else "error-vs-runtime"
+        return f"herringbone benchmark {name}: "
+    return f"herringbone {command}: "
+
+
 @pytest.fixture(scope="module")
 def command_line_runs(tmp_path_factory):
     """Every argv row run at once, one process per core (a process start costs about a
@@ -738,6 +757,7 @@ def test_a_bad_command_line_argument_exits_2_with_one_line(case, command_line_ru
     assert run.returncode == 2, f"exit code {run.returncode}; stderr: {run.stderr}"
     assert run.stdout == ""
     assert_one_clear_message(run.stderr, case.words, "stderr")
+    assert run.stderr.startswith(typed_command(case)), run.stderr  # the command as typed
     assert sorted(p.name for p in folder.iterdir()) == ["plain.txt", "results"]  # nothing written
 
 

@@ -28,7 +28,8 @@ def execute(args, parser) -> int:
 
 
 def execute_raw(arguments: list[str]) -> int:
-    """Run the chosen script's main with the rest of the command line; its exit code."""
+    """Run the chosen script's main with the rest of the command line, its usage and messages
+    naming the command as typed (`herringbone benchmark NAME`); its exit code."""
     if arguments[:1] and not arguments[0].startswith("-") and arguments[0] not in SCRIPTS:
         print(f"{PROG}: unknown benchmark {arguments[0]!r}"
               f"{did_you_mean(arguments[0], SCRIPTS)}; allowed: {', '.join(SCRIPTS)} "
@@ -45,4 +46,4 @@ def execute_raw(arguments: list[str]) -> int:
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.main(arguments)
+    return module.main(arguments, prog=f"{PROG} {name}")
