@@ -314,3 +314,35 @@ def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_pat
                 assert_shown(value, shown.group("numbers"), where)
             else:
                 exec(compile(ast.Module([statement], []), where, "exec"), namespace)
+
+
+def api_functions() -> dict[str, object]:
+    """The functions `import herringbone` gives (herringbone.__all__) and the Scene's methods
+    that make a scene from another: the ones a user's first lines call."""
+    import inspect
+
+    import herringbone
+
+    functions = {name: getattr(herringbone, name) for name in herringbone.__all__
+                 if inspect.isfunction(getattr(herringbone, name))}
+    return {**functions, "Scene.with_parameters": herringbone.Scene.with_parameters}
+
+
+@pytest.mark.parametrize("name", sorted(api_functions()))
+def test_an_api_functions_docstring_examples_run_and_give_what_they_show(name, tmp_path,
+                                                                          monkeypatch):
+    """Every function `import herringbone` gives has an example in its docstring (what
+    `help()` and the API page show), none skipped, and from a folder of the reader's own it
+    prints what the docstring says it does (doctest; whitespace between words may differ)."""
+    import doctest
+
+    monkeypatch.chdir(tmp_path)
+    function = api_functions()[name]
+    tests = doctest.DocTestFinder(recurse=False).find(function, name, globs={})
+    examples = [example for test in tests for example in test.examples]
+    assert any(example.want for example in examples), f"{name}: no example that shows a result"
+    assert not any(example.options.get(doctest.SKIP) for example in examples), name
+    runner = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE)
+    for test in tests:
+        runner.run(test, out=print)
+    assert runner.summarize(verbose=False).failed == 0, f"{name}: an example gave another result"

@@ -200,20 +200,36 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         apply, before any work.
     MissingDependency
         pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> scene = herringbone.load_scene("reference")
+    >>> table = herringbone.sweep(scene, speeds=[200.0, 400.0, 600.0], progress=False)
+    >>> table.loc[table.on_grid, "K_v"].round(2).tolist()  # the dynamic factor at each speed
+    [1.5, 1.47, 1.49]
     """
-    if method not in (None, *METHODS):
-        raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
-    require("pandas", "a sweep's table")  # before any work, whichever method runs
-    sweep_axes(scene, speeds, params)
-    why_not = shooting_applies(scene, speeds, params, options.get("fmu"))
-    if method == "shooting" and why_not:
-        raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
-                         "allowed: method='time'")
-    if method == "time" or why_not:
+    if runs_by_time(scene, speeds, params, method, options.get("fmu")):
         table = run_sweep(scene, speeds, params, protocol, **options)[0]
         return table.assign(stability="time", method="time")
     return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True),
                           params=params, doubling=options.get("doubling", True))
+
+
+def runs_by_time(scene, speeds, params, method, fmu) -> bool:
+    """Whether `sweep` runs by time integration: by `method` "time", or by None where
+    shooting does not apply (shooting_applies; `fmu`: the gear FMU it would run through, or
+    None). Before any work: ValueError for another method, for "shooting" where it does not
+    apply and for swept values not allowed; MissingDependency where pandas is not installed."""
+    if method not in (None, *METHODS):
+        raise ValueError(f"method {method!r}; allowed: {', '.join(METHODS)}")
+    require("pandas", "a sweep's table")  # whichever method runs
+    sweep_axes(scene, speeds, params)
+    why_not = shooting_applies(scene, speeds, params, fmu)
+    if method == "shooting" and why_not:
+        raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
+                         "allowed: method='time'")
+    return method == "time" or bool(why_not)
 
 
 def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True,

@@ -24,6 +24,13 @@ def scene_inputs(scene, stop_time: float) -> np.ndarray:
     numpy.ndarray
         Structured, fields "time" (s), "M_motor" and "M_load" (N·m): pass it as
         `fmpy.simulate_fmu(..., input=scene_inputs(scene, stop_time))`.
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> herringbone.scene_inputs(herringbone.load_scene("torque_step"), 0.02).tolist()
+    [(0.0, 500.0, 1800.0), (0.005, 500.0, 1800.0),
+     (0.005, 5000.0, 18000.0), (0.02, 5000.0, 18000.0)]
     """
     rows = []
     schedule = scene.inputs

@@ -33,18 +33,14 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DE
         through GearTrainModel.state_scales, cut where the train's modes ring longer than
         stepping.RINGING_BUDGET radians within the run (their step errors add up over every
         radian they ring: stepping.step_tolerance). A run in which the mesh lifts off entirely
-        and lands again, where a train can amplify small errors from landing to landing, is
-        checked by its own means (global_error.py): run again with every step held ten times
-        tighter, its error over the run estimated from the difference, and run tighter still
-        where that exceeds the tolerance, down to scipy's finest step tolerance; it costs two
-        to four runs. Measured: the run at 1e-10 agrees with itself at 1e-12 to within 1e-8 of
-        the force scale on the regression scenes, undamped trains included, and on rattling
-        random trains (docs/reference-accuracy.md).
+        and lands again, where a train can amplify small errors from landing to landing, checks
+        its own error over the run by a run with every step ten times tighter, and runs
+        tighter still where it exceeds the tolerance (global_error.py; two to four runs;
+        measured in docs/reference-accuracy.md).
     method : str
         scipy's solve_ivp method ("DOP853", "Radau", …).
     initial_pinion_angle : float
-        φp at t = 0, rad (docs/model.md starts at 0; any other angle must give the same run
-        shifted in mesh phase).
+        φp at t = 0, rad (0 in docs/model.md; another gives the run shifted in mesh phase).
     check_tension : bool
         Raise IntegrationError wherever a loaded point pulls or a free one penetrates
         (stepping.ScipyStepper's debug check; it costs a third more time).
@@ -68,6 +64,15 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DE
         (SceneError, a ValueError, for something that is not a Scene).
     IntegrationError
         The run cannot go on (it says where and why).
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> scene = herringbone.load_scene("reference")
+    >>> anchor = herringbone.reference_simulate(scene, stop_time=0.005, output_interval=1e-4)
+    >>> fast = herringbone.simulate(scene, stop_time=0.005, output_interval=1e-4)
+    >>> float(abs(fast["F_mesh"] - anchor["F_mesh"]).max()) < 1e-3  # N: they agree
+    True
     """
     check_reference_run(scene, stop_time, output_interval, tolerance, method,
                         initial_pinion_angle)

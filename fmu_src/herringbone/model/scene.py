@@ -103,7 +103,13 @@ class Scene:
         return self.components[component]
 
     def with_parameters(self, **changes) -> Scene:
-        """A copy with some parameters changed, validated like a scene file."""
+        """A copy with some parameters changed, validated like a scene file.
+
+        >>> import herringbone
+        >>> staggered = herringbone.load_scene("reference").with_parameters(stagger=0.5)
+        >>> staggered.parameters["stagger"], staggered.parameters["w0_pinion"]
+        (0.5, 157.08)
+        """
         return replace(self, given={**self.given, **changes})
 
     def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
@@ -132,6 +138,13 @@ def load_scene(path) -> Scene:
     SceneError
         One line naming the file, the key and what is allowed (and the closest shipped name
         or parameter for a misspelt one).
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> scene = herringbone.load_scene("reference")
+    >>> scene.parameters["w0_pinion"], scene.inputs.M_motor  # rad/s, N·m
+    (157.08, (500.0,))
     """
     given, path = path, resolve_scene(path)
     if path.is_dir():
@@ -170,6 +183,17 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
     ------
     SceneError
         One line naming the key and what is allowed.
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> slower = herringbone.scene_from_dict(
+    ...     {"parameters": {"w0_pinion": 100.0}, "inputs": {"M_motor": 400.0, "M_load": 1440.0}})
+    >>> slower.parameters["w0_pinion"], slower.parameters["zeta_mesh"]  # the rest: reference's
+    (100.0, 0.05)
+    >>> herringbone.scene_from_dict({"parameters": {"zeta_mesh": -1.0}})
+    Traceback (most recent call last):
+    herringbone.model.scene.SceneError: <scene>: [parameters] zeta_mesh is -1.0; allowed: >= 0
     """
     unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
     if unknown:
