@@ -105,6 +105,8 @@ class Scene:
     def with_parameters(self, **changes) -> Scene:
         """A copy with some parameters changed, validated like a scene file.
 
+        Examples
+        --------
         >>> import herringbone
         >>> staggered = herringbone.load_scene("reference").with_parameters(stagger=0.5)
         >>> staggered.parameters["stagger"], staggered.parameters["w0_pinion"]
