@@ -317,23 +317,29 @@ def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_pat
 
 
 def api_functions() -> dict[str, object]:
-    """The functions `import herringbone` gives (herringbone.__all__) and the Scene's methods
-    that make a scene from another: the ones a user's first lines call."""
+    """The functions `import herringbone` gives (herringbone.__all__), the Scene's method
+    that makes a scene from another, and the functions of the API page's modules that the
+    command line's stability, campbell, build-fmu and --ssp run: what a user calls."""
     import inspect
 
     import herringbone
+    from herringbone.analysis import campbell, stability
+    from herringbone.fmu import builder, ssp
 
     functions = {name: getattr(herringbone, name) for name in herringbone.__all__
                  if inspect.isfunction(getattr(herringbone, name))}
-    return {**functions, "Scene.with_parameters": herringbone.Scene.with_parameters}
+    commands = (stability.stability_chart, campbell.elastic_frequencies, campbell.crossings,
+                builder.build_gear_fmu, ssp.build_ssp)
+    return {**functions, "Scene.with_parameters": herringbone.Scene.with_parameters,
+            **{f"{function.__module__}.{function.__name__}": function for function in commands}}
 
 
 @pytest.mark.parametrize("name", sorted(api_functions()))
 def test_an_api_functions_docstring_examples_run_and_give_what_they_show(name, tmp_path,
                                                                           monkeypatch):
-    """Every function `import herringbone` gives has an example in its docstring (what
-    `help()` and the API page show), none skipped, and from a folder of the reader's own it
-    prints what the docstring says it does (doctest; whitespace between words may differ)."""
+    """Every function of api_functions has an example in its docstring (what `help()` and the
+    API page show), none skipped, and from a folder of the reader's own it prints what the
+    docstring says it does (doctest; whitespace between words may differ)."""
     import doctest
 
     monkeypatch.chdir(tmp_path)
@@ -342,7 +348,7 @@ def test_an_api_functions_docstring_examples_run_and_give_what_they_show(name, t
     examples = [example for test in tests for example in test.examples]
     assert any(example.want for example in examples), f"{name}: no example that shows a result"
     assert not any(example.options.get(doctest.SKIP) for example in examples), name
-    runner = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE)
+    runner, report = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE), []
     for test in tests:
-        runner.run(test, out=print)
-    assert runner.summarize(verbose=False).failed == 0, f"{name}: an example gave another result"
+        runner.run(test, out=report.append)
+    assert runner.failures == 0, "".join(report)

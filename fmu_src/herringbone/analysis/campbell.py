@@ -74,15 +74,54 @@ def elastic_modes(scene) -> list[Mode]:
 
 
 def elastic_frequencies(scene) -> np.ndarray:
-    """Natural frequencies (Hz, ascending) without the rigid rotation."""
+    """The natural frequencies of the train at its mean mesh stiffness, without the rigid
+    rotation.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    numpy.ndarray
+        Hz, ascending.
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> from herringbone.analysis.campbell import elastic_frequencies
+    >>> elastic_frequencies(herringbone.load_scene("reference")).round(1).tolist()  # Hz
+    [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
+    """
     frequencies = natural_modes(scene)[0]
     return frequencies[frequencies > 1e-6 * max(frequencies.max(), 1.0)]
 
 
 def crossings(scene, low: float, high: float) -> list[Crossing]:
-    """Where k·f_mesh = f_n for low <= speed <= high (rad/s), by speed."""
+    """The resonances of the Campbell diagram: where a mesh harmonic k·f_mesh meets a
+    natural frequency f_n.
+
+    Parameters
+    ----------
+    scene : Scene
+    low, high : float
+        The pinion speeds between which to look, rad/s (both included).
+
+    Returns
+    -------
+    list of Crossing
+        By speed: the pinion speed (rad/s), the harmonic k and the natural frequency (Hz).
+
+    Examples
+    --------
+    >>> import herringbone
+    >>> from herringbone.analysis.campbell import crossings
+    >>> [(round(c.speed, 1), c.order, round(c.frequency, 1))
+    ...  for c in crossings(herringbone.load_scene("reference"), 400.0, 500.0)]
+    [(429.6, 1, 683.7), (431.3, 3, 2059.4), (470.4, 2, 1497.3)]
+    """
     z = scene.parameters["z_pinion"]
-    return sorted((Crossing(speed, k, f) for f in elastic_frequencies(scene)
+    return sorted((Crossing(float(speed), k, float(f)) for f in elastic_frequencies(scene)
                    for k, speed in resonance_speeds(f, z).items() if low <= speed <= high),
                   key=lambda c: c.speed)
 

@@ -224,10 +224,38 @@ def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...
 
 def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
                     on_progress=None) -> StabilityChart:
-    """|λ|max over a sweep of pinion speeds (rad/s) and the unstable bands between them. A
-    speed that is not finite and > 0, or no speed, raises ValueError before any work.
-    `on_progress(count)`, if given, is called as each of about ten batches of speeds is done
-    (with the batch's size), for a progress bar."""
+    """The parametric stability of the linear mesh over pinion speeds: the largest Floquet
+    multiplier |λ|max at each speed and the unstable bands between them.
+
+    Parameters
+    ----------
+    scene : Scene
+    speeds : array_like
+        Pinion speeds, rad/s, finite and > 0 (sorted here).
+    substeps, step_phase : float
+        The monodromy's resolution (periodic_monodromy): at least `substeps` Magnus steps
+        per stretch of one contact set, each within `step_phase` radians of its fastest mode.
+    on_progress : callable or None
+        on_progress(count) is called as each of about ten batches of speeds is done, with
+        the batch's size (for a progress bar).
+
+    Returns
+    -------
+    StabilityChart
+
+    Raises
+    ------
+    ValueError
+        No speed, or one not finite and > 0, before any work.
+
+    Examples
+    --------
+    >>> import herringbone, numpy as np
+    >>> from herringbone.analysis.stability import stability_chart
+    >>> chart = stability_chart(herringbone.load_scene("reference"), np.linspace(1e3, 3e3, 41))
+    >>> chart.unstable_bands, round(float(chart.largest_exponent.max()), 1)  # rad/s; 1/s
+    ((), -2.0)
+    """
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
     batches = np.array_split(speeds, min(len(speeds), PROGRESS_BATCHES)) \

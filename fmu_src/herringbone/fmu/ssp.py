@@ -68,9 +68,44 @@ def _tag(qualified: str) -> str:
 
 def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: float = STEP,
               parameters: dict[str, dict[str, float]] | None = None) -> Path:
-    """Build the gear FMU of `scene` and the example motor and fan FMUs, and pack them with
-    their SSD into `output` (see `write_ssp` for the arguments and errors).  Returns `output`.
-    Raises SceneError for a bad scene, RuntimeError if an FMU build fails."""
+    """The drive train as an SSP archive: the gear FMU of `scene` and the example motor and
+    fan FMUs, connected by their SSD (write_ssp).
+
+    Parameters
+    ----------
+    scene : str or pathlib.Path
+        A scene file, or the name of a shipped scene.
+    output : pathlib.Path
+        The .ssp file to write (replaced if it exists).
+    stop_time, step : float
+        The default experiment the SSD carries: its stop time and communication step, s.
+    parameters : dict or None
+        {component: {name: value}}, replacing or adding to the default parameter set.
+
+    Returns
+    -------
+    pathlib.Path
+        `output`.
+
+    Raises
+    ------
+    SceneError
+        A bad scene.
+    ValueError
+        A bad experiment or parameter (write_ssp).
+    RuntimeError
+        An FMU's build failed, or `output` cannot be written.
+
+    Examples
+    --------
+    >>> import zipfile
+    >>> from pathlib import Path
+    >>> from herringbone.fmu.ssp import build_ssp
+    >>> archive = build_ssp("reference", Path("drivetrain.ssp"))
+    >>> zipfile.ZipFile(archive).namelist()
+    ['SystemStructure.ssd', 'resources/FanLoad.fmu', 'resources/HerringboneGear.fmu',
+     'resources/InductionMotor.fmu']
+    """
     check_experiment(stop_time, step)
     from .builder import build_example_fmus, build_gear_fmu
 
