@@ -14,7 +14,11 @@ machine's workers load what it wrote.
 """
 from __future__ import annotations
 
+import ast
 import os
+import sys
+import types
+from pathlib import Path
 
 from ..optional import require
 from .progress_bar import progress_bar
@@ -48,8 +52,75 @@ def map_points(function, points, shared, workers=None, scheduler=None, progress=
                 results.append(function(shared[0], point, *shared[1:]))
                 bar.update()
         return results
+    if scheduler is None:
+        check_workers_can_start(workers)
     with _dask_client(workers, scheduler, shared[0]) as client:
         return _run_on(client, function, points, shared, progress)
+
+
+def check_workers_can_start(workers) -> None:
+    """Before a LocalCluster starts: RuntimeError, one message saying what to do, where its
+    worker processes could not start. Dask starts them as multiprocessing's spawn does, each
+    importing the main script again (as __mp_main__, where `__name__ == "__main__"` is
+    false): a script that starts the sweep from its top level outside such a guard would start
+    it again in every worker, and a script read from stdin cannot be imported. Both ended in
+    seconds of tracebacks from every worker and "Nanny failed to start"."""
+    script = main_script()
+    if script is None:
+        return
+    what = f"a sweep on {workers or os.cpu_count()} worker processes"
+    also = "or workers=0 (the points here, one after the other)"
+    if not script.is_file():
+        raise RuntimeError(f"{what}: the main script {script} is no file that the workers "
+                           f"can import (each imports it as it starts); allowed: a script "
+                           f"file, {also}")
+    line = top_level_line()
+    if line is not None and not guarded(script, line):
+        raise RuntimeError(f"{what}: {script} starts it from its top level (line {line}), "
+                           f"which every worker would run again as it starts (each imports "
+                           f"the main script); allowed: that line under "
+                           f"`if __name__ == \"__main__\":`, {also}")
+
+
+def main_script() -> Path | None:
+    """The file that multiprocessing's spawn runs again in a new process, as it decides
+    (spawn.get_preparation_data, _fixup_main_from_name and _from_path): the main module's,
+    none for a package's __main__, an interactive session or IPython."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    if spec is not None and spec.name is not None:
+        runs_again = spec.name != "__main__" and not spec.name.endswith(".__main__")
+        return Path(spec.origin) if runs_again and spec.origin else None
+    path = getattr(main, "__file__", None)
+    if path is None or Path(path).stem == "ipython":
+        return None
+    return Path(os.path.abspath(path))
+
+
+def top_level_line() -> int | None:
+    """The line of the main module's top level that is running now (that led to this call),
+    or None where the main module is not running (an interactive session)."""
+    main, line = vars(sys.modules["__main__"]), None
+    frame: types.FrameType | None = sys._getframe(1)
+    while frame is not None:
+        if frame.f_code.co_name == "<module>" and frame.f_globals is main:
+            line = frame.f_lineno
+        frame = frame.f_back
+    return line
+
+
+def guarded(script: Path, line: int) -> bool:
+    """Whether `line` of `script` lies inside an `if` that tests `__name__` (the guard
+    `if __name__ == "__main__":` and its variants), which a worker's import skips; True
+    also where the script cannot be read, which is no reason to refuse the sweep."""
+    try:
+        tree = ast.parse(script.read_text(encoding="utf-8"))
+    except (OSError, SyntaxError, UnicodeDecodeError, ValueError):
+        return True
+    return any(isinstance(node, ast.If) and node.lineno <= line <= (node.end_lineno or 0)
+               and any(isinstance(name, ast.Name) and name.id == "__name__"
+                       for name in ast.walk(node.test))
+               for node in ast.walk(tree))
 
 
 class _dask_client:
