@@ -71,6 +71,19 @@ def test_the_example_runs_as_a_module_of_the_package(tmp_path):
     assert callable(drivetrain_operating_point.operating_point)
 
 
+def test_python_dash_m_herringbone_is_the_command(tmp_path):
+    """`python -m herringbone` (where the environment's scripts folder is not on PATH) is the
+    `herringbone` command: its name in the messages, its exit codes."""
+    def command(*arguments):
+        return subprocess.run([sys.executable, "-m", "herringbone", *arguments],
+                              capture_output=True, text=True, cwd=tmp_path, timeout=120)
+
+    scenes, missing = command("scenes"), command("run", "no_such_scene")
+    assert scenes.returncode == 0 and "reference" in scenes.stdout.split()
+    assert missing.returncode == 2 and missing.stdout == ""
+    assert missing.stderr.startswith("herringbone run: no_such_scene: no such scene file")
+
+
 def test_the_public_api_exports_what_a_run_raises_and_gives():
     for name in ("Result", "IntegrationError", "StepBudgetExceeded", "SceneError",
                  "MissingDependency", "scene_inputs"):
