@@ -337,3 +337,49 @@ def test_help_answers_without_loading_the_integrators(command):
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=True).stdout.strip().splitlines()[-1]
     assert loaded == "[]", f"herringbone {' '.join(command)} --help loaded {loaded}"
+
+
+def interrupted(arguments, folder, ready: str, group: bool = False):
+    """`herringbone ARGUMENTS` run in `folder` and sent SIGINT once its stderr shows `ready`
+    and a second more has passed: to the process alone, or to its whole process group (Dask's
+    workers too) where `group`, as Ctrl-C at a terminal does. Returns (exit code, stderr)."""
+    import os
+    import signal
+    import time
+
+    process = subprocess.Popen([str(Path(sys.executable).parent / "herringbone"), *arguments],
+                               cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               start_new_session=True)
+    assert process.stderr is not None
+    seen, deadline = b"", time.monotonic() + 120
+    while ready.encode() not in seen and time.monotonic() < deadline:
+        seen += os.read(process.stderr.fileno(), 4096) or b""
+    time.sleep(1.0)
+    if group:
+        os.killpg(process.pid, signal.SIGINT)
+    else:
+        process.send_signal(signal.SIGINT)
+    rest = process.communicate(timeout=120)[1]
+    return process.returncode, (seen + rest).decode()
+
+
+def test_ctrl_c_stops_a_run_in_one_line_and_leaves_the_file_it_would_replace(tmp_path):
+    (tmp_path / "out.csv").write_text("the last run's table\n")
+    code, stderr = interrupted(["run", "reference", "--reference", "--stop-time", "1", "-o",
+                                "out.csv"], tmp_path, "run reference:")
+    assert code == 130, stderr
+    assert stderr.splitlines()[-1] == ("herringbone run: interrupted; files not finished are "
+                                       "left as they were")
+    assert "Traceback" not in stderr
+    assert (tmp_path / "out.csv").read_text() == "the last run's table\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+
+
+def test_ctrl_c_stops_a_sweep_on_workers_in_one_line_not_a_traceback_from_each(tmp_path):
+    code, stderr = interrupted(["sweep", "reference", "--speeds", "100", "1000", "20",
+                                "--method", "time", "--workers", "2", "-o", "sweep"],
+                               tmp_path, "sweep:", group=True)
+    assert code == 130, stderr
+    assert stderr.splitlines()[-1].startswith("herringbone sweep: interrupted")
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr
+    assert not list(tmp_path.rglob("*.csv"))

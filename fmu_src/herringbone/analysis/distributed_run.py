@@ -15,8 +15,11 @@ machine's workers load what it wrote.
 from __future__ import annotations
 
 import ast
+import contextlib
 import os
+import signal
 import sys
+import threading
 import types
 from pathlib import Path
 
@@ -142,10 +145,11 @@ class _dask_client:
                 os.environ.setdefault(name, "1")
             # no dashboard; the scheduler's own HTTP routes (health, metrics) on a free port,
             # not on 8787, which another cluster on the machine may hold (Dask then warns)
-            self.cluster = LocalCluster(n_workers=self.workers or os.cpu_count(),
-                                        threads_per_worker=1, processes=True,
-                                        host="127.0.0.1", dashboard_address=None,
-                                        scheduler_kwargs={"dashboard_address": ":0"})
+            with interrupts_ignored():
+                self.cluster = LocalCluster(n_workers=self.workers or os.cpu_count(),
+                                            threads_per_worker=1, processes=True,
+                                            host="127.0.0.1", dashboard_address=None,
+                                            scheduler_kwargs={"dashboard_address": ":0"})
             self.client = Client(self.cluster)
         else:
             self.client = Client(_checked_address(self.scheduler), timeout="20s")
@@ -157,6 +161,24 @@ class _dask_client:
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
+
+
+@contextlib.contextmanager
+def interrupts_ignored():
+    """SIGINT ignored here while the LocalCluster starts its processes, which inherit that
+    (an ignored signal stays ignored across exec, and Python, asyncio and Dask then install no
+    handler of their own): Ctrl-C at a terminal signals every process of its group, and the
+    sweep then stops here (the cluster closed, the command's one line) instead of in every
+    worker, each with a page of traceback. Nothing where this is not the main thread, which
+    alone may set a handler."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _checked_address(address: str) -> str:

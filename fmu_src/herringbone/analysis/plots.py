@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..files import replace_file
 from ..optional import require
 
 HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
@@ -21,7 +22,7 @@ def _pyplot():
 def _save(figure, path):
     plt = _pyplot()
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    replace_file(path, lambda staging: figure.savefig(staging, dpi=110))
     plt.close(figure)
 
 

@@ -6,6 +6,7 @@ import csv
 import math
 from pathlib import Path
 
+from ..files import replace_file
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of
 
 # outputs shown in the summary in a unit more readable than SI: name -> (unit, factor)
@@ -14,14 +15,19 @@ SHOWN_IN = {"dte": ("um", 1e6)}
 
 def write_csv(results: dict, path: Path) -> None:
     """A run's outputs ({name: samples}) as CSV, one column a name with its unit ("time [s]",
-    "F_mesh [N]"), 12 significant digits; the folder is made as needed."""
+    "F_mesh [N]"), 12 significant digits; the folder is made as needed, the file written
+    whole or not at all (files.replace_file: a long table takes seconds to write)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     names = list(results)
-    with open(path, "w", newline="") as file:
-        writer = csv.writer(file)
-        writer.writerow([name_with_unit(name) for name in names])
-        for row in zip(*(results[name] for name in names)):
-            writer.writerow([f"{value:.12g}" for value in row])
+
+    def write(staging: Path) -> None:
+        with open(staging, "w", newline="") as file:
+            writer = csv.writer(file)
+            writer.writerow([name_with_unit(name) for name in names])
+            for row in zip(*(results[name] for name in names)):
+                writer.writerow([f"{value:.12g}" for value in row])
+
+    replace_file(path, write)
 
 
 def summary(scene, results: dict, wall_time: float, integrator: str = "",

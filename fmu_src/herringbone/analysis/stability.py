@@ -40,6 +40,7 @@ import numpy as np
 import scipy.linalg
 
 from ..arguments import check_scene, check_speeds
+from ..files import replace_file
 from ..model.assembly import GearTrainModel
 from ..model.parameters import RPM_PER_RAD_S
 
@@ -301,7 +302,7 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     axes.legend(loc="best")
     axes.grid(True, alpha=0.3)
     figure.tight_layout()
-    figure.savefig(path, dpi=120)
+    replace_file(path, lambda staging: figure.savefig(staging, dpi=120))
     plt.close(figure)
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import replace_file
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, resonation_summary
@@ -33,8 +34,8 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[
     stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
     csv = Path(f"{stem}.csv")
     # the swept columns with their units; the others name theirs (speed_rpm, F_mesh_max_N)
-    table.rename(columns={name: name_with_unit(name) for name in names}).to_csv(
-        csv, index=False, float_format="%.10g")
+    named = table.rename(columns={name: name_with_unit(name) for name in names})
+    replace_file(csv, lambda staging: named.to_csv(staging, index=False, float_format="%.10g"))
     written = [csv]
     natural, z = elastic_frequencies(scene), scene.parameters["z_pinion"]
     if names == [SPEED]:

@@ -37,16 +37,23 @@ class CommandError(Exception):
 # scene or value, an integration that cannot go on (IntegrationError), a build that failed
 # (RuntimeError), a missing optional dependency, a file that cannot be written
 EXPECTED_ERRORS = (CommandError, SceneError, ValueError, RuntimeError, ImportError, OSError)
+INTERRUPTED = 130  # the exit code of a command stopped by Ctrl-C: 128 + SIGINT
 
 
 def execute(module, args, parser: argparse.ArgumentParser) -> int:
     """Run a command module's `execute`; an expected error becomes one line on stderr,
-    `PROG: message`, and exit code 2."""
+    `PROG: message`, and exit code 2; an interrupt (Ctrl-C) one line, `PROG: interrupted`,
+    and exit code 130 (128 + SIGINT, as a shell reports it), the files it had not finished
+    left as they were (files.replace_file)."""
     try:
         return module.execute(args, parser)
     except EXPECTED_ERRORS as error:
         print(f"{parser.prog}: {one_line(error)}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"{parser.prog}: interrupted; files not finished are left as they were",
+              file=sys.stderr)
+        return INTERRUPTED
 
 
 def one_line(error: BaseException) -> str:

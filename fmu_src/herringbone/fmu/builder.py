@@ -20,10 +20,10 @@ import sys
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
-from collections.abc import Callable
 from pathlib import Path
 
 from .. import shipped
+from ..files import replace_file
 from . import carried as carried_package
 
 GEAR_PACKAGE = carried_package.PACKAGE  # herringbone
@@ -108,7 +108,7 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
         if problems:
             raise RuntimeError(f"{slave_script.name}: fmpy validate found\n" + "\n".join(problems))
         output.parent.mkdir(parents=True, exist_ok=True)
-        _replace_file(target=output, write=lambda staging: shutil.copyfile(built[0], staging))
+        replace_file(target=output, write=lambda staging: shutil.copyfile(built[0], staging))
     return output
 
 
@@ -156,7 +156,7 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
                     else 0o644 << 16
                 zf.writestr(info, contents[name], compress_type=zipfile.ZIP_DEFLATED)
 
-    _replace_file(target=fmu_path, write=write)
+    replace_file(target=fmu_path, write=write)
 
 
 def _content_guid(contents: dict[str, bytes]) -> str:
@@ -175,21 +175,6 @@ def _content_guid(contents: dict[str, bytes]) -> str:
             digest.update(len(part).to_bytes(8, "little") + part)
     hex_digits = digest.hexdigest()[:32]
     return "-".join(hex_digits[a:b] for a, b in ((0, 8), (8, 12), (12, 16), (16, 20), (20, 32)))
-
-
-def _replace_file(target: Path, write: Callable[[Path], object]) -> None:
-    """Replace `target` by what `write` writes to the staging path it is given; on any error
-    `target` is left as it was."""
-    # Stage beside the target so that os.replace is atomic: a reader never sees half a zip.
-    fd, staging = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial")
-    os.close(fd)
-    try:
-        write(Path(staging))
-        os.chmod(staging, 0o644)  # mkstemp makes it private; an FMU is an ordinary file
-        os.replace(staging, target)
-    except BaseException:
-        Path(staging).unlink(missing_ok=True)
-        raise
 
 
 def _rebuild_model_structure(root: ET.Element, no_feedthrough: bool) -> None:

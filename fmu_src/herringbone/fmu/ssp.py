@@ -18,11 +18,12 @@ first (herringbone.fmu.builder) and packs them.
 from __future__ import annotations
 
 import math
-import os
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
+
+from ..files import replace_file
 
 NAMESPACES = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -155,9 +156,8 @@ def write_ssp(fmus: dict[str, Path], output: Path, stop_time: float = STOP_TIME,
 
 
 def _write_zip(entries: dict[str, bytes], output: Path) -> None:
-    """Write the zip beside `output`, then rename it: a reader never sees half an archive."""
-    staging = output.with_name(f".{output.name}.partial")
-    try:
+    """Write the archive whole or not at all (files.replace_file)."""
+    def write(staging: Path) -> None:
         with zipfile.ZipFile(staging, "w") as archive:
             for name in sorted(entries):
                 info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
@@ -165,9 +165,8 @@ def _write_zip(entries: dict[str, bytes], output: Path) -> None:
                 # an FMU is a zip already: deflating it again gains nothing
                 kind = zipfile.ZIP_DEFLATED if name.endswith(".ssd") else zipfile.ZIP_STORED
                 archive.writestr(info, entries[name], compress_type=kind)
-        os.replace(staging, output)
-    finally:
-        staging.unlink(missing_ok=True)
+
+    replace_file(output, write)
 
 
 def _variables(fmu: Path) -> dict:
