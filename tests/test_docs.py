@@ -317,8 +317,8 @@ def test_a_pages_python_examples_run_and_give_the_numbers_it_shows(page, tmp_pat
 
 
 def api_functions() -> dict[str, object]:
-    """The functions `import herringbone` gives (herringbone.__all__), the Scene's method
-    that makes a scene from another, and the functions of the API page's modules that the
+    """The functions `import herringbone` gives (herringbone.__all__), the Scene's methods
+    that make a scene from another, and the functions of the API page's modules that the
     command line's stability, campbell, build-fmu and --ssp run: what a user calls."""
     import inspect
 
@@ -331,6 +331,7 @@ def api_functions() -> dict[str, object]:
     commands = (stability.stability_chart, campbell.elastic_frequencies, campbell.crossings,
                 builder.build_gear_fmu, ssp.build_ssp)
     return {**functions, "Scene.with_parameters": herringbone.Scene.with_parameters,
+            "Scene.with_inputs": herringbone.Scene.with_inputs,
             **{f"{function.__module__}.{function.__name__}": function for function in commands}}
 
 

@@ -115,7 +115,18 @@ class Scene:
         return replace(self, given={**self.given, **changes})
 
     def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
-        """A copy with other input torques (constants, or rows of [time, M_motor, M_load])."""
+        """A copy with other input torques: constants (N·m; one left out keeps the scene's
+        first), or a `table` of rows [time (s), M_motor, M_load (N·m)], each row's torques held
+        from its time on; validated like a scene file's [inputs].
+
+        Examples
+        --------
+        >>> import herringbone
+        >>> stepped = herringbone.load_scene("reference").with_inputs(
+        ...     table=[[0.0, 500.0, 1800.0], [0.01, 1000.0, 3600.0]])
+        >>> stepped.inputs.at(0.005), stepped.inputs.at(0.02)  # (M_motor, M_load), N·m
+        ((500.0, 1800.0), (1000.0, 3600.0))
+        """
         data = {"table": table} if table is not None else {
             "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,
             "M_load": self.inputs.M_load[0] if M_load is None else M_load}
