@@ -91,3 +91,15 @@ def fake_main(name=None, origin=None, file=None) -> types.ModuleType:
 def test_the_main_script_is_the_one_spawn_runs_again(main, script, monkeypatch):
     monkeypatch.setitem(sys.modules, "__main__", main)
     assert distributed_run.main_script() == script
+
+
+def test_the_interrupt_is_ignored_while_workers_start_and_handled_again_after():
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
+    with distributed_run.interrupts_ignored():
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    assert signal.getsignal(signal.SIGINT) is before
+    with pytest.raises(KeyError), distributed_run.interrupts_ignored():
+        raise KeyError("a cluster that failed to start")
+    assert signal.getsignal(signal.SIGINT) is before

@@ -170,11 +170,13 @@ def interrupts_ignored():
     handler of their own): Ctrl-C at a terminal signals every process of its group, and the
     sweep then stops here (the cluster closed, the command's one line) instead of in every
     worker, each with a page of traceback. Nothing where this is not the main thread, which
-    alone may set a handler."""
-    if threading.current_thread() is not threading.main_thread():
+    alone may set a handler, nor where the handler was not set from Python (an embedding
+    program's), which could not be put back."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous is None:
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         yield
     finally:
