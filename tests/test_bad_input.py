@@ -730,7 +730,7 @@ def typed_command(case):
         return "herringbone: "
     unknown = rest and not rest[0].startswith("-") and rest[0] not in benchmark.SCRIPTS
     if command == benchmark.NAME and not unknown:
-        name = rest[0] if rest and rest[0] in benchmark.SCRIPTS else "error-vs-runtime"
+        name = rest[0] if rest and rest[0] in benchmark.SCRIPTS else benchmark.DEFAULT
         return f"herringbone benchmark {name}: "
     return f"herringbone {command}: "
 

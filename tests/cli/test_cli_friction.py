@@ -356,7 +356,10 @@ def interrupted(arguments, folder, ready: str, group: bool = False):
     assert process.stderr is not None
     seen, deadline = b"", time.monotonic() + 120
     while ready.encode() not in seen and time.monotonic() < deadline:
-        seen += os.read(process.stderr.fileno(), 4096) or b""
+        chunk = os.read(process.stderr.fileno(), 4096)
+        if not chunk:  # the command ended before it showed `ready`
+            break
+        seen += chunk
     time.sleep(1.0)
     if group:
         os.killpg(process.pid, signal.SIGINT)

@@ -19,10 +19,10 @@ def _pyplot():
     return require("matplotlib.pyplot", "the pictures")
 
 
-def _save(figure, path):
+def _save(figure, path, dpi=110):
     plt = _pyplot()
     figure.tight_layout()
-    replace_file(path, lambda staging: figure.savefig(staging, dpi=110))
+    replace_file(path, lambda staging: figure.savefig(staging, dpi=dpi))
     plt.close(figure)
 
 

@@ -40,7 +40,6 @@ import numpy as np
 import scipy.linalg
 
 from ..arguments import check_scene, check_speeds
-from ..files import replace_file
 from ..model.assembly import GearTrainModel
 from ..model.parameters import RPM_PER_RAD_S
 
@@ -275,7 +274,7 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
     frequency in Hz on the top axis), with the line 0 (growth above, decay below) and the
     unstable bands shaded."""
-    from .plots import _pyplot
+    from .plots import _pyplot, _save
 
     plt = _pyplot()
     rpm = RPM_PER_RAD_S
@@ -301,9 +300,7 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     axes.set_title(title or "Parametric stability of the linear mesh (Floquet exponents)")
     axes.legend(loc="best")
     axes.grid(True, alpha=0.3)
-    figure.tight_layout()
-    replace_file(path, lambda staging: figure.savefig(staging, dpi=120))
-    plt.close(figure)
+    _save(figure, path, dpi=120)
 
 
 # --- closed form: one degree of freedom with a stiffness alternating between two values ------

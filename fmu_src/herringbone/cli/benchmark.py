@@ -12,6 +12,7 @@ NAME = "benchmark"
 # The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
 BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
 SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "extreme_scenes"}
+DEFAULT = "error-vs-runtime"  # what `herringbone benchmark` runs without a name
 HELP = (f"[{' | '.join(SCRIPTS)}] [OPTIONS]: run benchmarks/error_vs_runtime.py (the default) "
         "or benchmarks/extreme_scenes.py of the source checkout; `herringbone benchmark "
         "--help` lists the options")
@@ -35,7 +36,7 @@ def execute_raw(arguments: list[str]) -> int:
               f"{did_you_mean(arguments[0], SCRIPTS)}; allowed: {', '.join(SCRIPTS)} "
               f"(`{PROG} --help` lists the options)", file=sys.stderr)
         return 2
-    name = arguments.pop(0) if arguments[:1] and arguments[0] in SCRIPTS else "error-vs-runtime"
+    name = arguments.pop(0) if arguments[:1] and arguments[0] in SCRIPTS else DEFAULT
     script = BENCHMARKS / f"{SCRIPTS[name]}.py"
     if not script.is_file():
         print(f"{PROG}: the benchmarks need the source checkout: {script} is not there (this "
