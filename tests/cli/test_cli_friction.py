@@ -389,3 +389,38 @@ def test_ctrl_c_stops_a_sweep_on_workers_in_one_line_not_a_traceback_from_each(t
     assert stderr.splitlines()[-1].startswith("herringbone sweep: interrupted")
     assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr
     assert not list(tmp_path.rglob("*.csv"))
+
+
+def _raised_inside_a_compiled_call():
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as interrupt:  # numba's dispatcher hands it on so
+        raise SystemError("CPUDispatcher(...) returned a result with an exception set") \
+            from interrupt
+
+
+@pytest.mark.parametrize("interrupt", [KeyboardInterrupt, _raised_inside_a_compiled_call],
+                         ids=["plain", "inside-a-compiled-call"])
+def test_an_interrupt_wherever_it_lands_is_one_line_and_exit_130(interrupt, monkeypatch,
+                                                                  capsys):
+    from herringbone.cli import run
+
+    def execute(args, parser):
+        if interrupt is KeyboardInterrupt:
+            raise KeyboardInterrupt
+        interrupt()
+
+    monkeypatch.setattr(run, "execute", execute)
+    assert main(["run", "reference"]) == 130
+    assert one_error_line(capsys, "run").startswith("herringbone run: interrupted")
+
+
+def test_an_unexpected_error_is_not_taken_for_an_interrupt(monkeypatch):
+    from herringbone.cli import run
+
+    def execute(args, parser):
+        raise ZeroDivisionError("a fault of the program")
+
+    monkeypatch.setattr(run, "execute", execute)
+    with pytest.raises(ZeroDivisionError):
+        main(["run", "reference"])

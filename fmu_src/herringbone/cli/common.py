@@ -47,13 +47,25 @@ def execute(module, args, parser: argparse.ArgumentParser) -> int:
     left as they were (files.replace_file)."""
     try:
         return module.execute(args, parser)
-    except EXPECTED_ERRORS as error:
+    except BaseException as error:
+        if interrupted(error):
+            print(f"{parser.prog}: interrupted; files not finished are left as they were",
+                  file=sys.stderr)
+            return INTERRUPTED
+        if not isinstance(error, EXPECTED_ERRORS):
+            raise
         print(f"{parser.prog}: {one_line(error)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"{parser.prog}: interrupted; files not finished are left as they were",
-              file=sys.stderr)
-        return INTERRUPTED
+
+
+def interrupted(error: BaseException | None) -> bool:
+    """Whether `error` is a KeyboardInterrupt or was raised by one: numba hands an interrupt
+    that comes inside a compiled function's call on as a SystemError caused by it."""
+    while error is not None:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        error = error.__cause__ or error.__context__
+    return False
 
 
 def one_line(error: BaseException) -> str:
