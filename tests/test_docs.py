@@ -265,11 +265,10 @@ def test_readme_links_lead_to_files_of_the_repository():
 
 
 # The pages whose Python examples a reader pastes as they stand: how many of each page's
-# blocks (```python), run in order in one namespace, as the page builds them up (the
-# steady-state page's last block times two continuations of a test scene: not run here).
+# blocks (```python), run in order in one namespace, as the page builds them up.
 # The hosts page's example runs the FMU that `build-fmu` writes (scene_fmu builds it here).
-PYTHON_EXAMPLES = {"README.md": 1, "docs/api.md": 1, "docs/steady-state.md": 3,
-                   "docs/hosts.md": 1}
+PYTHON_EXAMPLES = {"README.md": 1, "docs/api.md": 1, "docs/steady-state.md": 4,
+                   "docs/hosts.md": 1, "docs/monodromy.md": 1}
 BUILT_FMUS = {"dist/reference-fmi2.fmu": "reference"}
 # an example's line that shows what its expression gives: `expression   # [1.5, -2.25] unit`
 SHOWN = re.compile(r"#\s*\[(?P<numbers>[-+0-9.e, ]+)\]")
