@@ -13,6 +13,9 @@ from ..optional import MissingDependency, require
 
 # tqdm's line for a run: simulated seconds done of the total, wall time spent and left
 SIMULATED_SECONDS = "{l_bar}{bar}| {n:.3g}/{total:.3g} s simulated [{elapsed}<{remaining}]"
+# s between two updates of a bar written to a log or a pipe, where each update stays as a line
+# of its own (tqdm's 0.1 s made a log line ten times a second)
+LOG_INTERVAL = 10.0
 
 
 class QuietBar:
@@ -53,4 +56,13 @@ def progress_bar(total, description: str, enabled: bool = True, unit: str = "s")
         return QuietBar(total)
     options = ({"unit_scale": False, "bar_format": SIMULATED_SECONDS} if unit == "s"
                else {"smoothing": 0.0})
+    if not redrawn(sys.stderr):
+        options["mininterval"] = LOG_INTERVAL
     return tqdm(total=total, unit=unit, desc=description, file=sys.stderr, **options)
+
+
+def redrawn(stream) -> bool:
+    """Whether a bar on `stream` redraws its one line in place: on a terminal, and in a
+    notebook (whose streams are not terminals, but show a carriage return as one)."""
+    isatty = getattr(stream, "isatty", None)
+    return bool(isatty and isatty()) or "ipykernel" in sys.modules
