@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import logging
 import os
 import signal
 import sys
@@ -71,7 +72,7 @@ def check_workers_can_start(workers) -> None:
     script = main_script()
     if script is None:
         return
-    what = f"a sweep on {workers or os.cpu_count()} worker processes"
+    what = f"a sweep on {local_workers(workers)} worker processes"
     also = "or workers=0 (the points here, one after the other)"
     if not script.is_file():
         raise RuntimeError(f"{what}: the main script {script} is no file that the workers "
@@ -83,6 +84,11 @@ def check_workers_can_start(workers) -> None:
                            f"which every worker would run again as it starts (each imports "
                            f"the main script); allowed: that line under "
                            f"`if __name__ == \"__main__\":`, {also}")
+
+
+def local_workers(workers) -> int:
+    """How many worker processes a LocalCluster of `workers` starts: None, one per core."""
+    return workers or os.cpu_count() or 1
 
 
 def main_script() -> Path | None:
@@ -146,7 +152,7 @@ class _dask_client:
             # no dashboard; the scheduler's own HTTP routes (health, metrics) on a free port,
             # not on 8787, which another cluster on the machine may hold (Dask then warns)
             with interrupts_ignored():
-                self.cluster = LocalCluster(n_workers=self.workers or os.cpu_count(),
+                self.cluster = LocalCluster(n_workers=local_workers(self.workers),
                                             threads_per_worker=1, processes=True,
                                             host="127.0.0.1", dashboard_address=None,
                                             scheduler_kwargs={"dashboard_address": ":0"})
@@ -157,10 +163,22 @@ class _dask_client:
         self.compiled = self.client.run(load_integrator, self.scene)
         return self.client
 
-    def __exit__(self, *exc):
+    def __exit__(self, kind, error, trace):
+        if self.cluster is not None and kind is not None:
+            # the points running are cancelled as their workers close, which each worker
+            # would log as a warning after the command's own message; a worker gone (the
+            # error may be that) has nothing to say, and what ends the sweep is the error
+            with contextlib.suppress(Exception):
+                self.client.run(quiet_cancellations, on_error="ignore")
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
+
+
+def quiet_cancellations() -> None:
+    """On a worker of the sweep's own cluster, closing after an error or an interrupt: its
+    tasks' cancellation, which Dask logs as a warning, is what the command asked for."""
+    logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)
 
 
 @contextlib.contextmanager
