@@ -11,8 +11,12 @@ stop time (or `--stop-time`), logging warnings and errors only.  The speeds and 
 observed by name (value references from libcosim's variable list), averaged over the last
 whole mesh periods, and printed beside the intersection of the motor's Kloss curve and the
 fan curve through the gear ratio, computed from the parameters the SSP sets (the FMUs' start
-values where it sets none).  Exit code 0; 1 if the co-simulation stopped early; 2 for an SSP
-that cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
+values where it sets none).  The step must fit a whole number of times in the stop time and
+at least once in the averaging window (five mesh periods at that intersection), which must
+fit twice in the run.  A run whose means lie far from the intersection has diverged (a step
+too long for the explicit coupling of motor and gear): it is said so, not tabled.  Exit
+code 0; 1 if the co-simulation stopped early or diverged; 2 for a bad argument or an SSP that
+cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
 and libcosimpy (`pip install "herringbone[cosim]"`).
 """
 import argparse
@@ -33,6 +37,9 @@ else:  # python examples/cosimulate_drivetrain.py: this folder is on sys.path
 SIGNALS = {"w_motor": ("gear", "rad/s"), "w_load": ("gear", "rad/s"),
            "M_motor": ("motor", "N.m"), "M_load": ("fan", "N.m")}
 WINDOW_MESH_PERIODS = 5  # the mesh ripples the speeds at z_pinion·w/2π: average it out
+# A settled run lies within 1e-5 of the intersection (docs/ssp.md); a mean more than 50 % off
+# it, or of the wrong sign, comes from a run that did not settle there.
+DIVERGED = 0.5
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
       "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
@@ -104,17 +111,48 @@ def window_means(samples, size):
     return last, before
 
 
+def argument_problem(stop_time, step, window):
+    """Why the run cannot give two averaging windows of `window` s (one line), or None."""
+    steps = stop_time / step
+    if abs(steps - round(steps)) > 1e-9 * steps:
+        return (f"--stop-time {stop_time:g} s is {steps:.4g} steps of {step:g} s; allowed: a "
+                "whole number of steps")
+    if abs(step * 1e9 - round(step * 1e9)) > 1e-6 * step * 1e9:  # libcosim counts integer ns
+        return f"--step {step:g} s; allowed: a whole number of nanoseconds"
+    if step > window:
+        return (f"--step {step:g} s; allowed: at most {window:.4g} s, the averaging window "
+                f"({WINDOW_MESH_PERIODS} mesh periods at the analytic operating point)")
+    two_windows = 2 * round(window / step) * step
+    if stop_time < two_windows:
+        return (f"--stop-time {stop_time:g} s; allowed: at least two averaging windows, "
+                f"{two_windows:.4g} s at --step {step:g} s")
+    return None
+
+
+def diverged(last, expected):
+    """The first signal whose mean is off the analytic point by more than DIVERGED, or None."""
+    for signal in SIGNALS:
+        if not abs(last[signal] / expected[signal] - 1) <= DIVERGED:  # NaN too
+            return signal
+    return None
+
+
 def report(ssp, experiment, expected, completed, end_time, samples, wall, step):
     """Print the run and the operating point table; returns the exit code."""
     print(f"{ssp}: libcosim, {end_time:g} s simulated at {step:g} s steps in {wall:.1f} s"
           + ("" if completed else f" -- STOPPED EARLY (asked for {experiment['stop_time']:g} s)"))
-    mesh_period = 2 * math.pi / (experiment["parameters"]["gear"]["z_pinion"]
-                                 * samples["w_motor"][-1])
-    size = round(WINDOW_MESH_PERIODS * mesh_period / step)
+    size = round(WINDOW_MESH_PERIODS * expected["mesh_period"] / step)
     if len(samples["w_motor"]) < 2 * size:
         print(f"too few samples for two windows of {size}: give a longer --stop-time")
         return 1
     last, before = window_means(samples, size)
+    signal = diverged(last, expected)
+    if signal is not None:
+        unit = SIGNALS[signal][1]
+        print(f"{ssp}: the co-simulation diverged: {signal} averages {last[signal]:g} {unit} "
+              f"over the last window, {expected[signal]:g} {unit} at the operating point; give "
+              f"a shorter --step (this one: {step:g} s)", file=sys.stderr)
+        return 1
     print(f"operating point: means over the last {WINDOW_MESH_PERIODS} mesh periods "
           f"({size} steps) and the {WINDOW_MESH_PERIODS} before them; analytic: Kloss curve "
           f"= fan curve through the gear ratio {expected['ratio']:g}")
@@ -159,6 +197,9 @@ def main(argv=None):
     expected = operating_point(p["motor"]["M_breakdown"], p["motor"]["s_breakdown"],
                                p["motor"]["w_sync"], p["fan"]["k_fan"], p["gear"]["z_pinion"],
                                p["gear"]["z_wheel"])
+    problem = argument_problem(stop_time, step, WINDOW_MESH_PERIODS * expected["mesh_period"])
+    if problem is not None:
+        parser.error(problem)
     completed, end_time, samples, wall = cosimulate(ssp, stop_time, step)
     return report(ssp, {**experiment, "stop_time": stop_time}, expected, completed, end_time,
                   samples, wall, step)

@@ -394,6 +394,22 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
     ("build_fmu-fmi-four", "--fmi", ("--fmi", "4"), ("--fmi 4", "allowed: 2, 3"), "build_fmu"),
     ("build_fmu-ssp-in-no-folder", "--ssp", ("--ssp", "{file}/x.ssp"),
      ("--ssp", "is a file, not a folder"), "build_fmu"),
+    ("build_fmu-ssp-fmi-three", "--fmi", ("{scene}", "--fmi", "3", "--ssp", "{tmp}/x.ssp"),
+     ("--fmi 3 with --ssp", "FMI 2.0", "libcosim", "leave out --fmi 3"), "build_fmu"),
+    ("build_fmu-ssp-scene-without-motor-and-load", "--ssp",
+     ("jump_resonance", "--ssp", "{tmp}/x.ssp"),
+     ("--ssp", "jump_resonance has neither", "[components]", "allowed: a scene with motor and "
+      "load"), "build_fmu"),
+    ("build_fmu-examples-and-output", "--output",
+     ("--examples", "{tmp}", "-o", "{tmp}/x.fmu"),
+     ("--output not allowed with argument --examples",), "build_fmu"),
+    ("build_fmu-ssp-and-examples", "--ssp",
+     ("{scene}", "--ssp", "{tmp}/x.ssp", "--examples", "{tmp}"),
+     ("--examples not allowed with argument --ssp",), "build_fmu"),
+    ("build_fmu-examples-simulate", "--simulate", ("--examples", "{tmp}", "--simulate"),
+     ("--simulate with --examples", "allowed: one of the two"), "build_fmu"),
+    ("build_fmu-examples-fmi-three", "--fmi", ("--examples", "{tmp}", "--fmi", "3"),
+     ("--fmi 3 with --examples", "FMI 2.0", "leave out --fmi"), "build_fmu"),
 ]
 OPTION_CASES = [Case(f"argv-{id}", "option", name, arguments, words, ("argv",), (program,))
                 for id, name, arguments, words, program in OPTION_ROWS]

@@ -137,11 +137,16 @@ def test_libcosim_runs_the_ssp_to_the_operating_point(drivetrain, tmp_path):
                                            cosim.STEP)
 
 
+def run_example_process(ssp_path, folder, *options):
+    """Run the example as a user does, with `options`; the finished process."""
+    return subprocess.run([sys.executable, str(EXAMPLE), str(ssp_path), *options], cwd=folder,
+                          capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "TMPDIR": str(folder)})
+
+
 def run_example(ssp_path, folder):
     """Run the example as a user does; its table as {signal: (last, before, analytic)}."""
-    run = subprocess.run([sys.executable, str(EXAMPLE), str(ssp_path)], cwd=folder,
-                         capture_output=True, text=True, timeout=600,
-                         env={**os.environ, "TMPDIR": str(folder)})
+    run = run_example_process(ssp_path, folder)
     assert run.returncode == 0, f"{EXAMPLE.name} exited {run.returncode}:\n{run.stderr[-3000:]}"
     table = {}
     for line in run.stdout.splitlines():
@@ -180,6 +185,70 @@ def test_example_follows_the_parameter_set(drivetrain, tmp_path):
     for signal in cosim.SIGNALS:  # the check below could not pass with the default k_fan
         assert abs(expected[signal] / default[signal] - 1) > 20 * cosim.TOLERANCES[signal]
     check_table(run_example(heavy, tmp_path), expected)
+
+
+@pytest.mark.parametrize("options, words", [
+    pytest.param(("--step", "0.03", "--stop-time", "0.3"),
+                 ("--step 0.03 s", "allowed: at most 0.02", "averaging window"),
+                 id="step-longer-than-the-window"),
+    pytest.param(("--step", "0.003", "--stop-time", "0.01"),
+                 ("--stop-time 0.01 s", "allowed: a whole number of steps"),
+                 id="stop-time-not-whole-steps"),
+    pytest.param(("--stop-time", "0.03"),
+                 ("--stop-time 0.03 s", "allowed: at least two averaging windows"),
+                 id="stop-time-shorter-than-two-windows"),
+    pytest.param(("--step=-1e-4",), ("--step -0.0001", "allowed: finite and > 0"),
+                 id="step-negative"),
+])
+def test_example_refuses_a_bad_argument_before_the_run(drivetrain, tmp_path, options, words):
+    """A step or stop time that cannot give two averaging windows of whole steps: exit 2, one
+    error line naming the option and what is allowed, before libcosim runs anything."""
+    run = run_example_process(drivetrain["ssp"], tmp_path, *options)
+    assert run.returncode == 2, f"exit {run.returncode}:\n{run.stdout}\n{run.stderr[-3000:]}"
+    assert run.stdout == ""
+    errors = [line for line in run.stderr.splitlines() if ": error: " in line]
+    assert len(errors) == 1 and "Traceback" not in run.stderr, run.stderr[-3000:]
+    assert all(word in errors[0] for word in words), errors[0]
+
+
+def test_example_says_a_diverged_run_diverged(drivetrain, tmp_path):
+    """At 0.01 s steps the explicit coupling of motor and gear is unstable (ssp.STEP): the
+    speeds swing off to the wrong sign.  The example says so and exits 1, no table of means."""
+    run = run_example_process(drivetrain["ssp"], tmp_path, "--step", "0.01")
+    assert run.returncode == 1, f"exit {run.returncode}:\n{run.stdout}\n{run.stderr[-3000:]}"
+    assert "the co-simulation diverged" in run.stderr, run.stderr[-3000:]
+    assert "Traceback" not in run.stderr
+    assert not re.search(r"^(w_motor|w_load|M_motor|M_load)\s", run.stdout, re.M), run.stdout
+
+
+def test_scene_without_motor_and_load_is_refused_before_any_build(tmp_path, monkeypatch):
+    """jump_resonance has neither motor nor load, whose speeds the SSP connects: one
+    ValueError naming the scene and what is allowed, before an FMU is built."""
+    from herringbone.fmu import builder
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("an FMU was built before the scene was checked")
+
+    monkeypatch.setattr(builder, "build_gear_fmu", no_build)
+    monkeypatch.setattr(builder, "build_example_fmus", no_build)
+    with pytest.raises(ValueError, match=r"^the SSP connects the motor and the load: scene "
+                                         r"jump_resonance has neither \(its \[components\]\); "
+                                         r"allowed: a scene with motor and load$"):
+        ssp.build_ssp("jump_resonance", tmp_path / "x.ssp")
+    assert not (tmp_path / "x.ssp").exists()
+
+
+def test_build_fmu_help_says_ssp_packs_fmi_2(capsys):
+    """`build-fmu --help` says, for --ssp, that it packs FMI 2.0 FMUs (not --fmi 3) and needs
+    a scene with motor and load; --fmi 3 with --ssp is refused (tests/test_bad_input.py)."""
+    from herringbone.cli import build_fmu
+
+    assert build_fmu.main(["--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    ssp_help = text[text.index("--ssp FILE build the drive train"):]
+    for words in ("FMI 2.0 FMUs", "libcosim, its host, reads FMI 2.0 only", "leave out --fmi 3",
+                  "a motor and a load"):
+        assert words in ssp_help, ssp_help
 
 
 def test_fmpy_simulate_ssp_reaches_the_operating_point(drivetrain, tmp_path):

@@ -27,7 +27,9 @@ SIMULATED = Path("results") / "<scene>_fmu.csv"
 def declare(parser, dist: Path = DIST) -> None:
     """The options of `build-fmu` (build_fmu.py's too, its FMUs in the checkout's dist/)."""
     add_scene(parser, optional_default=DEFAULT_SCENE)
-    parser.add_argument("-o", "--output", type=output_file(".fmu"), metavar="FILE",
+    # one thing built: the FMU (-o names it), the example FMUs or the SSP
+    built = parser.add_mutually_exclusive_group()
+    built.add_argument("-o", "--output", type=output_file(".fmu"), metavar="FILE",
                         help=f"a .fmu file to write: the FMU; an existing file is replaced "
                              f"(default: {dist}/<scene>-fmi<N>.fmu, e.g. "
                              f"{dist / default_fmu_name('reference', 2)}: each scene and FMI "
@@ -38,20 +40,35 @@ def declare(parser, dist: Path = DIST) -> None:
     parser.add_argument("--simulate", action="store_true",
                         help=f"then simulate the scene through the FMU with fmpy: a summary, "
                              f"and the outputs in {SIMULATED} (replaced if it exists)")
-    parser.add_argument("--examples", type=output_folder, metavar="DIR",
+    built.add_argument("--examples", type=output_folder, metavar="DIR",
                         help="build the example drive-train FMUs into the folder DIR instead "
                              "(InductionMotor.fmu, FanLoad.fmu, replaced if they exist)")
-    parser.add_argument("--ssp", type=output_file(".ssp"), metavar="FILE",
+    built.add_argument("--ssp", type=output_file(".ssp"), metavar="FILE",
                         help="build the drive train (SCENE's gear, the example motor and fan) "
-                             "as an SSP archive, a .ssp file, instead (replaced if it exists)")
+                             "as an SSP archive, a .ssp file, instead (replaced if it exists): "
+                             "FMI 2.0 FMUs, since libcosim, its host, reads FMI 2.0 only "
+                             "(leave out --fmi 3); SCENE must have a motor and a load, which "
+                             "the SSP connects")
     parser.set_defaults(dist=dist)
 
 
 def execute(args, parser) -> int:
-    """Check the outputs, then build what was asked; 2 with one line for a bad scene."""
+    """Check the options, the scene and the outputs, then build what was asked; 2 with one
+    line for a bad scene or a scene or --fmi that --ssp cannot pack."""
     from ..fmu import builder
     from ..model.scene import load_scene
 
+    if args.ssp is not None and args.fmi != 2:
+        fail(parser, f"--fmi {args.fmi} with --ssp: the SSP packs FMI 2.0 FMUs (libcosim, "
+                     f"its host, reads FMI 2.0 only); allowed: --fmi 2, the default: leave out "
+                     f"--fmi {args.fmi}")
+    other = "--examples" if args.examples is not None else "--ssp" if args.ssp else None
+    if other is not None and args.simulate:
+        fail(parser, f"--simulate with {other}: it simulates the gear FMU that build-fmu "
+                     f"builds without {other}; allowed: one of the two")
+    if args.examples is not None and args.fmi != 2:
+        fail(parser, f"--fmi {args.fmi} with --examples: the example FMUs are FMI 2.0 "
+                     "(pythonfmu); allowed: leave out --fmi")
     if args.examples is not None:
         for path in builder.build_example_fmus(output_dir=args.examples):
             print(path)
@@ -62,7 +79,11 @@ def execute(args, parser) -> int:
         fail(parser, f"--simulate writes {results}: {output_file_problem(results)}; run it "
                      "from a folder you can write in")
     if args.ssp is not None:
-        from ..fmu.ssp import build_ssp
+        from ..fmu.ssp import build_ssp, scene_problem
+
+        problem = scene_problem(scene)
+        if problem is not None:
+            fail(parser, f"--ssp: {problem}")
         print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
         return 0
     output = args.output or args.dist / default_fmu_name(scene.name, args.fmi)

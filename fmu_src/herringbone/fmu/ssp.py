@@ -13,7 +13,8 @@ Written for what libcosim's SSP parser reads: it matches the literal prefixes `s
 prefixes used.  The SSD also passes the SSP 1.0 schema as fmpy checks it.
 
 `write_ssp(fmus, output, …)` packs FMUs that exist; `build_ssp(scene, output, …)` builds them
-first (herringbone.fmu.builder) and packs them.
+first (herringbone.fmu.builder) and packs them.  The connections need the gear's motor and load
+(w_motor and w_load are theirs): `scene_problem` says why a scene has no SSP, before any build.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ import zipfile
 from pathlib import Path
 
 from ..files import replace_file
+from ..model.scene import Scene, load_scene
 
 NAMESPACES = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -40,6 +42,8 @@ CONNECTIONS = (
     (("gear", "w_load"), ("fan", "w_load")),
     (("fan", "M_load"), ("gear", "M_load")),
 )
+# The gear's components the connections need: w_motor and w_load are outputs of these.
+CONNECTED_COMPONENTS = ("motor", "load")
 # The parameters put in each component's parameter set by default: those that fix the
 # operating point (the motor's Kloss curve, the fan's coefficient).
 DEFAULT_PARAMETERS = {"motor": ("M_breakdown", "s_breakdown", "w_sync"), "fan": ("k_fan",)}
@@ -93,7 +97,8 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
     SceneError
         A bad scene.
     ValueError
-        A bad experiment or parameter (write_ssp).
+        A scene without a motor or a load (scene_problem), before any build; a bad experiment
+        or parameter (write_ssp).
     RuntimeError
         An FMU's build failed, or `output` cannot be written.
 
@@ -108,6 +113,9 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
      'resources/InductionMotor.fmu']
     """
     check_experiment(stop_time, step)
+    problem = scene_problem(load_scene(scene))
+    if problem is not None:
+        raise ValueError(problem)
     from .builder import build_example_fmus, build_gear_fmu
 
     with tempfile.TemporaryDirectory(prefix="drivetrain_ssp_") as tmp:
@@ -116,6 +124,17 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
         motor, fan = build_example_fmus(output_dir=folder)
         return write_ssp({"gear": gear, "motor": motor, "fan": fan}, output,
                          stop_time=stop_time, step=step, parameters=parameters)
+
+
+def scene_problem(scene: Scene) -> str | None:
+    """Why the gear FMU of `scene` cannot be connected in the SSP (one line), or None: the
+    connections take the motor's and the load's speeds, which a scene without them lacks."""
+    missing = [c for c in CONNECTED_COMPONENTS if not scene.has(c)]
+    if not missing:
+        return None
+    has = "neither" if len(missing) == len(CONNECTED_COMPONENTS) else f"no {missing[0]}"
+    return (f"the SSP connects the motor and the load: scene {scene.name} has {has} (its "
+            "[components]); allowed: a scene with motor and load")
 
 
 def check_experiment(stop_time: float, step: float) -> None:
