@@ -127,13 +127,13 @@ COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
                            choices=COMPILED_METHODS)
 MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
                     POSITIVE, infinite=True)
-# The FMU's solver settings, for fmu/slave.py (which keeps its own copy today): the
-# same ranges under the FMU's variable names. max_step says "no limit" with 0 there (a start
-# value in the model description cannot be inf).
+# The FMU's solver settings, for fmu/core.py: the same ranges under the FMU's variable names.
+# max_step's start value says "no limit" with 0 there (a start value in the model description
+# cannot be inf); inf, the API's "no limit", is taken too.
 FMU_SOLVER_TOLERANCE = Argument("solver_tolerance", None, "error per step relative to the "
                                 "static mesh force", COMPILED_TOLERANCE)
-FMU_MAX_STEP = Argument("max_step", None, "largest internal step, seconds; 0: no limit",
-                        Range(0.0, None))
+FMU_MAX_STEP = Argument("max_step", None, "largest internal step, seconds; 0 or inf: no "
+                        "limit", Range(0.0, None), infinite=True)
 FMU_SOLVER_METHOD = Argument("solver_method", None, "the compiled integrator's methods",
                              choices=COMPILED_METHODS)
 INITIAL_PINION_ANGLE = Argument("initial_pinion_angle", None, "pinion angle at t = 0, rad")

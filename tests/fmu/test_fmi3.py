@@ -3,6 +3,7 @@ one (both adapters over herringbone/fmu/core.py): it validates, and driven by fm
 FMI 2.0 FMU's outputs bit for bit, on the reference scene and on one with contact loss; its start
 time, its message for a bad parameter, its FMU state.
 """
+import math
 import shutil
 import xml.etree.ElementTree as ET
 import zipfile
@@ -32,6 +33,17 @@ def fmus(tmp_path_factory):
                                                      folder / f"{scene}_{version}.fmu",
                                                      fmi_version=version)
             for scene in SCENES for version in (2, 3)}
+
+
+def test_both_fmus_carry_the_linux_binary_only(fmus):
+    """The FMU is built and tested on Linux x86-64 only (docs/hosts.md): pythonfmu's and
+    pythonfmu3's Windows binaries are left out, so that a host elsewhere says the platform is
+    missing instead of loading an untried library."""
+    for version, folder in ((2, "linux64"), (3, "x86_64-linux")):
+        names = zipfile.ZipFile(fmus["reference", version]).namelist()
+        binaries = [name for name in names
+                    if name.startswith("binaries/") and not name.endswith("/")]
+        assert binaries == [f"binaries/{folder}/HerringboneGear.so"], (version, binaries)
 
 
 def variables(fmu):
@@ -152,3 +164,22 @@ def test_fmi3_errors_are_fmi3error_and_the_instance_lives(instance):
     assert instance.getFloat64([instance.refs["m_pinion"]]) == [0.929436]
     steps(instance, 2e-4, 2)  # the input problem has cleared: the run goes on
     assert len(instance.messages) == 3
+
+
+def test_fmi3_a_bad_step_size_and_calls_out_of_order_are_errors_and_the_instance_lives(
+        instance):
+    """As the Reference FMUs answer: a step size that is not finite and > 0 is fmi3Error with
+    one message (twice in a row: the instance lives, where a Python exception made it Fatal);
+    enter and exit initialization again answer OK with a message, and the run goes on."""
+    steps(instance, 0.0, 2)
+    for size in (math.nan, math.nan, -1e-4):
+        with pytest.raises(FMICallException, match="status 3"):
+            instance.doStep(currentCommunicationPoint=2e-4, communicationStepSize=size)
+    assert [text for _, text in instance.messages] == [
+        "gear: communicationStepSize is nan s; allowed: finite and > 0 s",
+        "gear: communicationStepSize is -0.0001 s; allowed: finite and > 0 s"]
+    instance.enterInitializationMode(startTime=0.0)
+    instance.exitInitializationMode()
+    assert all("after the FMU was initialized: refused, the run goes on" in text
+               for _, text in instance.messages[2:]) and len(instance.messages) == 4
+    steps(instance, 2e-4, 2)

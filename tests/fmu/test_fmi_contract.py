@@ -146,6 +146,78 @@ def test_an_input_discard_clears_once_the_input_is_valid_and_is_logged_once(gear
     assert len(instance.messages) == 2
 
 
+@pytest.mark.parametrize("size", [math.nan, math.inf, -STEP, 0.0])
+def test_a_step_size_that_is_not_finite_and_positive_is_refused_and_the_run_goes_on(gear, size):
+    """As the Reference FMUs do: a doStep by a step size that is not > 0 is refused (FMI 2.0:
+    Discard, pythonfmu has no Error) with one message naming it; the instance is unharmed."""
+    clean = run_steps(gear(), 4)
+    instance = gear()
+    run_steps(instance, 2)
+    for _ in range(2):
+        with pytest.raises(FMICallException) as error:
+            instance.slave.doStep(instance.time, size)
+        assert error.value.status == DISCARD
+    (message,) = [text for _, text in instance.messages]
+    assert f"communicationStepSize is {size!r} s; allowed: finite and > 0 s" in message
+    assert np.array_equal(run_steps(instance, 2), clean[2:])
+
+
+def test_a_step_past_what_the_clock_resolves_is_refused_and_the_run_goes_on(gear):
+    """A doStep of 1e300 s (it ran for ever) and an experiment started at 1e9 s (its times
+    resolve 1.2e-7 s, a hundredth of the fastest mode's time scale) are refused with one
+    message naming the time and the limit (5.4e7 s on the reference scene)."""
+    clean = run_steps(gear(), 4)
+    instance = gear()
+    run_steps(instance, 2)
+    with pytest.raises(FMICallException) as error:
+        instance.slave.doStep(instance.time, 1e300)
+    assert error.value.status == DISCARD
+    (message,) = [text for _, text in instance.messages]
+    assert "doStep to t = 1e+300 s" in message and "within 5.37e+07 s of t = 0" in message
+    assert np.array_equal(run_steps(instance, 2), clean[2:])
+    late = gear(start_time=1e9)
+    with pytest.raises(FMICallException):
+        late.step(STEP)
+    assert errors(late, "doStep to t = 1e+09 s", "resolves 1.2e-07 s")
+
+
+def test_a_max_step_makes_its_steps_and_no_runaway(gear):
+    """max_step = 1e-7 s forces 1e5 internal steps into a doStep of 1e-2 s, over the runaway
+    bound of the train alone: they are allowed for, and the run agrees with the one without
+    (the step bound only makes it more accurate). inf is no limit, as 0 is."""
+    free, bounded = gear(), gear(start_values={"max_step": 1e-7})
+    free.step(1e-2)
+    bounded.step(1e-2)
+    assert not bounded.messages, bounded.messages
+    assert bounded.get(["internal_steps"])["internal_steps"] >= 1e5
+    np.testing.assert_allclose(list(bounded.get(list(FORCES)).values()),
+                               list(free.get(list(FORCES)).values()), rtol=1e-5)
+    unbounded = gear(start_values={"max_step": math.inf})
+    unbounded.step(1e-2)
+    assert unbounded.get(list(FORCES)) == free.get(list(FORCES))
+
+
+def test_calls_out_of_their_order_are_refused_with_a_message_and_harm_nothing(gear):
+    """doStep before initialization is refused (Discard) with a message; enter and exit
+    initialization again after it are refused with a message (pythonfmu has no fmi2Error:
+    answered OK) and the run goes on as if they had not been made, not started again."""
+    clean = run_steps(gear(), 4)
+    instance = gear(initialize=False)
+    with pytest.raises(FMICallException) as error:
+        instance.slave.doStep(instance.time, STEP)
+    assert error.value.status == DISCARD
+    assert len(errors(instance, "fmi2DoStep before fmi2ExitInitializationMode")) == 1
+    instance.initialize()
+    run_steps(instance, 2)
+    instance.slave.enterInitializationMode()
+    instance.slave.exitInitializationMode()
+    assert len(errors(instance, "fmi2EnterInitializationMode after the FMU was initialized",
+                      "refused")) == 1
+    assert len(errors(instance, "fmi2ExitInitializationMode after the FMU was initialized",
+                      "refused")) == 1
+    assert np.array_equal(run_steps(instance, 2), clean[2:])
+
+
 def _serialize(instance):
     state = instance.slave.getFMUstate()
     data = instance.slave.serializeFMUstate(state)
@@ -173,6 +245,30 @@ def test_serialized_state_restores_every_bit_also_in_a_new_instance(gear, fmu):
         target.time = saved_time
         assert np.array_equal(run_steps(target, 30), after)
         assert target.get(["internal_steps"])["internal_steps"] == steps
+
+
+@pytest.mark.parametrize("change", ["values", "run", "run.cycle"])
+def test_a_state_not_of_this_fmus_layout_is_refused_with_a_message_not_a_fatal(gear, change):
+    """A serialized state with the format's name but a part missing (or, inside the run, a
+    contact set that is not one) is refused or fails with a message, not a Python exception
+    (which pythonfmu makes Fatal); where it was refused, the instance goes on unharmed."""
+    clean = run_steps(gear(), 4)
+    instance = gear()
+    run_steps(instance, 2)
+    state = json.loads(_serialize(instance))
+    if change == "run.cycle":
+        state["run"]["cycle"] = "no such cycle"
+    else:
+        del state[change]
+    _restore(instance, json.dumps(state).encode())
+    (message,) = [text for status, text in instance.messages]
+    assert "fmi2SetFMUstate" in message
+    if change == "run.cycle":  # the values were taken: the instance stops with the message
+        with pytest.raises(FMICallException):
+            instance.step(STEP)
+    else:
+        assert "not one of this FMU" in message
+        assert np.array_equal(run_steps(instance, 2), clean[2:])
 
 
 def test_a_state_restores_every_bit_in_an_instance_started_with_other_torques(gear):

@@ -20,7 +20,7 @@ class Instance:
     """Instantiate, set start values, initialize; then step, read outputs, save and restore."""
 
     def __init__(self, fmu_path, start_values=None, name="gear", start_time=0.0,
-                 tolerance=None):
+                 tolerance=None, initialize=True):
         self.description = read_model_description(str(fmu_path))
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.unzipped = extract(str(fmu_path))
@@ -39,10 +39,14 @@ class Instance:
                                instanceName=name)
         self.slave.instantiate(callbacks=self.callbacks, loggingOn=True)
         self.slave.setupExperiment(startTime=start_time, tolerance=tolerance)
+        self.time = start_time
+        if initialize:
+            self.initialize(start_values)
+
+    def initialize(self, start_values=None):
         self.slave.enterInitializationMode()
         self.set(**(start_values or {}))
         self.slave.exitInitializationMode()
-        self.time = start_time
 
     def set(self, **values):
         for name, value in values.items():

@@ -32,6 +32,8 @@ GEAR_SLAVE_MODULE = "herringbone_gear_fmu"  # the script's name in the FMU (see 
 GEAR_SLAVE3 = GEAR_PACKAGE / "fmu" / "slave3.py"
 GEAR_SLAVE3_MODULE = "herringbone_gear_fmu3"  # not the FMI 2.0 one's: both may share a process
 FMI_VERSIONS = (2, 3)
+# the binaries an FMU keeps: FMI 2.0's and FMI 3.0's names of Linux x86-64
+LINUX_BINARIES = ("binaries/linux64/", "binaries/x86_64-linux/")
 # shipped with every FMI 2.0 FMU as top-level modules (the examples import them so): see their
 # docstrings
 UNITS_MODULE = GEAR_PACKAGE / "fmu" / "units.py"
@@ -123,7 +125,9 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     from the state, so `dependencies=""`), adds a `<UnitDefinitions>` entry for every
     `unit`/`displayUnit` used by a variable (a slave sets them on the `<Real>` element, see
     examples/), drops generationDateAndTime and sets the GUID to a hash of the FMU's content
-    (_content_guid).
+    (_content_guid). It drops the binaries of every platform but Linux x86-64 (pythonfmu's
+    and pythonfmu3's Windows ones): the FMU is built and tested on Linux only (docs/hosts.md),
+    and a host elsewhere should say so rather than load an untried library.
     The zip is rewritten in name order with fixed timestamps and permissions, so that the same
     content makes the same bytes.  Idempotent; all other entries' contents are unchanged.
     """
@@ -143,7 +147,9 @@ def fix_model_description(fmu_path: Path, no_feedthrough: bool = False) -> None:
     for element in root.iter():  # pythonfmu3 pretty-prints: start from bare elements
         element.text = element.tail = None
     ET.indent(root, space="  ")
-    contents = {info.filename: data for info, data in entries.items()}
+    contents = {info.filename: data for info, data in entries.items()
+                if not info.filename.startswith("binaries/")
+                or info.filename.startswith(LINUX_BINARIES)}
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     root.set(token, "{" + _content_guid(contents) + "}")
     contents["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -73,7 +73,17 @@ DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (do
 # step stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
 STEP_BUDGET_FLOOR = 10_000
 STEP_BUDGET_PER_MODE = 100
+# and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
+# compiled loop counts in 64 bits)
+STEP_BUDGET_PER_MAX_STEP = 2
+MOST_STEPS = 2**62
+# a run's times must resolve the train's fastest time scale to this share (_resolution_problem)
+RESOLVED_SHARE = 1e-3
 STATE_FORMAT = "herringbone-fmu-state-2"  # the serialized FMU state's layout (_get_fmu_state)
+STATE_KEYS = {"format", "values", "start_time", "initialized", "experiment_tolerance",
+              "problem", "input_problem", "run"}
+RUN_STATE_KEYS = {"time", "state", "cycle", "interval", "loaded", "step_hint", "outputs",
+                  "first_steps", "internal_steps", "stepper_inputs"}
 WARNING, ERROR = 1, 3  # the same numbers in fmi2Status and fmi3Status
 STATUS_NAMES = {WARNING: "warning", ERROR: "error"}
 
@@ -100,6 +110,39 @@ KINDS = {bool: "boolean", int: "integer", str: "string", float: "real"}
 CONVERT = {"real": float, "integer": int, "boolean": bool, "string": str}
 # what a refused read returns
 REFUSED = {"real": math.nan, "integer": 0, "int64": 0, "boolean": False, "string": ""}
+
+
+def step_budget(step_size, fastest_rate, max_step) -> int:
+    """Internal steps a doStep of `step_size` s may take before it counts as a runaway:
+    STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max (`fastest_rate`, 1/s), and with a
+    `max_step` (s; 0 or inf: none) STEP_BUDGET_PER_MAX_STEP·h/max_step more; at most
+    MOST_STEPS."""
+    steps = STEP_BUDGET_PER_MODE * step_size * fastest_rate
+    if 0.0 < max_step < math.inf:
+        steps += STEP_BUDGET_PER_MAX_STEP * step_size / max_step
+    return int(min(STEP_BUDGET_FLOOR + steps, MOST_STEPS))
+
+
+def _resolution_problem(end, fastest_rate) -> str | None:
+    """Why a doStep may not end at `end` (s), or None: where double precision's spacing of
+    times is over RESOLVED_SHARE of the train's fastest time scale 1/|λ|max (`fastest_rate`,
+    1/s), the integrator's steps and event times are rounding, not the train (a doStep of
+    1e300 s, or an experiment started at 1e9 s)."""
+    limit = RESOLVED_SHARE / (fastest_rate * np.finfo(float).eps)
+    if abs(end) <= limit:
+        return None
+    return (f"doStep to t = {end:g} s: there double precision resolves "
+            f"{np.spacing(abs(end)):.2g} s, over {RESOLVED_SHARE:g} of the train's fastest time "
+            f"scale (1/|λ|max = {1.0 / fastest_rate:.2g} s); allowed: doSteps that end within "
+            f"{limit:.3g} s of t = 0 (an experiment that starts nearer 0, shorter steps)")
+
+
+def _step_size_problem(step_size) -> str | None:
+    """Why a doStep's communicationStepSize (s) is not allowed, or None: it must be finite and
+    > 0, as the FMI standard asks (the Reference FMUs answer Error to one that is not)."""
+    if math.isfinite(step_size) and step_size > 0.0:
+        return None
+    return f"communicationStepSize is {step_size!r} s; allowed: finite and > 0 s"
 
 
 @dataclasses.dataclass
@@ -221,7 +264,19 @@ class GearCore:
         if self.run is not None and not self.initialized:
             self.run.clock[0] = self.start_time  # outputs before initialization: same place
 
+    def _enter_initialization(self):
+        """enterInitializationMode: only before initialization (refused with a message
+        after)."""
+        problem = self._order_problem("EnterInitializationMode")
+        if problem is not None:
+            self._report(problem)
+
     def _exit_initialization(self):
+        """exitInitializationMode: the run starts from the values set; a second one is
+        refused with a message and the run goes on (it would start it again)."""
+        problem = self._order_problem("ExitInitializationMode")
+        if problem is not None:
+            return self._report(problem)
         self._apply_experiment_tolerance()
         self.initialized = True
         self._start()
@@ -230,16 +285,19 @@ class GearCore:
         """Advance by one communication step; returns the problem that stops it (already
         reported), or None."""
         if self.problem is None:
-            self.input_problem = self._input_problem(current_time, step_size)
+            self.input_problem = self._step_problem(current_time, step_size)
             if self.input_problem is None:
                 self._advance(current_time, step_size)
         return self.problem or self.input_problem
 
-    def _input_problem(self, current_time, step_size):
-        """What is wrong with the inputs of this doStep (reported once while it lasts)."""
-        problem = None
+    def _step_problem(self, current_time, step_size):
+        """What is wrong with this doStep (reported once while it lasts): a call before
+        initialization, its step size, an input, its start time. None of them harms the
+        instance: the next doStep without the problem goes on."""
+        problem = (self._order_problem("DoStep") or _step_size_problem(step_size)
+                   or _resolution_problem(current_time + step_size, self.stepper.fastest_rate))
         for name in INPUTS:
-            if not math.isfinite(self.values[name]):
+            if problem is None and not math.isfinite(self.values[name]):
                 problem = f"input {name} is {self.values[name]}; allowed: any finite number"
         # masters add up their times in their own way: forgive rounding, not a skipped step
         drift = abs(current_time - self.run.time)
@@ -250,10 +308,23 @@ class GearCore:
             self._report(problem)
         return problem
 
+    def _order_problem(self, call):
+        """Why `call` (an FMI function's name without its prefix) may not come now, or None:
+        a doStep only once initialized, enter/exitInitializationMode only before."""
+        prefix = self.API["prefix"]
+        if call == "DoStep" and not self.initialized:
+            return (f"{prefix}DoStep before {prefix}ExitInitializationMode: refused; allowed: "
+                    f"doStep once {prefix}EnterInitializationMode and "
+                    f"{prefix}ExitInitializationMode have initialized the FMU")
+        if call != "DoStep" and self.initialized:
+            return (f"{prefix}{call} after the FMU was initialized: refused, the run goes "
+                    f"on; allowed: once, before the first doStep ({prefix}Reset starts "
+                    "again)")
+        return None
+
     def _advance(self, current_time, step_size):
         torques = (self.values["M_motor"], self.values["M_load"])
-        budget = STEP_BUDGET_FLOOR + int(STEP_BUDGET_PER_MODE * step_size
-                                         * self.stepper.fastest_rate)
+        budget = step_budget(step_size, self.stepper.fastest_rate, self.built_from["max_step"])
         try:
             self.stepper.run_to(self.run, current_time + step_size, torques, max_steps=budget)
         except StepBudgetExceeded:
@@ -264,10 +335,13 @@ class GearCore:
 
     def _runaway_message(self, current_time, step_size, budget):
         speed = self.stepper.model.named_outputs(self.run.outputs)["w_pinion"]
+        max_step = self.built_from["max_step"]
+        forced = (f" + {STEP_BUDGET_PER_MAX_STEP}·h/max_step, max_step = {max_step:g} s"
+                  if 0.0 < max_step < math.inf else "")
         return (f"doStep from t = {current_time:g} s by {step_size:g} s failed: it took over "
                 f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
                 f"{STEP_BUDGET_PER_MODE}·h·|λ|max, |λ|max = {self.stepper.fastest_rate:.3g} "
-                f"1/s) and stopped at t = {self.run.time:.9g} s with the pinion at "
+                f"1/s{forced}) and stopped at t = {self.run.time:.9g} s with the pinion at "
                 f"{speed:.3g} rad/s: the train runs away. Check the torques M_motor = "
                 f"{self.values['M_motor']:g} N.m and M_load = {self.values['M_load']:g} N.m "
                 f"(a runaway is most likely one far beyond the scene's, "
@@ -355,11 +429,28 @@ class GearCore:
         return state
 
     def _set_fmu_state(self, state):
-        if not isinstance(state, dict) or state.get("format") != STATE_FORMAT \
-                or set(state["values"]) != set(self.values):
+        if not self._own_state(state):
             return self._report(f"{self.API['set_state']}: the state is not one of this FMU "
                                 f"(expected {STATE_FORMAT} with this scene's variables); "
                                 "the FMU keeps its own")
+        try:
+            self._restore(state)
+        except Exception as error:  # its own layout, numbers that are not this run's
+            self.problem = None  # perhaps the state's: this one is what the user must hear
+            self._fail(f"{self.API['set_state']}: the state could not be restored: {error!r}")
+
+    def _own_state(self, state) -> bool:
+        """Whether `state` has the layout `_get_fmu_state` gives, with this scene's
+        variables."""
+        if not (isinstance(state, dict) and state.get("format") == STATE_FORMAT
+                and set(state) == STATE_KEYS and isinstance(state["values"], dict)
+                and set(state["values"]) == set(self.values)):
+            return False
+        return state["run"] is None or (isinstance(state["run"], dict)
+                                        and set(state["run"]) == RUN_STATE_KEYS)
+
+    def _restore(self, state):
+        """Take the values and the run of `state` (one of this FMU's)."""
         self.values = dict(state["values"])
         self.start_time, self.initialized = state["start_time"], state["initialized"]
         self.experiment_tolerance = state["experiment_tolerance"]

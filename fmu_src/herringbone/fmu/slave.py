@@ -76,6 +76,10 @@ class HerringboneGear(BalancedSlave, GearCore, Fmi2Slave):
         The stop time is not used: the run goes where the doSteps take it."""
         self._set_experiment(start_time, tolerance)
 
+    def enter_initialization_mode(self) -> None:
+        """fmi2EnterInitializationMode: refused with a message once initialized."""
+        self._enter_initialization()
+
     def exit_initialization_mode(self) -> None:
         """fmi2ExitInitializationMode: check the parameters and build the model; a problem
         raises (fmi2Fatal) only where the host does not hear the log."""

@@ -125,6 +125,10 @@ class HerringboneGear(GearCore, Fmi3Slave):
 
     # --- FMI callbacks -----------------------------------------------------------------------
 
+    def enter_initialization_mode(self):
+        """fmi3EnterInitializationMode: refused with a message once initialized."""
+        self._enter_initialization()
+
     def exit_initialization_mode(self):
         """Start the run from the values set in initialization mode (fmi3ExitInitializationMode);
         a refused value or start raises, after the message has reached the host."""
