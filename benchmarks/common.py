@@ -50,8 +50,13 @@ def file_hash(*paths) -> str:
     return digest.hexdigest()[:12]
 
 
-def scene_paths(patterns) -> list[Path]:
-    """Scene files from names ("reference"), paths, or globs ("models/*.toml")."""
+SCENES_ALLOWED = "scene names (models/NAME.toml), scene files or globs"
+
+
+def scene_paths(patterns, parser, option="--scenes") -> list[Path]:
+    """Scene files from names ("reference"), paths, or globs ("models/*.toml"); one that names
+    no file stops the script through `parser` (its one-line error, exit code 2: before any
+    run), naming `option` and the pattern, with the closest shipped name."""
     found = []
     for pattern in patterns:
         if any(c in pattern for c in "*?["):
@@ -59,14 +64,19 @@ def scene_paths(patterns) -> list[Path]:
             matches = [Path(m) for m in (sorted(glob.glob(pattern))
                                          or sorted(glob.glob(str(ROOT / pattern))))]
             if not matches:
-                raise SystemExit(f"benchmark: no scene file matches {pattern}")
+                parser.error(f"{option} {pattern}: no scene file matches it; allowed: "
+                             f"{SCENES_ALLOWED}")
         elif Path(pattern).suffix or Path(pattern).exists():
             matches = [Path(pattern)]
         else:
             matches = [MODELS / f"{pattern}.toml"]
         for match in matches:
             if not match.is_file():
-                raise SystemExit(f"benchmark: no scene file {match}")
+                from herringbone.suggest import did_you_mean
+
+                names = sorted(path.stem for path in MODELS.glob("*.toml"))
+                parser.error(f"{option} {pattern}: no scene file {match}; allowed: "
+                             f"{SCENES_ALLOWED}{did_you_mean(pattern, names)}")
             if match.resolve() not in found:
                 found.append(match.resolve())
     return found

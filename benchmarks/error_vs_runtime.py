@@ -383,11 +383,11 @@ def main(argv=None, prog="error_vs_runtime.py") -> int:
         parser.error(f"unknown method {sorted(unknown)[0]}; allowed: fmu {' '.join(SCIPY_METHODS)}")
     if args.repeat < 1:
         parser.error(f"--repeat {args.repeat}: allowed: 1 or more")
+    scenes = common.scene_paths(args.scenes, parser)
     command = common.command_line(__file__, sys.argv[1:] if argv is None else argv)
 
     from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE
 
-    scenes = common.scene_paths(args.scenes)
     fmu_runs = (len(args.fmu_methods or [None]) * len(args.steps)
                 * len(set(args.tolerances) | {DEFAULT_TOLERANCE}) if "fmu" in args.methods else 0)
     scipy_runs = len([m for m in args.methods if m != "fmu"]) * len(args.tolerances)

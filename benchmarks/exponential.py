@@ -157,7 +157,7 @@ def main(argv=None) -> int:
                                         for drive in DRIVES] + [f"{m} setup s" for m in METHODS]
     header += [f"{m} {what}/event" for what in ("trials", "rejected") for m in METHODS]
     print(" | ".join(header + ["speed-up step", "speed-up run"]))
-    for path in common.scene_paths(args.scenes):
+    for path in common.scene_paths(args.scenes, parser, "scene"):
         scene = herringbone.load_scene(path)
         reference = common.cached_reference(path, args.span, args.output_interval,
                                             args.reference_tolerance, log=lambda text: None)

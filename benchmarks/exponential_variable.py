@@ -239,11 +239,11 @@ def main(argv=None) -> int:
                         help="also the pinion angle's departure from a polynomial in t")
     args = parser.parse_args(argv)
     print("scene | scheme | accepted steps | rejected | max |x − x_DOP853, bound| / atol")
-    for path in common.scene_paths(args.scenes):
+    for path in common.scene_paths(args.scenes, parser, "scene"):
         step_counts(path, args.segments, args.warm)
     if args.pinion:
         print("scene | set's span µs | max |φp − line| / length | max |φp − parabola| / length")
-        for path in common.scene_paths(args.scenes):
+        for path in common.scene_paths(args.scenes, parser, "scene"):
             pinion_deviation(path, args.segments, args.warm)
     if args.cost:
         print("compiled kernel | CPU µs a call")

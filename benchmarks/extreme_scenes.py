@@ -288,13 +288,17 @@ def main(argv=None, prog="extreme_scenes.py") -> int:
                               ("window_periods", 25, 5)):
         if getattr(args, name) is None:
             setattr(args, name, quick if args.quick else full)
+    # every scene found before any run: a long benchmark never ends on a misspelt name
+    scenes = [] if args.no_scenes else common.scene_paths(args.scenes, parser)
+    if args.periods > 0 and args.long_scene is not None:
+        args.long_scene = common.scene_paths([str(args.long_scene)], parser, "--long-scene")[0]
     command = common.command_line(__file__, sys.argv[1:] if argv is None else argv)
 
     def log(text):
         print(text, flush=True)
 
     rows = [] if args.no_scenes else scene_rows(
-        common.scene_paths(args.scenes), span_scale=args.span_scale, max_span=args.max_span,
+        scenes, span_scale=args.span_scale, max_span=args.max_span,
         budget=args.budget, reference_tolerance=args.reference_tolerance,
         fmu_methods=args.fmu_methods or [None], log=log)
     long = None

@@ -29,7 +29,9 @@ from .model.parameters import (
     POSITIVE,
     RPM_PER_RAD_S,
     Range,
+    allowed_words,
     number_problem,
+    outputs_of,
 )
 from .model.scene import Scene, SceneError
 from .suggest import did_you_mean
@@ -72,13 +74,11 @@ class Argument:
     whole: bool = False
 
     def describe(self) -> str:
-        """What is allowed, in words: "> 0 (simulated seconds)"."""
+        """What is allowed, in words: "> 0 and finite (simulated seconds)"."""
         if self.choices is not None:
-            allowed = ", ".join(repr(choice) for choice in self.choices)
-        else:
-            allowed = self.allowed.describe() + (" or inf" if self.infinite else "")
-            allowed = f"a whole number {allowed}" if self.whole else allowed
-        return f"{allowed} ({self.meaning})"
+            return f"{', '.join(repr(choice) for choice in self.choices)} ({self.meaning})"
+        return allowed_words(self.allowed, whole=self.whole, infinite=self.infinite,
+                             meaning=self.meaning)
 
     def problem(self, value) -> str | None:
         """Why `value` is not allowed ("is -1.0; allowed: …"), or None if it is."""
@@ -171,7 +171,57 @@ def check_run_times(scene, stop_time=None, output_interval=None, initial_pinion_
         raise ValueError(f"output_interval is {float(interval)!r}, longer than stop_time "
                          f"{float(stop)!r}; allowed: > 0 and <= stop_time (seconds between "
                          "output samples)")
+    problem = samples_problem(scene, stop, interval)
+    if problem is not None:
+        raise ValueError(problem)
     INITIAL_PINION_ANGLE.check(initial_pinion_angle)
+
+
+def physical_memory() -> int | None:
+    """The machine's physical memory, bytes (os.sysconf on POSIX); None where it is unknown
+    (Windows has no sysconf; a system may answer -1)."""
+    try:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+    return memory if memory > 0 else None
+
+
+# A run holds its samples about twice as it ends: the compiled one samples every output into
+# one array of rows (herringbone.integrate.contract.sampled_run) and copies each output's
+# column out of it. So its samples may take at most this share of the machine's memory.
+SAMPLES_SHARE_OF_MEMORY = 0.5
+
+
+def samples_problem(scene, stop_time: float, output_interval: float,
+                    names: tuple[str, str] = ("stop_time", "output_interval")) -> str | None:
+    """Why a run of `scene` over `stop_time` sampled every `output_interval` (s) cannot hold its
+    samples in this machine's memory, or None (also where the memory is unknown): the
+    stop_time/output_interval + 1 samples of every output and the time, 8 bytes each, must take
+    at most SAMPLES_SHARE_OF_MEMORY of physical_memory(). `names`: how the message names the
+    two (the API's arguments, or the command line's options)."""
+    memory = physical_memory()
+    if memory is None:
+        return None
+    columns = len(outputs_of(scene.components)) + 1
+    samples = float(stop_time) / float(output_interval) + 1.0  # inf past the largest float
+    most = SAMPLES_SHARE_OF_MEMORY * memory / (8.0 * columns)
+    if samples <= most:
+        return None
+    return (f"{names[0]} {float(stop_time):g} s with {names[1]} {float(output_interval):g} s "
+            f"is {samples:.3g} samples of {columns} values (the outputs and the time), "
+            f"{_bytes(8.0 * columns * samples)}; allowed: at most {most:.3g} samples of this "
+            f"scene, within {SAMPLES_SHARE_OF_MEMORY:.0%} of this machine's {_bytes(memory)} of "
+            f"memory (a longer {names[1]} or a shorter {names[0]})")
+
+
+def _bytes(size: float) -> str:
+    """A size in bytes as messages write it: "7.28 TiB"."""
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if size < 1024.0 or unit == "PiB":
+            return f"{size:.3g} {unit}"
+        size /= 1024.0
+    return f"{size:.3g} PiB"
 
 
 def check_reference_run(scene, stop_time=None, output_interval=None, tolerance=1e-10,
@@ -319,14 +369,38 @@ def output_file(*suffixes: str):
     return checked
 
 
+# where a gear FMU carries its scene (fmu/builder.build_gear_fmu puts it there)
+FMU_SCENE_MEMBER = "resources/scene.toml"
+GEAR_FMU_ALLOWED = "the path of a gear FMU (herringbone build-fmu SCENE builds one)"
+
+
+def gear_fmu_problem(path: Path) -> str | None:
+    """Why `path` is not a gear FMU to read, or None: an existing .fmu file, a zip archive
+    that carries its scene (FMU_SCENE_MEMBER)."""
+    import zipfile
+
+    path = Path(path)
+    if not path.is_file():
+        return "no such FMU file" if not path.exists() else "a folder, not an FMU file"
+    if path.suffix.lower() != ".fmu":
+        return f"not an FMU file (its suffix is {path.suffix or 'none'}, not .fmu)"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = archive.namelist()
+    except (zipfile.BadZipFile, OSError):
+        return "not an FMU (an FMU is a zip archive; this file is none)"
+    if FMU_SCENE_MEMBER not in members:
+        return f"not a gear FMU (it carries no {FMU_SCENE_MEMBER})"
+    return None
+
+
 def existing_fmu(text: str) -> Path:
-    """argparse `type=` for an FMU to read: the Path of an existing .fmu file, or
-    ArgumentTypeError."""
-    path = Path(text)
-    if path.suffix.lower() != ".fmu" or not path.is_file():
-        raise argparse.ArgumentTypeError(f"{text}: no such FMU file; allowed: the path of a "
-                                         "gear FMU (herringbone build-fmu SCENE builds one)")
-    return path
+    """argparse `type=` for a gear FMU to read: the Path (gear_fmu_problem), or
+    ArgumentTypeError saying why not."""
+    problem = gear_fmu_problem(Path(text))
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text}: {problem}; allowed: {GEAR_FMU_ALLOWED}")
+    return Path(text)
 
 
 def output_path(text: str) -> Path:

@@ -272,8 +272,8 @@ def test_chart_finds_the_bands_where_the_mesh_mode_resonates(resonance_scene, to
     for order in (1, 2, 5):
         predicted = 2 * mesh_mode / order * 2 * math.pi / z
         assert any(low < predicted < high for low, high in chart.unstable_bands), order
-    assert all((chart.largest_modulus > 1) == [any(lo <= s <= hi for lo, hi in chart.unstable_bands)
-                                               for s in speeds])
+    assert all((chart.largest_modulus > 1 + chart.resolution)
+               == [any(lo <= s <= hi for lo, hi in chart.unstable_bands) for s in speeds])
     # between bands, and for the reference damping everywhere: every multiplier inside the circle
     assert np.abs(stability.multipliers(resonance_scene, 8000.0)).max() < 1.0
     damped = torsional_scene.with_parameters(contact_loss=False)
@@ -320,6 +320,51 @@ def test_command_line_lists_the_bands_of_the_example(tmp_path, capsys):
     assert low < 2080.0 < high and chart.stat().st_size > 10_000
 
 
+@pytest.fixture(scope="module")
+def undamped_chart():
+    """models/undamped.toml charted over 100-2000 rad/s in 20 speeds: parametric resonance at
+    100 and 1100 rad/s (|λ|max 1.005 and 1.0025), every other multiplier on the unit circle."""
+    return stability.stability_chart(herringbone.load_scene(ROOT / "models" / "undamped.toml"),
+                                     np.linspace(100.0, 2000.0, 20))
+
+
+def test_an_undamped_train_is_neutral_where_its_exponent_is_rounding(undamped_chart):
+    """Without damping |λ|max is 1 but for rounding (1 + 4e-16 to 1 + 1e-14, an exponent of
+    6e-13 to 7e-12 1/s) away from the bands: neutral, no band, within the resolution the chart
+    derives (which bounds the rounding tenfold over); the two real bands are still found."""
+    chart = undamped_chart
+    growing = np.isin(chart.speeds, [100.0, 1100.0])
+    assert np.all(chart.largest_modulus[growing] - 1 > 1e-3)
+    assert np.array_equal(chart.neutral, ~growing)
+    rounding = np.abs(chart.largest_modulus[~growing] - 1.0)
+    assert rounding.max() > 0 and np.all(rounding < chart.resolution[~growing] / 10)
+    assert np.all(chart.resolution < 1e-10)  # far below any band worth the name
+    assert np.all(np.abs(chart.largest_exponent[~growing]) <= chart.exponent_resolution[~growing])
+    assert len(chart.unstable_bands) == 2
+    for (low, high), speed in zip(chart.unstable_bands, (100.0, 1100.0)):
+        assert low <= speed <= high and high - low <= 200.0  # no wider than its neighbours
+    assert not any(low <= s <= high for low, high in chart.unstable_bands
+                   for s in chart.speeds[~growing])
+
+
+def test_the_summary_of_an_undamped_train_says_nothing_decays(undamped_chart, tmp_path,
+                                                              capsys):
+    """The command's words agree with its chart: no "every disturbance decays" where nothing
+    does, the neutral speeds said so, and only the real bands listed."""
+    from herringbone.cli import main
+    from herringbone.cli.stability import summary
+
+    lines = summary(undamped_chart)
+    assert not any("decays" in line and "every" in line for line in lines), lines
+    assert any("neither grows nor decays" in line and "18 of 20" in line for line in lines)
+    assert len([line for line in lines if line.startswith("unstable:")]) == 2
+    assert main(["stability", "undamped", "--speeds", "200", "1000", "9", "--no-progress",
+                 "-o", str(tmp_path / "chart.png")]) == 0
+    printed = capsys.readouterr().out
+    assert "unstable:" not in printed and "every disturbance decays" not in printed
+    assert "no unstable band" in printed and "9 of 9 speeds" in printed
+
+
 def test_chart_reads_as_a_decay_rate_that_does_not_creep_towards_instability(reference_scene):
     """The chart's exponent ln|λ|max/T (1/s): on the reference scene, stable at every speed,
     it stays near −σ of the least-damped mode (the 113 Hz motor-load mode, σ ≈ 2 1/s: within
@@ -335,6 +380,10 @@ def test_chart_reads_as_a_decay_rate_that_does_not_creep_towards_instability(ref
     period = 2 * math.pi / (10 * speeds)
     assert np.allclose(chart.largest_exponent, np.log(chart.largest_modulus) / period,
                        rtol=1e-12)
+    assert not chart.neutral.any()
+    from herringbone.cli.stability import summary
+
+    assert "below zero at every speed: every disturbance decays" in summary(chart)
     done = []
     grouped = stability.stability_chart(reference_scene, speeds, on_progress=done.append)
     assert sum(done) == len(speeds) and len(done) > 1

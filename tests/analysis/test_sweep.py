@@ -233,8 +233,84 @@ def test_shooting_where_it_does_not_apply_is_refused_by_name(reference_scene):
         sweep(unbalanced, speeds=[300.0], method="shooting")
     with pytest.raises(ValueError, match="method 'harmonic'; allowed: shooting, time"):
         sweep(reference_scene, speeds=[300.0], method="harmonic")
-    table = sweep(unbalanced, speeds=[300.0], protocol=SHORT, workers=0, progress=False)
+    table = sweep(reference_scene, params={"zeta_mesh": [0.05], "dbeta_right": [0.0]},
+                  protocol=SHORT, workers=0, progress=False)
     assert list(table["method"]) == ["time"]
+
+
+@pytest.fixture
+def no_sweep_work(monkeypatch):
+    """A point run or a branch followed fails the test: every check must come first."""
+    import herringbone.analysis.sweep as module
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the sweep began before its arguments were checked")
+
+    monkeypatch.setattr(module, "run_point", refuse)
+    monkeypatch.setattr(module, "shooting_sweep", refuse)
+
+
+@pytest.mark.parametrize("arguments, culprit", [
+    ({"speeds": [300, 300]}, "speeds holds 300 more than once; allowed: distinct values"),
+    ({"params": {"zeta_mesh": [0.02, 0.05, 0.02]}}, "zeta_mesh holds 0.02 more than once"),
+    ({"params": ["zeta_mesh"]}, "params is a list (['zeta_mesh']); allowed: a dict"),
+    ({"speeds": [300.0], "protocol": {"settle_time": 0.01}}, "protocol is a dict"),
+    ({"speeds": [300.0], "foo": 1}, "unknown option foo; allowed: workers, scheduler"),
+    ({"speeds": [300.0], "method": "time", "foo": 1}, "unknown option foo; allowed:"),
+    ({"speeds": [300.0], "workers": -1}, "workers is -1; allowed: a whole number >= 0"),
+    ({"speeds": [300.0], "workers": 2}, "workers=2: a sweep by shooting follows its branch"),
+    ({"speeds": [300.0], "scheduler": "tcp://127.0.0.1:1"}, "scheduler='tcp://127.0.0.1:1'"),
+    ({"speeds": [300.0], "method": "time", "doubling": False}, "doubling=False: allowed:"),
+])
+def test_a_bad_sweep_argument_is_one_value_error_before_any_work(arguments, culprit,
+                                                                  reference_scene,
+                                                                  no_sweep_work):
+    """The same refusal whichever method would run: the shooting path took unknown options
+    and workers it cannot use in silence, a list or dict in the wrong place ended in an
+    AttributeError, a repeated speed in "cannot convert float NaN to integer"."""
+    with pytest.raises(ValueError) as error:
+        sweep(reference_scene, progress=False, **arguments)
+    message = str(error.value)
+    assert culprit in message and "allowed" in message and "\n" not in message
+
+
+def test_a_sweep_of_no_scene_is_a_scene_error(no_sweep_work):
+    with pytest.raises(herringbone.SceneError, match="scene must be a herringbone.Scene, got "
+                                                     "str 'reference'; load one"):
+        sweep("reference", speeds=[300.0, 400.0])
+
+
+def test_a_sweep_whose_points_have_no_steady_running_is_refused_before_any_work(
+        reference_scene, no_sweep_work):
+    """Torques that do not balance (the train runs away from the speed its row names),
+    M_motor <= 0 (the back flanks, on which the model has no contact), a standing pinion or
+    an input table: one message before any point runs, by either method; one torque swept
+    on a balanced scene still moves the other with it."""
+    from herringbone.analysis.sweep import check_sweep
+
+    unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=100.0)
+    for method in (None, "time"):
+        with pytest.raises(ValueError, match=r"M_load = 100 N·m does not balance M_motor = "
+                                             r"500 N·m .*allowed: M_load = u·M_motor = 1800$"):
+            sweep(unbalanced, speeds=[300.0, 400.0], method=method, workers=0)
+    with pytest.raises(ValueError, match=r"at M_motor = 250, M_load = 1800: M_load = 1800 "
+                                         r"N·m does not balance M_motor = 250 N·m"):
+        sweep(reference_scene, params={"M_motor": [250.0, 500.0], "M_load": [900.0, 1800.0]},
+              workers=0)
+    negative = reference_scene.with_inputs(M_motor=-500.0, M_load=-1800.0)
+    for scene, params in ((negative, None), (reference_scene, {"M_motor": [-100.0, 100.0]})):
+        with pytest.raises(ValueError, match="M_motor = -\\d+ N·m: .*negative .*back flanks"):
+            sweep(scene, speeds=[300.0, 600.0] if params is None else None, params=params)
+    standing = reference_scene.with_parameters(w0_pinion=0.0)
+    with pytest.raises(ValueError, match="w0_pinion is 0: a sweep point needs a turning"):
+        sweep(standing, params={"zeta_mesh": [0.02, 0.05]}, method="time", workers=0)
+    stepped = reference_scene.with_inputs(table=[[0.0, 500.0, 1800.0], [0.01, 600.0, 2160.0]])
+    with pytest.raises(ValueError, match="needs constant input torques"):
+        sweep(stepped, speeds=[300.0, 400.0], method="time", workers=0)
+    assert check_sweep(standing, speeds=[300.0]) == "shooting"  # the speeds set w0_pinion
+    assert check_sweep(reference_scene, params={"M_load": [900.0, 3600.0]}) == "shooting"
+    assert check_sweep(reference_scene, speeds=[300.0, 400.0],
+                       params={"M_motor": [250.0, 500.0]}) == "time"
 
 
 @pytest.mark.parametrize("arguments, culprit", [
@@ -266,8 +342,8 @@ def test_bad_sweep_arguments_get_one_line_and_exit_code_2(arguments, culprit, ca
 
 def test_sweep_command_writes_table_and_pictures(tmp_path, capsys):
     code = cli.main(["sweep", str(MODELS / "torsional.toml"), "--speeds", "2000", "6000", "3",
-                     "--rpm", "--settle-time", "0.01", "--window-periods", "5", "--workers",
-                     "0", "--no-progress", "-o", str(tmp_path)])
+                     "--rpm", "--settle-time", "0.01", "--window-periods", "5", "--method",
+                     "time", "--workers", "0", "--no-progress", "-o", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0 and "settle" in out
     table = pd.read_csv(tmp_path / "torsional_sweep_w0_pinion.csv")
@@ -416,3 +492,26 @@ def test_the_summary_of_a_branch_reads_k_v_on_what_a_run_settles_on(reference_sc
     assert lines[4] == "folds of the 2T branches at 0.031"
     assert lines[5] == ("K_v from 1.4000 to 2.5000 (stable orbits); largest at zeta_mesh = "
                         "0.02")
+
+
+def test_the_summary_of_a_branch_on_which_no_orbit_converged_names_them(reference_scene,
+                                                                        tmp_path):
+    """A shooting table whose every point fell back to time integration has no stable or
+    unstable row and none of the time table's settle columns: its summary counts them as
+    such (it raised KeyError 'settle_time_s'), and its table and picture are written."""
+    from herringbone.analysis.sweep_report import describe, write_outputs
+
+    table = pd.DataFrame({"w0_pinion": [300.0, 450.0, 600.0], "speed_rpm": [2865.0, 4297.0,
+                                                                            5730.0],
+                          "K_v": [1.4, 1.5, 1.6], "dte_p2p_um": [5.0, 6.0, 7.0],
+                          "dte_rms_um": [1.0, 1.2, 1.4], "contact_lost_share": [0.0] * 3,
+                          "stability": ["time"] * 3, "method": ["time"] * 3,
+                          "on_grid": [True] * 3, "event": [""] * 3, "mesh_periods": [1] * 3})
+    table.attrs.update(continued="w0_pinion", folds=[])
+    lines = describe(reference_scene, table, 1.0).splitlines()
+    assert lines[1].endswith("0 stable, 0 unstable orbits; 3 points where no orbit converged, "
+                             "run by time integration"), lines
+    assert lines[2].startswith("K_v from 1.4000 to 1.6000; largest at w0_pinion = 600")
+    written = write_outputs(reference_scene, table, None, tmp_path)
+    assert [path.name for path in written] == ["reference_sweep_w0_pinion.csv",
+                                               "reference_sweep_w0_pinion_resonance.png"]

@@ -211,6 +211,31 @@ def test_run_tolerance_is_checked_against_the_integrator_chosen(capsys, no_work,
     assert "[1e-12, 1e-05]" in one_error_line(capsys, "run")
 
 
+def test_a_run_too_large_for_the_memory_is_refused_before_work(capsys, no_work, monkeypatch):
+    """--stop-time 1e5 --output-interval 1e-7 ended in numpy's "Unable to allocate 7.28 TiB"
+    and a traceback: one line naming both options, the size and what is allowed instead (the
+    machine's memory taken as 1 GiB, whatever this one has)."""
+    from herringbone import arguments
+
+    monkeypatch.setattr(arguments, "physical_memory", lambda: 2 ** 30, raising=False)
+    assert main(["run", REFERENCE, "--stop-time", "1e5", "--output-interval", "1e-7"]) == 2
+    error = one_error_line(capsys, "run")
+    assert "--stop-time 100000 s with --output-interval 1e-07 s is 1e+12 samples" in error
+    assert "138 TiB; allowed: at most 3.53e+06 samples" in error and "1 GiB" in error
+
+
+def test_a_benchmark_of_a_scene_that_is_not_there_is_one_line_and_exit_2(capsys):
+    """`benchmark --scenes nosuch` said "benchmark: no scene file …" with exit code 1."""
+    for scenes, words in ((["nosuch"], "no scene file"), (["refrence"], "'reference'?"),
+                          (["nosuch*.toml"], "no scene file matches it")):
+        with pytest.raises(SystemExit) as stop:
+            main(["benchmark", "--quick", "--scenes", *scenes])
+        assert stop.value.code == 2
+        error = one_error_line(capsys, "benchmark error-vs-runtime")
+        assert f"--scenes {scenes[0]}: " in error and words in error
+        assert "allowed: scene names (models/NAME.toml), scene files or globs" in error
+
+
 def test_the_compiled_run_shows_progress_and_keeps_its_numbers(capsys):
     """With the bar, and with the compiled loop loaded first for on_ready (a run of a
     nanosecond), the numbers are herringbone.simulate's to the bit."""
@@ -427,3 +452,14 @@ def test_an_unexpected_error_is_not_taken_for_an_interrupt(monkeypatch):
     monkeypatch.setattr(run, "execute", execute)
     with pytest.raises(ZeroDivisionError):
         main(["run", "reference"])
+
+
+def test_info_gives_a_backward_speed_with_its_sign(tmp_path, capsys):
+    """w0_pinion < 0 turns the train backwards (docs/model.md): `info` gives the speed as the
+    scene does, and the mesh frequency, which has no sign, as at the forward speed."""
+    scene = tmp_path / "backwards.toml"
+    scene.write_text((MODELS / "reference.toml").read_text().replace(
+        "w0_pinion = 157.08", "w0_pinion = -157.08"))
+    assert main(["info", str(scene)]) == 0
+    assert "Mesh frequency at w0_pinion = -157.08 rad/s (-1500 rpm): 250.00 Hz" in \
+        capsys.readouterr().out

@@ -431,7 +431,8 @@ def test_fmpy_command_line_fails_with_the_message(fmu, tmp_path):
                   "--start-values", "m_pinion", "-1"], tmp_path)
     assert run.returncode == 1
     first_line = run.stderr.splitlines()[0]
-    assert first_line == "HerringboneGear: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg"
+    assert first_line == ("HerringboneGear: error: parameter m_pinion is -1.0 kg; allowed: "
+                          "> 0 kg and finite")
 
 
 def test_fmpy_with_logging_on_gets_the_message_in_its_log_only(fmu, tmp_path):

@@ -100,3 +100,74 @@ def test_scene_error_carries_its_fields():
     assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: a whole number >= 1"
     again = pickle.loads(pickle.dumps(error))
     assert (str(again), again.key) == (str(error), "z_pinion")
+
+
+@pytest.mark.parametrize("path, shown", [(None, "None (NoneType)"), (123, "123 (int)"),
+                                         ("", "'' (empty)"), ([1, 2], "[1, 2] (list)")])
+def test_a_path_that_names_no_file_is_blamed_on_the_argument(path, shown):
+    """load_scene of something that is no path, or of '' (which pathlib reads as the current
+    folder), names its argument, what it got and what is allowed: not a TypeError, not "."."""
+    with pytest.raises(SceneError) as raised:
+        herringbone.load_scene(path)
+    message = str(raised.value)
+    assert message.startswith(f"load_scene: path is {shown}; allowed: a scene file"), message
+    assert "shipped scene" in message and "\n" not in message
+    assert raised.value.key == "path"
+
+
+@pytest.mark.parametrize("data", [[1, 2], None, "reference"])
+def test_scene_from_dict_of_no_dict_names_its_argument(data):
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict(data)
+    message = str(raised.value)
+    assert message.startswith(f"scene_from_dict: data is {data!r} ({type(data).__name__}); "
+                              "allowed: a dict of the scene file's tables"), message
+    assert "unknown table" not in message
+
+
+def test_a_value_of_with_parameters_or_with_inputs_is_not_blamed_on_the_file(reference_scene):
+    """The file said nothing wrong: the message names the call that handed the value over;
+    its fields still say which table and key (the FMU words them its own way)."""
+    cases = [(lambda: reference_scene.with_parameters(zeta_mesh=-1.0),
+              "with_parameters: zeta_mesh is -1.0; allowed: >= 0 and finite", "parameters"),
+             (lambda: reference_scene.with_parameters(c_pont=1e8),
+              "with_parameters: unknown parameter 'c_pont'; did you mean 'c_point'?",
+              "parameters"),
+             (lambda: reference_scene.with_inputs(M_motor=float("nan")),
+              "with_inputs: M_motor is nan; allowed: any finite number, in N.m", "inputs"),
+             (lambda: reference_scene.with_inputs(table=[[0.1, 500.0, 1800.0]]),
+              "with_inputs: table must start at time 0, its first row is at 0.1", "inputs")]
+    for provoke, expected, table in cases:
+        with pytest.raises(SceneError) as raised:
+            provoke()
+        error = raised.value
+        assert str(error) == expected
+        assert (error.table, error.call, error.source) == (table, expected.split(":")[0],
+                                                           reference_scene.source)
+        assert str(pickle.loads(pickle.dumps(error))) == expected
+    # a value of the file is still the file's
+    with pytest.raises(SceneError, match=r"^x\.toml: \[parameters\] zeta_mesh is -1\.0"):
+        herringbone.scene_from_dict({"parameters": {"zeta_mesh": -1.0}}, source="x.toml")
+
+
+def test_every_range_that_refuses_inf_says_finite():
+    """Range.contains refuses inf, so the words of every parameter and input with an open end
+    say "finite" (c_point = inf was told "allowed: > 0 N/m", which inf satisfies)."""
+    from herringbone.model.parameters import INPUTS, PARAMETERS
+
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"c_point": float("inf")}})
+    assert raised.value.problem == "c_point is inf; allowed: > 0 N/m and finite"
+    for name, p in {**PARAMETERS, **INPUTS}.items():
+        if p.kind is not float:
+            continue
+        table = "inputs" if name in INPUTS else "parameters"
+        with pytest.raises(SceneError) as raised:
+            herringbone.scene_from_dict({table: {name: float("inf")}})
+        assert "finite" in raised.value.problem or p.allowed.high is not None, name
+
+
+def test_a_flag_of_the_wrong_kind_is_shown_with_what_it_got():
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"contact_loss": "yes"}})
+    assert raised.value.problem == "contact_loss must be true or false, got str 'yes'"

@@ -65,8 +65,9 @@ def scene_report(scene) -> str:
     if p["edge_ramp"] > 0:
         lines.append(f"  (edge_ramp {1e3 * p['edge_ramp']:g} mm widens each point's span: the "
                      "model counts more points than this law)")
-    speed = abs(p["w0_pinion"])
-    f_mesh = speed * g.z_pinion / (2.0 * math.pi)
+    # the speed as the scene gives it (w0_pinion < 0 turns backwards); a frequency has no sign
+    speed = p["w0_pinion"]
+    f_mesh = abs(speed) * g.z_pinion / (2.0 * math.pi)
     lines += ["", f"Mesh frequency at w0_pinion = {speed:g} rad/s "
                   f"({speed * RPM_PER_RAD_S:.0f} rpm): {f_mesh:.2f} Hz", ""]
     frequencies, shapes, names = natural_modes(scene, pinion_angle=None)

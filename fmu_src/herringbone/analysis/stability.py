@@ -98,11 +98,7 @@ def periodic_monodromy(mass, stretches, durations, substeps=SUBSTEPS,
     inverse_mass, size = np.linalg.inv(mass), 2 * len(mass)
     durations = np.asarray(durations, dtype=float)
     batch_shape, durations = durations.shape[:-1], durations.reshape(-1, len(stretches))
-    fastest = np.array([np.abs(np.linalg.eigvals(s.state_matrices([0.0, 0.5, 1.0], inverse_mass)))
-                        .max() for s in stretches])
-    # powers of two: a sweep of speeds falls into few groups that share their step counts
-    refine = np.maximum(durations * fastest / (step_phase * substeps), 1.0)
-    steps = substeps * 2 ** np.ceil(np.log2(refine)).astype(int)
+    steps = magnus_steps(stretches, inverse_mass, durations, substeps, step_phase)
     result = np.empty((len(durations), size, size))
     for pattern in np.unique(steps, axis=0):
         rows = np.flatnonzero(np.all(steps == pattern, axis=1))
@@ -112,6 +108,34 @@ def periodic_monodromy(mass, stretches, durations, substeps=SUBSTEPS,
                 phi = _magnus_product(stretch, inverse_mass, duration, count) @ phi
             result[chunk] = phi
     return result.reshape(batch_shape + (size, size))
+
+
+def magnus_steps(stretches, inverse_mass, durations, substeps=SUBSTEPS,
+                 step_phase=STEP_PHASE) -> np.ndarray:
+    """The Magnus steps periodic_monodromy takes over each stretch of each row of `durations`
+    (s, shape (B, len(stretches))): at least `substeps`, and a power of two times that to keep
+    each step within `step_phase` radians of the stretch's fastest frozen mode."""
+    fastest = np.array([np.abs(np.linalg.eigvals(s.state_matrices([0.0, 0.5, 1.0], inverse_mass)))
+                        .max() for s in stretches])
+    # powers of two: a sweep of speeds falls into few groups that share their step counts
+    refine = np.maximum(durations * fastest / (step_phase * substeps), 1.0)
+    return substeps * 2 ** np.ceil(np.log2(refine)).astype(int)
+
+
+def modulus_resolution(stretches, durations, substeps=SUBSTEPS,
+                       step_phase=STEP_PHASE) -> np.ndarray:
+    """What |λ| of the rigid-free system (mass I, the stretches' size n) can resolve at each
+    row of `durations` (s, shape (B, len(stretches))): N·2n·ε, a pure number per period.
+
+    Φ is the product of the period's N Magnus factors (magnus_steps), each of size 2n: each
+    factor and each product of two rounds to about 2n·ε of its norm (ε the float's epsilon,
+    2.2e-16), and the N of them add up, so a multiplier on the unit circle comes out as
+    1 ± N·2n·ε. An excess |λ|max − 1 within it is rounding, not growth: measured on undamped
+    trains from 5 to 20 000 rad/s (N 16 to 16 896), at most 0.08 of it. In the exponent it is
+    ln(1 + N·2n·ε)/T 1/s, T the period (StabilityChart.exponent_resolution)."""
+    size = 2 * stretches[0].stiffness.shape[-1]
+    steps = magnus_steps(stretches, np.eye(size // 2), durations, substeps, step_phase)
+    return steps.sum(axis=-1) * size * np.finfo(float).eps
 
 
 def _magnus_product(stretch, inverse_mass, durations, count):
@@ -190,7 +214,10 @@ PROGRESS_BATCHES = 10  # stability_chart's batches of speeds when it reports its
 @dataclass(frozen=True)
 class StabilityChart:
     """The largest Floquet multiplier over a range of pinion speeds, as |λ|max per mesh period
-    and as the largest Floquet exponent ln|λ|max/T (1/s), and the bands where it exceeds 1.
+    and as the largest Floquet exponent ln|λ|max/T (1/s), the bands where it exceeds 1 by more
+    than rounding, and that rounding (`resolution`, modulus_resolution): where |λ|max is 1
+    within it, a disturbance neither grows nor decays as far as the computation can tell
+    (`neutral`; every speed of a train without damping, but inside its bands).
 
     The exponent is what the chart shows: a disturbance grows (> 0) or decays (< 0) like
     exp(exponent·t) whatever the speed, whereas |λ|max per period of a train whose least-damped
@@ -198,19 +225,39 @@ class StabilityChart:
     reads like an approach to instability that is not there."""
     speeds: np.ndarray  # pinion speeds, rad/s, ascending
     largest_modulus: np.ndarray  # |λ|max at each speed, per mesh period
-    unstable_bands: tuple[tuple[float, float], ...]  # (from, to) rad/s where |λ|max > 1
+    # (from, to) rad/s where |λ|max > 1 + resolution
+    unstable_bands: tuple[tuple[float, float], ...]
     mesh_teeth: int  # z_pinion: mesh frequency = speed·z_pinion/(2π)
+    resolution: np.ndarray  # |λ|max's rounding at each speed, per mesh period (pure number)
 
     @property
     def largest_exponent(self) -> np.ndarray:
         """ln|λ|max / T at each speed, 1/s, T = 2π/(z_pinion·speed) the mesh period."""
-        return np.log(self.largest_modulus) * self.speeds * self.mesh_teeth / (2.0 * math.pi)
+        return np.log(self.largest_modulus) / self._period
+
+    @property
+    def exponent_resolution(self) -> np.ndarray:
+        """The exponent's rounding at each speed, ln(1 + resolution)/T, 1/s."""
+        return np.log1p(self.resolution) / self._period
+
+    @property
+    def neutral(self) -> np.ndarray:
+        """At each speed, whether |λ|max is 1 within its rounding (nothing grows or decays)."""
+        return np.abs(self.largest_modulus - 1.0) <= self.resolution
+
+    @property
+    def _period(self) -> np.ndarray:
+        """The mesh period at each speed, s."""
+        return 2.0 * math.pi / (self.speeds * self.mesh_teeth)
 
 
-def unstable_bands(parameter, largest_modulus) -> tuple[tuple[float, float], ...]:
-    """The intervals of a sampled parameter where |λ|max > 1, their edges interpolated linearly
-    in |λ|max − 1 between samples (a band open at an end of the samples ends there)."""
-    x, excess = np.asarray(parameter, dtype=float), np.asarray(largest_modulus) - 1.0
+def unstable_bands(parameter, largest_modulus, resolution=0.0) -> tuple[tuple[float, float], ...]:
+    """The intervals of a sampled parameter where |λ|max > 1 + `resolution` (what the
+    computation resolves, a pure number or one per sample, modulus_resolution; 0: any excess),
+    their edges interpolated linearly in |λ|max − 1 − resolution between samples (a band open
+    at an end of the samples ends there)."""
+    x = np.asarray(parameter, dtype=float)
+    excess = np.asarray(largest_modulus) - 1.0 - np.asarray(resolution, dtype=float)
     change = np.diff(np.concatenate([[0], (excess > 0.0).astype(int), [0]]))
     firsts, lasts = np.flatnonzero(change == 1), np.flatnonzero(change == -1) - 1
 
@@ -258,16 +305,23 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
     """
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
-    batches = np.array_split(speeds, min(len(speeds), PROGRESS_BATCHES)) \
-        if on_progress is not None else [speeds]
+    # the model once for every batch and for the resolution (monodromy builds its own)
+    model = GearTrainModel(scene)
+    stretches, lengths = mesh_stretches(model)
+    durations = lengths / speeds[:, None]
+    batches = np.array_split(np.arange(len(speeds)), min(len(speeds), PROGRESS_BATCHES)) \
+        if on_progress is not None else [np.arange(len(speeds))]
     parts = []
     for batch in batches:
-        parts.append(largest_multiplier(scene, batch, substeps, step_phase))
+        phi = periodic_monodromy(np.eye(model.size - 1), stretches, durations[batch], substeps,
+                                 step_phase)
+        parts.append(np.abs(np.linalg.eigvals(phi)).max(axis=-1))
         if on_progress is not None:
             on_progress(len(batch))
     largest = np.concatenate(parts)
-    return StabilityChart(speeds, largest, unstable_bands(speeds, largest),
-                          scene.parameters["z_pinion"])
+    resolution = modulus_resolution(stretches, durations, substeps, step_phase)
+    return StabilityChart(speeds, largest, unstable_bands(speeds, largest, resolution),
+                          scene.parameters["z_pinion"], resolution)
 
 
 def plot_stability_chart(chart: StabilityChart, path, title=None):

@@ -16,12 +16,13 @@ FMU with fmpy instead of the package's integrator.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..arguments import SWEEP_METHODS, check_speeds, check_values
-from ..model.parameters import INPUTS, unit_of, with_unit
+from ..arguments import SWEEP_METHODS, check_scene, check_speeds, check_values
+from ..model.parameters import INPUTS, unit_of, values_problem, with_unit
 from ..optional import require
 from ..suggest import did_you_mean
 from .progress_bar import progress_bar
@@ -40,8 +41,13 @@ class Point:
 
 
 def sweep_axes(scene, speeds=None, params=None) -> dict[str, np.ndarray]:
-    """The swept quantities and their values, checked: at most two, each a scene parameter
-    (w0_pinion for `speeds`, rad/s) or M_motor/M_load, finite numbers, no repeats."""
+    """The swept quantities and their values, checked: a Scene (else SceneError), at most two
+    quantities, each a scene parameter (w0_pinion for `speeds`, rad/s) or M_motor/M_load,
+    `params` a dict of them, finite numbers, each value once."""
+    check_scene(scene)
+    if params is not None and not isinstance(params, Mapping):
+        raise ValueError(f"params is a {type(params).__name__} ({params!r}); allowed: a dict "
+                         "{parameter name: values}, e.g. {\"zeta_mesh\": [0.02, 0.05]}")
     axes = {} if speeds is None else {SPEED: speeds}
     for name, values in (params or {}).items():
         if name in axes:
@@ -61,8 +67,17 @@ def sweep_axes(scene, speeds=None, params=None) -> dict[str, np.ndarray]:
             raise ValueError(f"{name} is not a parameter of scene {scene.name}"
                              f"{did_you_mean(name, known)}; allowed: "
                              f"{', '.join(sorted(scene.parameters))}, M_motor, M_load")
-        checked[name] = (check_values(check_speeds(values), "speeds") if name == SPEED
+        label = "speeds" if name == SPEED else name
+        checked[name] = (check_values(check_speeds(values), label) if name == SPEED
                          else check_values(values, name))
+        problem = None if name == SPEED else values_problem(name, checked[name])
+        if problem is not None:
+            raise ValueError(f"params[{name!r}]: {problem}")
+        unique, counts = np.unique(checked[name], return_counts=True)
+        if (counts > 1).any():
+            # a point twice is a mistake: a branch cannot step from a value to itself
+            raise ValueError(f"{label} holds {unique[counts > 1][0]:g} more than once; "
+                             "allowed: distinct values, each point once")
     return checked
 
 
@@ -110,17 +125,15 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     """The table (pandas DataFrame, a row per point in grid order) and, per point, its
     window series (for spectra). workers: 0 runs the points here, one after the other; N >= 1
     starts a LocalCluster of N single-threaded worker processes (None: one per core);
-    scheduler: address of a running Dask scheduler (workers is then ignored)."""
+    scheduler: address of a running Dask scheduler (workers is then ignored). Every argument
+    and every point is checked before any process starts (check_sweep, method "time")."""
     pd = require("pandas", "a sweep's table")
 
     from .distributed_run import map_points
 
-    if fmu is not None:
-        from .sweep_fmu import check_fmu
-        check_fmu(fmu)
+    check_sweep(scene, speeds, params, protocol, "time", workers=workers,
+                scheduler=scheduler, fmu=fmu, progress=progress)
     points = grid(sweep_axes(scene, speeds, params))
-    for point in points:  # bad values fail here, before any process starts
-        scene_at(scene, point)
     results = map_points(run_point, points, (scene, protocol, fmu), workers, scheduler,
                          progress)
     table = pd.DataFrame([row for row, _ in results])
@@ -163,41 +176,39 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     ----------
     scene : Scene
     speeds : array_like or None
-        Pinion speeds w0_pinion, rad/s.
+        Pinion speeds w0_pinion, rad/s, each once (a repeated value is refused).
     params : dict or None
-        {parameter name (or "M_motor", "M_load"): values, in its unit}; with `speeds`, at
-        most two quantities (a grid). One torque swept with balanced torques: the other follows.
+        {parameter name (or "M_motor", "M_load"): values, in its unit, each once}; with
+        `speeds`, at most two quantities (a grid). One torque swept: the other follows.
+        Each point needs constant torques that balance (M_load = u·M_motor), M_motor > 0.
     protocol : Protocol
         How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
     method : {"shooting", "time"} or None
         "shooting" (None's choice where it applies: one quantity — the speed, or a continuous
-        parameter or torque at one speed or none — at balanced constant torques, no FMU): the
-        branches of periodic steady states (analysis.continuation); elsewhere refused with
-        the reason. "time" (None's choice elsewhere): each point past its transient.
+        parameter or torque at one speed or none —, no FMU): the branches of periodic steady
+        states (analysis.continuation); elsewhere refused with the reason. "time" (None's
+        choice elsewhere): each point past its transient. Never chosen by `workers`.
     **options
-        workers (0: here, one point after the other; None: one Dask process per core),
-        scheduler (a Dask scheduler's address), fmu (through this gear FMU): time only;
-        progress (a bar on stderr); doubling (shooting; False: no period-2 branch).
+        workers (0: here, one point after the other; None: one Dask process per core; N >= 1
+        and scheduler, a Dask scheduler's address: time only), fmu (through this gear FMU of
+        the scene: time), progress (a bar on stderr), doubling (False: no period-2 branch).
 
     Returns
     -------
     pandas.DataFrame
-        "time": a row per point in grid order: the swept values, then speed_rpm, K_v, forces
-        (N), dte (µm), contact_lost_share, floquet_max (the columns name their units), method
-        and stability "time". "shooting": a row per branch point in branch order (a row at
-        each requested value the branch passes, several where it folds back over it, and the
-        points that passing a fold took, on_grid False): the continued quantity, speed_rpm,
-        the torque following a swept one (M_load_Nm, M_motor_Nm), the same figures, the
-        orbit's floquet_max and floquet_exponent_per_s (1/s), stability ("stable", "unstable",
-        "time": no orbit converged, run by time integration), method, on_grid, event ("fold",
-        "period doubling", "torus"), mesh_periods, branch (Branch.table); attrs: "continued",
-        "folds", "period_doublings", "folds_2T" (values).
+        "time": a row per point in grid order: the swept values, speed_rpm, K_v, forces (N),
+        dte (µm), contact_lost_share, floquet_max (columns name their units), method and
+        stability "time". "shooting": a row per branch point in branch order (at each value
+        the branch passes, several where it folds back, and those between, on_grid False):
+        the continued quantity, speed_rpm, the torque following a swept one (M_load_Nm,
+        M_motor_Nm), the same figures, floquet_max and floquet_exponent_per_s (1/s) of the
+        orbit, stability ("stable", "unstable", "time": no orbit converged), method, on_grid,
+        event, mesh_periods, branch; attrs: continued, folds, period_doublings, folds_2T.
 
     Raises
     ------
     ValueError
-        A swept name or value that is not allowed, or method "shooting" where it does not
-        apply, before any work.
+        Before any work, anything not allowed (check_sweep); SceneError for no Scene.
     MissingDependency
         pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
 
@@ -209,11 +220,13 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     >>> table.loc[table.on_grid, "K_v"].round(2).tolist()  # the dynamic factor at each speed
     [1.5, 1.47, 1.49]
     """
-    if runs_by_time(scene, speeds, params, method, options.get("fmu")):
-        table = run_sweep(scene, speeds, params, protocol, **options)[0]
-        return table.assign(stability="time", method="time")
-    return shooting_sweep(scene, speeds, protocol, progress=options.get("progress", True),
-                          params=params, doubling=options.get("doubling", True))
+    method = check_sweep(scene, speeds, params, protocol, method, **options)
+    doubling = options.pop("doubling", True)  # False only with shooting (check_sweep)
+    if method == "time":
+        return run_sweep(scene, speeds, params, protocol, **options)[0].assign(
+            stability="time", method="time")
+    return shooting_sweep(scene, speeds, protocol, options.get("progress", True), params,
+                          doubling)
 
 
 def runs_by_time(scene, speeds, params, method, fmu) -> bool:
@@ -230,6 +243,91 @@ def runs_by_time(scene, speeds, params, method, fmu) -> bool:
         raise ValueError(f"method 'shooting' cannot run this sweep: {why_not}; "
                          "allowed: method='time'")
     return method == "time" or bool(why_not)
+
+
+def check_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
+                method=None, **options) -> str:
+    """Every argument of `sweep` and every point, before any work: the method the sweep runs
+    by ("shooting" or "time"; runs_by_time). ValueError (SceneError for something that is
+    not a Scene) naming the first culprit and what is allowed: the swept values
+    (sweep_axes), the protocol, the options (check_options), each point (point_problem) and
+    the FMU (sweep_fmu.check_fmu: a gear FMU of this scene)."""
+    check_scene(scene)
+    if not isinstance(protocol, Protocol):
+        raise ValueError(f"protocol is a {type(protocol).__name__} ({protocol!r}); allowed: "
+                         "a herringbone.analysis.sweep_point.Protocol, e.g. "
+                         "Protocol(settle_time=0.05)")
+    unknown = sorted(set(options) - set(OPTIONS))
+    if unknown:
+        raise ValueError(f"unknown option {unknown[0]}{did_you_mean(unknown[0], OPTIONS)}; "
+                         f"allowed: {', '.join(OPTIONS)}")
+    by_time = runs_by_time(scene, speeds, params, method, options.get("fmu"))
+    check_options(options, by_time)
+    axes = sweep_axes(scene, speeds, params)
+    for point in grid(axes):
+        problem = point_problem(scene_at(scene, point))
+        if problem is not None:
+            where = ", ".join(f"{name} = {value:g}" for name, value in point.values)
+            raise ValueError(f"{scene.source} at {where}: {problem}")
+    if options.get("fmu") is not None:
+        from .sweep_fmu import check_fmu
+        check_fmu(options["fmu"], scene, list(axes))
+    return "time" if by_time else "shooting"
+
+
+# the keyword options of `sweep`, in the order its docstring gives them
+OPTIONS = ("workers", "scheduler", "fmu", "progress", "doubling")
+
+
+def check_options(options: dict, by_time: bool) -> None:
+    """The options of `sweep` for a sweep by time (`by_time`) or by shooting: workers a whole
+    number >= 0 or None, scheduler an address or None, and a sweep by shooting run here
+    (it follows its branch one point from the last: workers 0 or None, no scheduler);
+    doubling=False only with shooting. ValueError naming the first one not allowed."""
+    workers, scheduler = options.get("workers"), options.get("scheduler")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 0):
+        raise ValueError(f"workers is {workers!r}; allowed: a whole number >= 0 "
+                         "(0: no Dask, run here), or None (one process per core)")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ValueError(f"scheduler is {scheduler!r}; allowed: the address of a running "
+                         "Dask scheduler, e.g. \"tcp://HOST:8786\", or None")
+    if not by_time and (workers or scheduler is not None):
+        what = f"workers={workers!r}" if workers else f"scheduler={scheduler!r}"
+        raise ValueError(f"{what}: a sweep by shooting follows its branch here, each point "
+                         "from the last; allowed: workers=0 or None and no scheduler, or "
+                         "method='time' to run the points on Dask")
+    if by_time and options.get("doubling") is False:
+        raise ValueError("doubling=False: allowed: only with a sweep by method 'shooting' "
+                         "(this one runs by time: it follows no branch)")
+
+
+def point_problem(scene) -> str | None:
+    """Why `scene` (a point's) has no steady running state for a sweep to record, or None.
+    It needs constant input torques; a turning pinion; M_motor > 0, since K_v is measured
+    against the static mesh force M_motor/Rp and a negative torque would load the back
+    flanks, on which the model has no contact (docs/model.md section 3); and torques that
+    balance (M_load = u·M_motor), else the train accelerates through the settle and the
+    window, away from the speed the row is labelled with."""
+    from .steady_state import ShootingError, check_balanced
+
+    if len(scene.inputs.times) != 1:
+        return ("a sweep point needs constant input torques; the scene has an input table "
+                "(allowed: [inputs] M_motor, M_load)")
+    if scene.parameters["w0_pinion"] == 0.0:
+        return ("w0_pinion is 0: a sweep point needs a turning pinion (allowed: w0_pinion "
+                "!= 0 rad/s in the scene, or the speeds swept or given)")
+    motor = scene.inputs.M_motor[0]
+    if motor <= 0.0:
+        return (f"M_motor = {motor:g} N·m: the static mesh force M_motor/Rp would be "
+                f"{'zero' if motor == 0.0 else 'negative'} (a negative torque loads the back "
+                "flanks, on which the model has no contact); allowed: M_motor > 0 N·m, "
+                "M_load = u·M_motor")
+    try:
+        check_balanced(scene)
+    except ShootingError as error:
+        return str(error)
+    return None
 
 
 def shooting_sweep(scene, speeds, protocol: Protocol = Protocol(), progress: bool = True,

@@ -58,7 +58,7 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[
 def describe(scene, table, wall: float, args=None) -> str:
     """The summary printed after a sweep."""
     lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
-             *(_branch_lines(table) if is_branch(table) else _time_lines(table)),
+             *(_branch_lines(table) if by_shooting(table) else _time_lines(table)),
              *_k_v_lines(table)]
     if SPEED in swept_names(table) and len(swept_names(table)) == 1:
         low, high = table[SPEED].min(), table[SPEED].max()
@@ -82,7 +82,16 @@ def _k_v_lines(table) -> list[str]:
             f"largest at {resonation_summary(table)}"]
 
 
+def by_shooting(table) -> bool:
+    """Whether a table is sweep's method "shooting" (a branch table: on_grid, attrs
+    "continued"), whatever its rows' stability: where no orbit converged at any point, all
+    its rows are "time" and it still has no settle or window columns."""
+    return "on_grid" in table or "continued" in table.attrs or is_branch(table)
+
+
 def _time_lines(table) -> list[str]:
+    if not {"settle_time_s", "window_time_s", "samples"} <= set(table.columns):
+        return []  # a table of other figures: nothing to say about settling
     settle, window = table["settle_time_s"], table["window_time_s"]
     return [f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
             "the least-damped mode decayed), then a window of "

@@ -13,6 +13,7 @@ from ..arguments import (
     REFERENCE_TOLERANCE_ARGUMENT,
     STOP_TIME,
     number,
+    samples_problem,
 )
 from ..model.scene import load_scene
 from ..optional import require
@@ -73,6 +74,13 @@ def execute(args, parser) -> int:
         fail(parser, f"--output-interval {interval:g} s is longer than the stop time "
                      f"{stop_time:g} s; allowed: > 0 and <= the stop time (give a shorter "
                      "--output-interval or a longer --stop-time)")
+    # here, not only in simulate's own check, so that the message names the options (or the
+    # scene's [experiment], where an option was not given)
+    names = ("--stop-time" if args.stop_time else "[experiment] stop_time",
+             "--output-interval" if args.output_interval else "[experiment] output_interval")
+    too_many = samples_problem(scene, stop_time, interval, names)
+    if too_many is not None:
+        fail(parser, too_many)
     output = default_output(parser, args.output, Path("results") / f"{scene.name}.csv",
                             SUFFIXES)
     if args.plot:

@@ -40,15 +40,34 @@ def execute(args, parser) -> int:
         chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)
     plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
-    exponent = chart.largest_exponent
-    print(f"largest Floquet exponent from {exponent.min():.6g} to {exponent.max():.6g} 1/s "
-          f"over {speeds[0]:g}-{speeds[-1]:g} rad/s (below zero: every disturbance decays; "
-          f"|λ|max per mesh period from {chart.largest_modulus.min():.6g} to "
-          f"{chart.largest_modulus.max():.6g})")
-    for band_low, band_high in chart.unstable_bands:
-        print(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
-              f"({band_low * RPM_PER_RAD_S:.0f}-{band_high * RPM_PER_RAD_S:.0f} rpm)")
-    if not chart.unstable_bands:
-        print("no unstable band: every multiplier inside the unit circle")
+    print("\n".join(summary(chart)))
     print(f"chart written to {output}")
     return 0
+
+
+def summary(chart) -> list[str]:
+    """The chart in lines: the exponent's span, what it means at the speeds (decay, neither
+    growth nor decay within rounding, growth), the unstable bands."""
+    exponent, speeds, neutral = chart.largest_exponent, chart.speeds, chart.neutral
+    decaying = ~neutral & (chart.largest_modulus < 1.0)
+    lines = [f"largest Floquet exponent from {exponent.min():.6g} to {exponent.max():.6g} 1/s "
+             f"over {speeds[0]:g}-{speeds[-1]:g} rad/s (|λ|max per mesh period from "
+             f"{chart.largest_modulus.min():.6g} to {chart.largest_modulus.max():.6g})"]
+    if decaying.all():
+        lines.append("below zero at every speed: every disturbance decays")
+    else:
+        if decaying.any():
+            lines.append(f"below zero at {decaying.sum()} of {len(speeds)} speeds: there every "
+                         "disturbance decays")
+        if neutral.any():
+            lines.append(f"zero within rounding (at most {chart.exponent_resolution.max():.2g} "
+                         f"1/s) at {neutral.sum()} of {len(speeds)} speeds: there the slowest "
+                         "disturbance neither grows nor decays, no damping reaches it (in a "
+                         "train without damping nothing decays)")
+    for band_low, band_high in chart.unstable_bands:
+        lines.append(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
+                     f"({band_low * RPM_PER_RAD_S:.0f}-{band_high * RPM_PER_RAD_S:.0f} rpm)")
+    if not chart.unstable_bands:
+        lines.append("no unstable band: every multiplier inside the unit circle"
+                     + ("" if decaying.all() else " or on it within rounding"))
+    return lines

@@ -22,13 +22,13 @@ from ..arguments import (
     WINDOW_PERIODS,
     existing_fmu,
     number,
+    output_folder,
 )
-from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S
+from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S, values_problem
 from ..model.scene import load_scene
 from ..optional import require
 from ..suggest import did_you_mean
 from .common import (
-    add_output,
     add_progress,
     add_scene,
     add_speeds,
@@ -61,6 +61,9 @@ class _ParamAction(argparse.Action):
                 and SPEED_COUNT.problem(count) is None):
             raise argparse.ArgumentError(self, f"{' '.join(values)}: allowed: FROM < TO, "
                                                "finite, and COUNT >= 2 values")
+        problem = values_problem(name, _values(low, high, int(count)))
+        if problem is not None:
+            raise argparse.ArgumentError(self, f"{' '.join(values)}: {problem}")
         getattr(namespace, self.dest).append((name, low, high, int(count)))
 
 
@@ -99,20 +102,25 @@ def declare(parser) -> None:
                              "switch to and follow the period-2 branch from each (followed by "
                              "default)")
     parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
-    parser.add_argument("--workers", type=number, help="Dask LocalCluster worker processes "
-                        "(default: one per core; 0: no Dask, run here one after the other)")
-    parser.add_argument("--scheduler", help="run on an existing Dask cluster, "
-                        "e.g. tcp://HOST:8786 (its workers need herringbone installed)")
+    parser.add_argument("--workers", type=number, help="where the points run: N Dask "
+                        "LocalCluster worker processes, with --method time (default: one per "
+                        "core); 0: no Dask, run here one after the other, with either method "
+                        "(shooting always runs here)")
+    parser.add_argument("--scheduler", help="with --method time: run on an existing Dask "
+                        "cluster, e.g. tcp://HOST:8786 (its workers need herringbone installed)")
     parser.add_argument("--through-fmu", type=existing_fmu, metavar="FMU",
-                        help="run each point through this gear FMU with fmpy")
+                        help="run each point through this gear FMU with fmpy (one built from "
+                             "SCENE: herringbone build-fmu SCENE)")
     add_progress(parser)
-    add_output(parser, "the table <scene>_sweep_<swept>.csv and its pictures; files of those "
-               "names in it are replaced", "results", folder=True)
+    parser.add_argument("-o", "--output", type=_output_folder, metavar="FOLDER",
+                        help="a folder to write: the table <scene>_sweep_<swept>.csv and its "
+                             "pictures; files of those names in it are replaced (default: "
+                             "results)")
 
 
 def execute(args, parser) -> int:
     """Check everything, run the sweep, write the table first, then the pictures."""
-    from ..analysis.sweep import chained_time_sweep, run_sweep, shooting_sweep
+    from ..analysis.sweep import chained_time_sweep, check_sweep, run_sweep, shooting_sweep
     from ..analysis.sweep_point import Protocol
     from ..analysis.sweep_report import describe, write_outputs
 
@@ -135,6 +143,8 @@ def execute(args, parser) -> int:
     require("pandas", "sweep")
     require("matplotlib", "the sweep's pictures")
     method = _method(parser, args, scene, speeds, params)
+    # the points, the FMU and what the API checks besides: one line each, before any work
+    check_sweep(scene, speeds, params, protocol, method, fmu=args.through_fmu)
     started = time.perf_counter()
     time_sweeps = None
     if method == "shooting":
@@ -167,12 +177,15 @@ def _method(parser, args, scene, speeds, params) -> str:
     if args.method == "shooting" and why_not:
         fail(parser, f"--method shooting: this sweep cannot be run so: {why_not}; allowed: "
                      "--method time")
-    # Dask's workers run time sweeps: asking for them asks for the time method
-    distributed = args.workers is not None or args.scheduler is not None
-    if args.method == "shooting" and distributed:
-        fail(parser, "--workers/--scheduler: allowed: only with --method time (shooting runs "
-                     "here, in milliseconds a point)")
-    method = args.method or ("time" if why_not or distributed else "shooting")
+    # where the points run does not choose the method (as in the API): a branch is followed
+    # here, each point from the last, so only a sweep by time can go to Dask
+    method = args.method or ("time" if why_not else "shooting")
+    if method == "shooting" and (args.workers or args.scheduler is not None):
+        given = (f"--workers {args.workers:g}" if args.workers
+                 else f"--scheduler {args.scheduler}")
+        fail(parser, f"{given}: allowed: only with --method time (this sweep runs by "
+                     "shooting, which follows its branch here, in milliseconds a point; "
+                     "--workers 0 runs here with either method)")
     if args.time_sweeps and method != "shooting":
         fail(parser, "--time-sweeps: allowed: only with a sweep by --method shooting "
                      f"(this one runs by time{': ' + why_not if why_not else ''})")
@@ -183,6 +196,23 @@ def _method(parser, args, scene, speeds, params) -> str:
         fail(parser, "--time-sweeps: allowed: only with a sweep of speeds (--speeds alone); "
                      "this one continues in " + ", ".join(params))
     return method
+
+
+# what -o must not end in: the sweep writes several files into the folder it names
+FILE_SUFFIXES = (".csv", ".png", ".svg", ".pdf", ".jpg", ".jpeg", ".txt", ".json", ".xlsx",
+                 ".parquet", ".html", ".toml", ".fmu", ".ssp", ".zip")
+
+
+def _output_folder(text: str) -> Path:
+    """argparse `type=` for -o: a folder (arguments.output_folder); a new one not named with
+    a file's suffix (FILE_SUFFIXES), checked before output_folder makes it. What exists is
+    taken as it is: a folder, or a file that output_folder refuses."""
+    if not Path(text).exists() and Path(text).suffix.lower() in FILE_SUFFIXES:
+        raise argparse.ArgumentTypeError(
+            f"{text}: names a {Path(text).suffix} file, but -o is a folder for sweep (the "
+            "table and its pictures are written in it); allowed: a folder, e.g. -o "
+            f"{Path(text).parent / Path(text).stem}")
+    return output_folder(text)
 
 
 def _one_speed(parser, args):

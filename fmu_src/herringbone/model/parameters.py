@@ -152,20 +152,34 @@ def with_unit(text: str, unit: str) -> str:
     return f"{text} {unit}"
 
 
+def allowed_words(allowed: Range, unit: str = "", whole: bool = False, infinite: bool = False,
+                  meaning: str = "") -> str:
+    """What `allowed` admits, as messages say it, with the unit: "> 0 N/m and finite",
+    "(0, 1.5708) rad, an angle in radians", "any finite number, in N.m". A range open at an
+    end says "and finite" (Range.contains refuses inf, which "> 0" alone would seem to admit),
+    unless `infinite` (+inf allowed too: "or inf") or `whole` (a whole number is finite);
+    `meaning` closes it in parentheses."""
+    bounded = allowed.low is not None or allowed.high is not None
+    described = with_unit(allowed.describe(), unit) if bounded or unit in ("", "1") \
+        else f"{allowed.describe()}, in {unit}"
+    if infinite:
+        described += " or inf"
+    elif bounded and (allowed.low is None or allowed.high is None) and not whole:
+        described += " and finite"
+    described = f"a whole number {described}" if whole else described
+    described += ", an angle in radians" if unit == "rad" else ""
+    return described + (f" ({meaning})" if meaning else "")
+
+
 def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
                    infinite: bool = False, meaning: str = "") -> str | None:
     """Why `value` is not an allowed number, or None: the one check of a number against its
     range, for the parameters and inputs of a scene (check_value) and the run arguments
     (herringbone.arguments.Argument). The message gives the value and what is allowed with
-    the unit ("is 22.86 rad; allowed: (0, 1.5708) rad, an angle in radians"); `whole`: a whole
-    number; `infinite`: +inf allowed too ("no limit"); `meaning` closes it in parentheses."""
-    described = with_unit(allowed.describe(), unit) if allowed.low is not None \
-        or allowed.high is not None or unit in ("", "1") \
-        else f"{allowed.describe()}, in {unit}"
-    described += " or inf" if infinite else ""
-    described = f"a whole number {described}" if whole else described
-    described += ", an angle in radians" if unit == "rad" else ""
-    described += f" ({meaning})" if meaning else ""
+    the unit ("is 22.86 rad; allowed: (0, 1.5708) rad, an angle in radians"; allowed_words);
+    `whole`: a whole number; `infinite`: +inf allowed too ("no limit"); `meaning` closes it in
+    parentheses."""
+    described = allowed_words(allowed, unit, whole, infinite, meaning)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return f"must be a number, got {type(value).__name__} {value!r}; allowed: {described}"
     number = float(value)
@@ -178,10 +192,22 @@ def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
 
 def check_value(parameter: Parameter, value) -> str | None:
     """Why `value` is not allowed for `parameter`, or None if it is (number_problem, with the
-    parameter's unit; a flag must be true or false)."""
+    parameter's unit; a flag must be true or false, and the message says what it got)."""
     if parameter.kind is bool:
-        return None if isinstance(value, bool) else "must be true or false"
+        return None if isinstance(value, bool) \
+            else f"must be true or false, got {type(value).__name__} {value!r}"
     return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int)
+
+
+def values_problem(name: str, values) -> str | None:
+    """Why a value of the parameter or input `name` among `values` (a sweep's, a
+    continuation's) is not allowed, the first one, as "NAME is VALUE; allowed: …", or None."""
+    parameter = {**PARAMETERS, **INPUTS}[name]
+    for value in values:
+        problem = check_value(parameter, float(value))
+        if problem is not None:
+            return f"{name} {problem}"
+    return None
 
 
 def name_with_unit(name: str) -> str:

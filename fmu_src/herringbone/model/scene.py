@@ -8,13 +8,17 @@ A scene file is TOML with four tables, all optional:
     [inputs]       M_motor = 500, M_load = 1800   (constants), or
                    table = [[time, M_motor, M_load], ...]   (each row held until the next)
 
-Every problem is reported as one SceneError naming the file, the key and what is allowed.
+Every problem is reported as one SceneError naming the file, the key and what is allowed; a
+value handed over by Scene.with_parameters or Scene.with_inputs is named by that call, not the
+file (the file did not say it).
 """
 from __future__ import annotations
 
 import bisect
 import math
+import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import cast
 
@@ -36,21 +40,27 @@ class SceneError(ValueError):
     """A scene that cannot be simulated; the message names the culprit and what is allowed.
 
     Its fields say where the problem lies, for a caller that words it its own way (the FMU):
-    `source` the file (or "<scene>"; None where there is no scene at all), `table` the table of
-    the scene file ("parameters", "components", "experiment", "inputs"; None for the file as a
-    whole), `key` the parameter, component or key at fault (None if none), `problem` what is
-    wrong, the key named in it ("z_pinion is 0; allowed: >= 1"). str() is the one-line message
-    "SOURCE: [TABLE] PROBLEM" (without the parts that are None)."""
+    `source` the file (or "<scene>"; None where there is no scene at all; for a value of a
+    `call`, the file of the scene it changed), `table` the table of the scene file
+    ("parameters", "components", "experiment", "inputs"; None for the file as a whole), `key`
+    the parameter, component or key at fault (None if none), `problem` what is wrong, the key
+    named in it ("z_pinion is 0; allowed: >= 1"), `call` the function that handed the value
+    over ("with_parameters", "with_inputs", "load_scene"; None: it came from the file or dict,
+    `source`). str() is the one-line message "SOURCE: [TABLE] PROBLEM" (without the parts that
+    are None), or "CALL: PROBLEM" for a value of a call: its scene's file did not say it."""
 
     def __init__(self, problem: str, source: str | None = None, table: str | None = None,
-                 key: str | None = None):
+                 key: str | None = None, call: str | None = None):
         self.problem, self.source, self.table, self.key = problem, source, table, key
+        self.call = call
         prefix = "" if source is None else f"{source}: "
-        super().__init__(f"{prefix}{'' if table is None else f'[{table}] '}{problem}")
+        where = f"{prefix}{'' if table is None else f'[{table}] '}" if call is None \
+            else f"{call}: "
+        super().__init__(f"{where}{problem}")
 
     def __reduce__(self):
         """Pickled with its fields (a sweep's workers send it back to the client)."""
-        return type(self), (self.problem, self.source, self.table, self.key)
+        return type(self), (self.problem, self.source, self.table, self.key, self.call)
 
 
 @dataclass(frozen=True)
@@ -111,7 +121,13 @@ class Scene:
         >>> staggered = herringbone.load_scene("reference").with_parameters(stagger=0.5)
         >>> staggered.parameters["stagger"], staggered.parameters["w0_pinion"]
         (0.5, 157.08)
+        >>> herringbone.load_scene("reference").with_parameters(zeta_mesh=-1.0)
+        Traceback (most recent call last):
+        herringbone.model.scene.SceneError: with_parameters: zeta_mesh is -1.0; allowed: >= 0
+        and finite
         """
+        # checked here first, so that a bad value is named by this call, not the scene's file
+        _check_parameters(changes, self.components, self.source, call="with_parameters")
         return replace(self, given={**self.given, **changes})
 
     def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
@@ -130,7 +146,7 @@ class Scene:
         data = {"table": table} if table is not None else {
             "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,
             "M_load": self.inputs.M_load[0] if M_load is None else M_load}
-        return replace(self, inputs=_inputs(data, self.source))
+        return replace(self, inputs=_inputs(data, self.source, call="with_inputs"))
 
 
 def load_scene(path) -> Scene:
@@ -150,7 +166,8 @@ def load_scene(path) -> Scene:
     ------
     SceneError
         One line naming the file, the key and what is allowed (and the closest shipped name
-        or parameter for a misspelt one).
+        or parameter for a misspelt one); for a `path` that is no path (None, a number, ''),
+        naming the argument.
 
     Examples
     --------
@@ -159,7 +176,7 @@ def load_scene(path) -> Scene:
     >>> scene.parameters["w0_pinion"], scene.inputs.M_motor  # rad/s, N·m
     (157.08, (500.0,))
     """
-    given, path = path, resolve_scene(path)
+    given, path = path, resolve_scene(_scene_path(path))
     if path.is_dir():
         raise SceneError("a folder, not a scene file; allowed: a scene file (TOML) or the name "
                          "of a shipped scene (`herringbone scenes`)", str(path))
@@ -173,6 +190,26 @@ def load_scene(path) -> Scene:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise SceneError(f"not a valid TOML file: {error}", str(path)) from None
     return scene_from_dict(data, name=path.stem, source=str(path))
+
+
+SCENE_PATH_ALLOWED = ("a scene file (TOML) as a str or pathlib.Path, or the name of a shipped "
+                      "scene (`herringbone scenes`)")
+
+
+def _scene_path(path):
+    """`path` of load_scene if it can name a file; else SceneError naming the argument (an
+    empty str would be read as the current folder)."""
+    try:
+        text = os.fspath(path)
+    except TypeError:
+        text = None
+    if not isinstance(text, str):
+        raise SceneError(f"path is {path!r} ({type(path).__name__}); allowed: "
+                         f"{SCENE_PATH_ALLOWED}", key="path", call="load_scene")
+    if not text:
+        raise SceneError(f"path is {path!r} (empty); allowed: {SCENE_PATH_ALLOWED}", key="path",
+                         call="load_scene")
+    return path
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") -> Scene:
@@ -195,7 +232,8 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
     Raises
     ------
     SceneError
-        One line naming the key and what is allowed.
+        One line naming the key and what is allowed (the argument, for `data` that is no
+        dict).
 
     Examples
     --------
@@ -207,10 +245,16 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
     >>> herringbone.scene_from_dict({"parameters": {"zeta_mesh": -1.0}})
     Traceback (most recent call last):
     herringbone.model.scene.SceneError: <scene>: [parameters] zeta_mesh is -1.0; allowed: >= 0
+    and finite
     """
+    if not isinstance(data, Mapping):
+        raise SceneError(f"data is {data!r} ({type(data).__name__}); allowed: a dict of the "
+                         f"scene file's tables, {{\"parameters\": {{...}}, "
+                         "\"components\": {...}, \"experiment\": {...}, \"inputs\": {...}}, "
+                         "any of them left out", key="data", call="scene_from_dict")
     unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
     if unknown:
-        key = sorted(unknown)[0]
+        key = sorted(unknown, key=str)[0]
         raise SceneError(f"unknown table [{key}]; allowed: [parameters], [components], "
                          "[experiment], [inputs]", source, key=key)
     components = _components(_table(data, "components", source), source)
@@ -240,21 +284,29 @@ def _components(table, source):
     return {c: components.get(c, True) for c in COMPONENTS}
 
 
-def _complete_parameters(given, components, source):
+def _check_parameters(given, components, source, call=None):
+    """SceneError for the first of the `given` parameters that is unknown, of a component the
+    train leaves out, or out of its range; `call` names where they came from (None: the
+    file or dict `source`)."""
     carried = parameters_of(components)
     for key, value in given.items():
         if key not in PARAMETERS:
             hint = (" (inputs belong in [inputs])" if key in INPUTS
                     else did_you_mean(key, PARAMETERS))
-            raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key)
+            raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key, call)
         if key not in carried:
             raise SceneError(f"{key} belongs to the component '{PARAMETERS[key].component}', "
                              "which this scene leaves out "
                              f"([components] {PARAMETERS[key].component} = false)",
-                             source, "parameters", key)
+                             source, "parameters", key, call)
         problem = check_value(PARAMETERS[key], value)
         if problem:
-            raise SceneError(f"{key} {problem}", source, "parameters", key)
+            raise SceneError(f"{key} {problem}", source, "parameters", key, call)
+
+
+def _complete_parameters(given, components, source):
+    _check_parameters(given, components, source)
+    carried = parameters_of(components)
     values = {name: given.get(name, p.default) for name, p in carried.items()}
     for name, p in carried.items():
         if p.kind is int:
@@ -286,38 +338,40 @@ def _experiment(table, source):
     return experiment
 
 
-def _inputs(table, source):
+def _inputs(table, source, call=None):
+    """The InputSchedule of an [inputs] table (constants or a table of rows); SceneError
+    naming the key, and `call` where the values came from (None: the file or dict `source`)."""
+    def error(problem, key):
+        return SceneError(problem, source, "inputs", key, call)
+
     if "table" in table:
         if set(table) != {"table"}:
-            raise SceneError("give either constants (M_motor, M_load) or a table, not both",
-                             source, "inputs", "table")
+            raise error("give either constants (M_motor, M_load) or a table, not both", "table")
         rows = table["table"]
         if not isinstance(rows, list) or not rows:
-            raise SceneError("table must be a list of rows [time, M_motor, M_load]", source,
-                             "inputs", "table")
+            raise error("table must be a list of rows [time, M_motor, M_load]", "table")
         for i, row in enumerate(rows):
             if not isinstance(row, list) or len(row) != 3 or not all(
                     isinstance(v, (int, float)) and not isinstance(v, bool)
                     and math.isfinite(v) for v in row):
-                raise SceneError(f"table row {i} is {row!r}; allowed: three finite numbers "
-                                 "[time, M_motor, M_load]", source, "inputs", "table")
+                raise error(f"table row {i} is {row!r}; allowed: three finite numbers "
+                            "[time, M_motor, M_load]", "table")
         times = [float(row[0]) for row in rows]
         if times[0] != 0.0:
-            raise SceneError(f"table must start at time 0, its first row is at {times[0]:g}",
-                             source, "inputs", "table")
+            raise error(f"table must start at time 0, its first row is at {times[0]:g}",
+                        "table")
         if any(b <= a for a, b in zip(times, times[1:])):
-            raise SceneError("table times must increase strictly", source, "inputs", "table")
+            raise error("table times must increase strictly", "table")
         return InputSchedule(tuple(times), tuple(float(r[1]) for r in rows),
                              tuple(float(r[2]) for r in rows))
     values = {}
     for key, value in table.items():
         if key not in INPUTS:
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
-            raise SceneError(f"unknown key '{key}'{hint}; allowed: M_motor, M_load, table",
-                             source, "inputs", key)
+            raise error(f"unknown key '{key}'{hint}; allowed: M_motor, M_load, table", key)
         problem = check_value(INPUTS[key], value)
         if problem:
-            raise SceneError(f"{key} {problem}", source, "inputs", key)
+            raise error(f"{key} {problem}", key)
         values[key] = float(value)
     return InputSchedule((0.0,), (values.get("M_motor", INPUTS["M_motor"].default),),
                          (values.get("M_load", INPUTS["M_load"].default),))
