@@ -191,3 +191,24 @@ def test_bad_continued_quantities_are_refused_by_name(reference_scene):
         continue_in_parameter(reference_scene, "M_load", [0.0, 1800.0])
     with pytest.raises(ValueError, match="pinion_speed"):
         continue_in_parameter(reference_scene, "zeta_mesh", [0.05], pinion_speed=0.0)
+
+
+def test_a_branch_lost_is_begun_again_at_the_next_value_and_flagged_restart(monkeypatch):
+    """Where the continuation cannot go on (its first step fails here, forced), the next
+    requested speed starts the branch again from the last orbit: that orbit is flagged
+    "restart" (no continuity with the one before; the report and the curve say so), and the
+    branch goes on from it as usual."""
+    from herringbone.analysis import continuation
+
+    advance, calls = continuation.Continuation.advance, []
+
+    def lost_once(self):
+        calls.append(self.v[-1])
+        return False if len(calls) == 1 else advance(self)
+
+    monkeypatch.setattr(continuation.Continuation, "advance", lost_once)
+    scene = herringbone.load_scene(MODELS / "reference.toml")
+    branch = continuation.continue_in_speed(scene, [500.0, 600.0, 700.0], doubling=False)
+    events = {point.value: point.events for point in branch.points if point.on_grid}
+    assert events == {500.0: (), 600.0: ("restart",), 700.0: ()}, events
+    assert [point.method for point in branch.points] == ["shooting"] * len(branch.points)

@@ -515,3 +515,46 @@ def test_the_summary_of_a_branch_on_which_no_orbit_converged_names_them(referenc
     written = write_outputs(reference_scene, table, None, tmp_path)
     assert [path.name for path in written] == ["reference_sweep_w0_pinion.csv",
                                                "reference_sweep_w0_pinion_resonance.png"]
+
+
+def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
+        reference_scene):
+    """Where the continuation could not go on (an undamped train's resonance, say) and
+    shooting began again further on, the first orbit there is flagged "restart": the summary
+    names where the branch was lost, and the curve draws no line across what nobody
+    computed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis.sweep_plots import draw_branch
+    from herringbone.analysis.sweep_report import describe
+
+    table = pd.DataFrame({"w0_pinion": [300.0, 303.0, 306.1, 450.0, 600.0],
+                          "speed_rpm": [2865.0, 2893.0, 2923.0, 4297.0, 5730.0],
+                          "K_v": [1.2, 1.6, 2.0, 1.4, 15.0],
+                          "stability": ["stable", "stable", "stable", "time", "stable"],
+                          "mesh_periods": [1] * 5, "event": ["", "", "", "", "restart"],
+                          "contact_lost_share": [0.0] * 5})
+    table.attrs.update(continued="w0_pinion", folds=[])
+    assert ("the branch was lost past 306.1 rad/s: no orbit followed on to 600 rad/s, where "
+            "shooting began again (nothing computed between them)"
+            in describe(reference_scene, table, 1.0).splitlines())
+    figure, axes = plt.subplots(1, 1)
+    draw_branch([axes], table, [("K_v", "k")])
+    (stable,) = [line for line in axes.get_lines() if line.get_label() == "K_v, stable orbits"]
+    x, y = stable.get_xdata(), stable.get_ydata()
+    # the segments drawn, between neighbours that are both numbers: along the orbits up to
+    # 2923 rpm, none into the time point (4297 rpm) nor across to the restart (5730 rpm)
+    drawn = [(float(x[k]), float(x[k + 1])) for k in range(len(x) - 1)
+             if np.isfinite(y[k]) and np.isfinite(y[k + 1])]
+    assert drawn == [(2865.0, 2893.0), (2893.0, 2923.0)], drawn
+    axes.clear()
+    draw_branch([axes], table.drop(index=3), [("K_v", "k")])  # the restart right after
+    (stable,) = [line for line in axes.get_lines() if line.get_label() == "K_v, stable orbits"]
+    x, y = stable.get_xdata(), stable.get_ydata()
+    assert [(float(x[k]), float(x[k + 1])) for k in range(len(x) - 1)
+            if np.isfinite(y[k]) and np.isfinite(y[k + 1])] == [(2865.0, 2893.0),
+                                                                 (2893.0, 2923.0)]
+    plt.close(figure)

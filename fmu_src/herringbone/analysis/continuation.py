@@ -102,7 +102,8 @@ class BranchPoint:
     orbit: PeriodicOrbit | None
     method: str  # "shooting" or "time"
     on_grid: bool  # at one of the requested values
-    events: tuple[str, ...] = ()  # "fold", "period doubling", "torus"
+    # "fold", "period doubling", "torus"; "restart": the first orbit after the branch was lost
+    events: tuple[str, ...] = ()
     figures: dict = field(default_factory=dict)
     tangent_value: float = math.nan  # t_p at the point (its sign: the branch's direction)
     follows: dict = field(default_factory=dict)  # columns that follow p (the other torque)
@@ -454,8 +455,11 @@ class Continuation:
         upward = np.zeros(self.size + 1)
         upward[-1] = 1.0
         self.accept(v, base, taken, fresh, True, upward)
-        if self.points[-1].events and len(self.points) > 1:
-            self.points[-1].events = ()  # no continuity with the point before a gap
+        if len(self.points) > 1:
+            # no continuity with the points before: where an orbit came before, the branch
+            # was lost between the two, and says so ("restart": no line drawn across)
+            lost = any(point.method == "shooting" for point in self.points[:-1])
+            self.points[-1].events = ("restart",) if lost else ()
         return True
 
     def by_time(self, value):

@@ -50,16 +50,21 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
     entry on a panel, however many branches draw it."""
     abscissa = table[along].to_numpy()
     stability = table["stability"].to_numpy()
+    # where the branch was lost and shooting began again, no line: nothing was computed there
+    gaps = np.flatnonzero(table["event"].str.contains("restart").to_numpy())
     for panel, (column, colour) in zip(axes, columns):
         values, name = table[column].to_numpy(), SHOWN_AS.get(column, column)
         for kind, style in (("stable", "-"), ("unstable", "--")):
             if not (stability == kind).any():
                 continue  # no legend entry for a line the picture does not have
-            # each stretch drawn to the next point, so that stretches join
-            shown = (stability == kind) | np.r_[False, stability[:-1] == kind]
+            # each stretch drawn to the next orbit, so that stretches join; not into a point
+            # run by time integration, which is no orbit of the branch
+            orbit = np.isin(stability, ("stable", "unstable"))
+            shown = (stability == kind) | (np.r_[False, stability[:-1] == kind] & orbit)
             masked = np.where(shown, values, np.nan)
-            panel.plot(abscissa, masked, style, color=colour, lw=1.3,
-                       label=_once(panel, f"{name}, {kind_label}{kind} orbits"))
+            panel.plot(np.insert(abscissa.astype(float), gaps, np.nan),
+                       np.insert(masked.astype(float), gaps, np.nan), style, color=colour,
+                       lw=1.3, label=_once(panel, f"{name}, {kind_label}{kind} orbits"))
         timed = stability == "time"
         if timed.any():
             panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,

@@ -109,6 +109,7 @@ def _branch_lines(table) -> list[str]:
              + (f"; {unconverged} points where no orbit converged, run by time integration"
                 if unconverged else "")]
     lines += _values_line(f"folds (jumps) in {name}", table.attrs.get("folds", []), name)
+    lines += _lost_lines(table[~doubled], name)
     doublings = table.attrs.get("period_doublings", [])
     if len(doublings):
         counts = table["stability"][doubled].value_counts()
@@ -117,6 +118,21 @@ def _branch_lines(table) -> list[str]:
                      f"{counts.get('unstable', 0)} unstable orbits")
         lines += _values_line("folds of the 2T branches", table.attrs.get("folds_2T", []),
                               name)
+    return lines
+
+
+def _lost_lines(table, name: str) -> list[str]:
+    """Where the branch (rows in its order) was lost: from its last orbit before each
+    "restart" row to that row, where shooting began again; nothing was computed between."""
+    lines = []
+    stability, values = table["stability"].to_numpy(), table[name].to_numpy()
+    for row in np.flatnonzero(table["event"].str.contains("restart").to_numpy()):
+        orbits = np.flatnonzero(np.isin(stability[:row], ("stable", "unstable")))
+        if len(orbits):
+            lost, found = (with_unit(f"{values[k]:.6g}", unit_of(name))
+                           for k in (orbits[-1], row))
+            lines.append(f"the branch was lost past {lost}: no orbit followed on to {found}, "
+                         "where shooting began again (nothing computed between them)")
     return lines
 
 
