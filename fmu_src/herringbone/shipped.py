@@ -55,20 +55,35 @@ def resolve_scene(scene) -> Path:
 
 
 def headline(path: Path) -> str:
-    """The first line of a scene file's header comment ('' if it has none)."""
+    """What a scene file's header comment says it is: its first sentence, from the comment
+    lines above everything else but a line that says how to run it ("Run: …"), cut at a word
+    to HEADLINE_WIDTH characters ('' without a header)."""
+    lines = []
     try:
         with open(path, encoding="utf-8") as file:
             for line in file:
                 line = line.strip()
-                if line:
-                    return line.lstrip("#").strip() if line.startswith("#") else ""
+                if not line.startswith("#"):
+                    break
+                text = line.lstrip("#").strip()
+                if not text.startswith("Run:"):
+                    lines.append(text)
     except (OSError, UnicodeDecodeError):
-        pass
-    return ""
+        return ""
+    words = " ".join(lines)
+    end = words.find(". ")
+    sentence = words if end < 0 else words[:end + 1]
+    if len(sentence) <= HEADLINE_WIDTH:
+        return sentence
+    return sentence[:HEADLINE_WIDTH - 1].rsplit(" ", 1)[0] + " …"
+
+
+# the characters of a scene's headline in `herringbone scenes`: its line within a terminal's 120
+HEADLINE_WIDTH = 96
 
 
 def scene_list() -> list[str]:
-    """`herringbone scenes`: one line per shipped scene, its name and its header's first line."""
+    """`herringbone scenes`: one line per shipped scene, by name, its name and its headline."""
     files = scene_files()
     width = max(map(len, files), default=0)
-    return [f"{name:<{width}}  {headline(path)}" for name, path in files.items()]
+    return [f"{name:<{width}}  {headline(files[name])}" for name in sorted(files)]

@@ -7,7 +7,11 @@ from collections.abc import Iterable
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """"; did you mean 'NAME'?" for the closest of `choices` to `word` (difflib's ratio at least
-    0.6), or "" when none is close; meant to end a one-line message."""
-    found = difflib.get_close_matches(str(word), [str(choice) for choice in choices], n=1)
+    """"; did you mean 'NAME'?" for the one of `choices` that `word` begins (a name cut short,
+    "zeta" for "zeta_mesh", which difflib ranks below "beta"), else the closest to `word`
+    (difflib's ratio at least 0.6), or "" when none is close; meant to end a one-line
+    message."""
+    word, names = str(word), [str(choice) for choice in choices]
+    begun = [name for name in names if len(word) >= 3 and name.startswith(word)]
+    found = begun if len(begun) == 1 else difflib.get_close_matches(word, names, n=1)
     return f"; did you mean {found[0]!r}?" if found else ""

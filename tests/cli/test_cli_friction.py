@@ -102,6 +102,7 @@ def test_speeds_take_the_same_form_everywhere(capsys, no_work):
     (["run", "refrence"], "run", "'reference'"),
     (["run", REFERENCE, "--stoptime", "1"], "run", "'--stop-time'"),
     (["sweep", REFERENCE, "--param", "z_pinon", "10", "12", "2"], "sweep", "'z_pinion'"),
+    (["sweep", REFERENCE, "--param", "zeta", "0.02", "0.05", "2"], "sweep", "'zeta_mesh'"),
     (["stability", REFERENCE, "--speed", "1", "2", "3", "--outptu", "x.png"], "stability",
      "'--output'"),
 ])
@@ -463,3 +464,18 @@ def test_info_gives_a_backward_speed_with_its_sign(tmp_path, capsys):
     assert main(["info", str(scene)]) == 0
     assert "Mesh frequency at w0_pinion = -157.08 rad/s (-1500 rpm): 250.00 Hz" in \
         capsys.readouterr().out
+
+
+def test_scenes_lists_every_shipped_scene_by_name_with_a_whole_sentence(capsys):
+    """One line a scene, in the order of their names, each the first sentence of its header
+    (not a "Run:" line, not cut mid-sentence; a long one cut at a word with "…")."""
+    from herringbone.shipped import HEADLINE_WIDTH, scene_files
+
+    assert main(["scenes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = [line.split()[0] for line in lines]
+    assert names == sorted(scene_files()) and "parametric_resonance" in names
+    for line in lines:
+        said = line.split(None, 1)[1]
+        assert said.endswith((".", " …")) and len(said) <= HEADLINE_WIDTH + 1, line
+        assert not said.startswith("Run:"), line

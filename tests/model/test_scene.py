@@ -4,7 +4,7 @@ import pickle
 import pytest
 
 import herringbone
-from herringbone import SceneError
+from herringbone import SceneError, load_scene
 
 BAD_SCENES = [
     ('[parameters]\nm_pinion = -1.0\n', "m_pinion", "> 0"),
@@ -171,3 +171,21 @@ def test_a_flag_of_the_wrong_kind_is_shown_with_what_it_got():
     with pytest.raises(SceneError) as raised:
         herringbone.scene_from_dict({"parameters": {"contact_loss": "yes"}})
     assert raised.value.problem == "contact_loss must be true or false, got str 'yes'"
+
+
+@pytest.mark.parametrize("text, words", [
+    ("[experimnt]\nstop_time = 0.1\n", "unknown table [experimnt]; did you mean 'experiment'?"),
+    ("stop_time = 0.1\n[parameters]\nzeta_mesh = 0.1\n",
+     "stop_time stands outside any table; allowed: under [experiment]"),
+    ("zeta_mesh = 0.1\n", "zeta_mesh stands outside any table; allowed: under [parameters]"),
+    ("foo = 1\n", "foo stands outside any table; allowed: keys under a table, [parameters]"),
+])
+def test_a_key_outside_its_table_or_a_misspelt_table_is_named_with_its_home(tmp_path, text,
+                                                                           words):
+    """A key written above every table is told the table it belongs under, and a misspelt
+    table gets "did you mean"."""
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as error:
+        load_scene(path)
+    assert words in str(error.value)

@@ -7,7 +7,7 @@ from pathlib import Path
 from ..model.parameters import RPM_PER_RAD_S
 from ..model.scene import load_scene
 from ..optional import require
-from .common import add_output, add_scene, add_speeds, default_output
+from .common import add_output, add_scene, add_speeds, default_output, speeds_of
 
 NAME = "campbell"
 HELP = "Campbell diagram: natural frequencies against speed with the mesh orders, crossings listed"
@@ -27,7 +27,9 @@ def execute(args, parser) -> int:
     """Draw the diagram and list the crossings."""
     from ..analysis.campbell import plot_campbell
 
-    speeds = args.speeds._replace(in_rpm=args.rpm).speeds()
+    sweep = speeds_of(args, parser)
+    assert sweep is not None  # the command has default speeds
+    speeds = sweep.speeds()
     low, high = float(speeds[0]), float(speeds[-1])
     scene = load_scene(args.scene)
     output = default_output(parser, args.output, Path("results") / f"{scene.name}_campbell.png",

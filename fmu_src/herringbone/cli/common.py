@@ -119,18 +119,25 @@ class _SpeedsAction(argparse.Action):
 def add_speeds(parser: argparse.ArgumentParser, default: tuple[float, float, int] | None,
                what: str) -> None:
     """--speeds FROM TO COUNT (checked as a whole) and --rpm, the same in every command."""
-    shown = "" if default is None else f" (default: {' '.join(f'{v:g}' for v in default)})"
-    parser.add_argument("--speeds", type=number, nargs=3, action=_SpeedsAction,
-                        default=None if default is None else SpeedSweep(*default),
+    shown = "" if default is None else f" (default: {' '.join(f'{v:g}' for v in default)} rad/s)"
+    # the default apart, in rad/s: --rpm applies to the speeds given, and alone is refused
+    parser.set_defaults(default_speeds=None if default is None else SpeedSweep(*default))
+    parser.add_argument("--speeds", type=number, nargs=3, action=_SpeedsAction, default=None,
                         metavar=("FROM", "TO", "COUNT"),
                         help=f"{what}: COUNT pinion speeds from FROM to TO, rad/s (rpm with "
                              f"--rpm); {SPEED_SWEEP_ALLOWED}{shown}")
     parser.add_argument("--rpm", action="store_true", help="FROM and TO of --speeds are in rpm")
 
 
-def speeds_of(args) -> SpeedSweep | None:
-    """--speeds with --rpm applied (None when not given and without default)."""
-    return None if args.speeds is None else args.speeds._replace(in_rpm=args.rpm)
+def speeds_of(args, parser) -> SpeedSweep | None:
+    """--speeds with --rpm applied, else the command's default speeds (rad/s; None without
+    one); --rpm without --speeds is refused (it says what --speeds' FROM and TO are in)."""
+    if args.speeds is not None:
+        return args.speeds._replace(in_rpm=args.rpm)
+    if args.rpm and getattr(args, "speed", None) is None:
+        fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT "
+                     "(FROM and TO in rpm)")
+    return args.default_speeds
 
 
 def add_output(parser: argparse.ArgumentParser, what: str, default: str,

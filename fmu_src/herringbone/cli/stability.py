@@ -7,11 +7,19 @@ from pathlib import Path
 from ..model.parameters import RPM_PER_RAD_S
 from ..model.scene import load_scene
 from ..optional import require
-from .common import add_output, add_progress, add_scene, add_speeds, default_output
+from .common import (
+    add_output,
+    add_progress,
+    add_scene,
+    add_speeds,
+    default_output,
+    speeds_of,
+)
 
 NAME = "stability"
-HELP = ("Floquet chart: the largest multiplier of the linear mesh against pinion speed, with "
-        "its unstable bands (a picture and a list of the bands)")
+HELP = ("Floquet chart: the largest Floquet exponent of the linear mesh (1/s: > 0 grows, < 0 "
+        "decays) against pinion speed, with its unstable bands (a picture and a list of the "
+        "bands)")
 PICTURES = (".png", ".pdf", ".svg")
 
 
@@ -29,7 +37,8 @@ def execute(args, parser) -> int:
     from ..analysis.progress_bar import progress_bar
     from ..analysis.stability import plot_stability_chart, stability_chart
 
-    sweep = args.speeds._replace(in_rpm=args.rpm)
+    sweep = speeds_of(args, parser)
+    assert sweep is not None  # the command has default speeds
     scene = load_scene(args.scene)
     output = default_output(parser, args.output,
                             Path("results") / f"{scene.name}_stability.png", PICTURES)

@@ -129,7 +129,7 @@ def execute(args, parser) -> int:
     if args.rpm and args.speeds is None and args.speed is None:
         fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT "
                      "or --speed W")
-    sweep = speeds_of(args)
+    sweep = speeds_of(args, parser)
     params = {name: _values(low, high, count) for name, low, high, count in args.param}
     speeds = None if sweep is None else sweep.speeds()
     if args.speed is not None:

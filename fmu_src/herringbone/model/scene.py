@@ -252,11 +252,10 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
                          f"scene file's tables, {{\"parameters\": {{...}}, "
                          "\"components\": {...}, \"experiment\": {...}, \"inputs\": {...}}, "
                          "any of them left out", key="data", call="scene_from_dict")
-    unknown = set(data) - {"parameters", "components", "experiment", "inputs"}
+    unknown = set(data) - set(TABLES)
     if unknown:
         key = sorted(unknown, key=str)[0]
-        raise SceneError(f"unknown table [{key}]; allowed: [parameters], [components], "
-                         "[experiment], [inputs]", source, key=key)
+        raise SceneError(_unknown_table(key, data[key]), source, key=key)
     components = _components(_table(data, "components", source), source)
     return Scene(name=name, components=components,
                  given=dict(_table(data, "parameters", source)),
@@ -269,6 +268,24 @@ def _table(data, key, source):
     if not isinstance(table, dict):
         raise SceneError(f"'{key}' must be a table [{key}], got {table!r}", source, key=key)
     return table
+
+
+# a scene file's tables, and the keys each holds
+TABLES = {"parameters": tuple(PARAMETERS), "components": tuple(COMPONENTS),
+          "experiment": ("stop_time", "output_interval"), "inputs": (*INPUTS, "table")}
+
+
+def _unknown_table(key, value) -> str:
+    """What is wrong with a top-level `key` of a scene that is not one of its TABLES: a key
+    of a table written outside it ("stop_time = 0.1" above every table), or a misspelt
+    table."""
+    allowed = ", ".join(f"[{table}]" for table in TABLES)
+    if not isinstance(value, Mapping):
+        home = next((table for table, keys in TABLES.items() if key in keys), None)
+        where = (f"; allowed: under [{home}]" if home is not None
+                 else f"; allowed: keys under a table, {allowed}")
+        return f"{key} stands outside any table{where}"
+    return f"unknown table [{key}]{did_you_mean(key, TABLES)}; allowed: {allowed}"
 
 
 def _components(table, source):
