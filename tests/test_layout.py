@@ -199,16 +199,6 @@ def test_an_unknown_name_says_which_names_there_are(tmp_path, monkeypatch):
     assert "shipped" not in str(error.value)
 
 
-def test_scenes_lists_every_shipped_scene_with_its_headers_first_line(capsys):
-    assert cli.main(["scenes"]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    files = sorted(MODELS.glob("*.toml")) + sorted((ROOT / "examples").glob("*.toml"))
-    assert [line.split()[0] for line in lines] == [path.stem for path in files]
-    for line, path in zip(lines, files):
-        first = path.read_text(encoding="utf-8").splitlines()[0].lstrip("#").strip()
-        assert line.split(None, 1)[1] == first
-
-
 def test_build_fmu_command_refuses_a_bad_scene_in_one_line(tmp_path, capsys):
     assert cli.main(["build-fmu", "referense", "-o", str(tmp_path / "x.fmu")]) == 2
     err = capsys.readouterr().err
