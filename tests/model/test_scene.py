@@ -189,3 +189,4 @@ def test_a_key_outside_its_table_or_a_misspelt_table_is_named_with_its_home(tmp_
     with pytest.raises(SceneError) as error:
         load_scene(path)
     assert words in str(error.value)
+

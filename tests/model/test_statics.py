@@ -108,3 +108,15 @@ def test_a_train_turning_backwards_from_a_switch_starts_static_in_the_set_it_tur
     for run in (compiled, reference):
         assert np.ptp(run["F_mesh"]) <= STATIC_TOLERANCE * model.force_scale()
         assert np.all(run["n_contacts"] == len(contact_set))
+
+
+def test_stiffnesses_too_far_apart_for_double_precision_are_named_not_a_linalg_error():
+    """c_point = 1e30 N/m is allowed by its range, but beside bearings of 5e8 N/m the
+    stiffness matrix is singular in double precision: the run says so, naming the two
+    extremes, where numpy said "Singular matrix"."""
+    scene = herringbone.load_scene("reference").with_parameters(c_point=1e30)
+    with pytest.raises(ValueError) as error:
+        herringbone.simulate(scene, stop_time=1e-3, output_interval=1e-4)
+    message = str(error.value)
+    assert "stiffness matrix is singular in double precision" in message
+    assert "c_point = 1e+30 N/m" in message and "c_brg_pinion_left = 5e+08 N/m" in message

@@ -28,7 +28,7 @@ import scipy.linalg
 from . import equations
 from .geometry import GearGeometry
 from .mesh import ContactSet, Mesh
-from .parameters import outputs_of
+from .parameters import PARAMETERS, outputs_of
 
 ALL_COORDINATES = ("phi_motor", "phi_pinion", "psi_pinion", "x_pinion",
                    "phi_wheel", "psi_wheel", "x_wheel", "phi_load")
@@ -307,10 +307,25 @@ class GearTrainModel:
         elastic = [i for i in range(self.size) if i != self.pinion]
         stiffness_matrix = self.stiffness_matrix(y, contact_set, relative=True)
         deflection = np.zeros(self.size)
-        deflection[elastic] = np.linalg.solve(stiffness_matrix[np.ix_(elastic, elastic)],
-                                              force[elastic])
+        try:
+            deflection[elastic] = np.linalg.solve(stiffness_matrix[np.ix_(elastic, elastic)],
+                                                  force[elastic])
+        except np.linalg.LinAlgError:
+            raise ValueError(self._unsolvable_stiffness()) from None
         deflection[self.pinion] = y[self.pinion]
         return deflection
+
+    def _unsolvable_stiffness(self) -> str:
+        """Why the static deflection has no solution: the stiffness matrix is singular in double
+        precision, which stiffnesses far apart make it; the message names the extremes."""
+        given = {name: value for name, value in self.scene.parameters.items()
+                 if PARAMETERS[name].unit == "N/m" and value > 0.0}
+        low, high = min(given, key=given.get), max(given, key=given.get)
+        return (f"the static deflection has no solution: the train's stiffness matrix is "
+                f"singular in double precision, its stiffnesses from {low} = {given[low]:g} N/m "
+                f"to {high} = {given[high]:g} N/m, {given[high] / given[low]:.2g} times it; "
+                "allowed: stiffnesses that double precision sets beside each other (a ratio "
+                "far under 1/ε = 4.5e15)")
 
     def mean_stiffness_matrix(self) -> np.ndarray:
         """K averaged over one mesh period (Gauss-Legendre on each contact interval: the
