@@ -275,3 +275,11 @@ def test_step_from_a_time_the_fmu_is_not_at_is_discarded(built_fmus):
         assert any("FMU is at" in text for status, text in gear.messages if status == 3)
     finally:
         gear.free()
+
+
+@pytest.mark.parametrize("stop_time", [-1.0, 0.0, float("nan")])
+def test_scene_inputs_refuses_a_stop_time_that_is_not_finite_and_positive(stop_time):
+    """A table for fmpy up to a stop time of -1 s would end before it starts: refused with
+    the stop time's one message, as simulate refuses it."""
+    with pytest.raises(ValueError, match=r"stop_time is .*; allowed: > 0 and finite"):
+        herringbone.scene_inputs(herringbone.load_scene("torque_step"), stop_time)

@@ -266,3 +266,16 @@ def test_one_call_frees_what_it_allocates_and_keeps_what_it_was_given(scene, met
     assert_kept(figures)
     if method == "radau":
         assert figures["allocated"] > 0  # the check sees the allocations it counts
+
+
+@pytest.mark.parametrize("stop_time, output_interval, last_three", [
+    (0.3, 0.1, [0.1, 0.2, 0.3]),          # 3·0.1 is 0.30000000000000004, a rounding past
+    (0.05, 0.007, [0.042, 0.049, 0.05]),  # stop_time added where h does not divide it
+])
+def test_the_samples_end_at_the_stop_time_itself(stop_time, output_interval, last_three):
+    """A run samples up to its stop time inclusive and no further: the last sample time is
+    the stop time, exactly, so that no run integrates a rounding past it."""
+    times = output_times(stop_time, output_interval)
+    assert times[-1] == stop_time
+    np.testing.assert_allclose(times[-3:], last_three, rtol=1e-12)
+    assert np.all(np.diff(times) > 0.0)

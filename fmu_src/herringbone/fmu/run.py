@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..arguments import STOP_TIME, check_scene
+
 
 def scene_inputs(scene, stop_time: float) -> np.ndarray:
     """The scene's input table as fmpy's `input`, held between rows (not ramped).
@@ -25,6 +27,13 @@ def scene_inputs(scene, stop_time: float) -> np.ndarray:
         Structured, fields "time" (s), "M_motor" and "M_load" (N·m): pass it as
         `fmpy.simulate_fmu(..., input=scene_inputs(scene, stop_time))`.
 
+    Raises
+    ------
+    SceneError
+        `scene` is no Scene.
+    ValueError
+        `stop_time` is not finite and > 0.
+
     Examples
     --------
     >>> import herringbone
@@ -32,6 +41,8 @@ def scene_inputs(scene, stop_time: float) -> np.ndarray:
     [(0.0, 500.0, 1800.0), (0.005, 500.0, 1800.0),
      (0.005, 5000.0, 18000.0), (0.02, 5000.0, 18000.0)]
     """
+    check_scene(scene)
+    STOP_TIME.check(stop_time)
     rows = []
     schedule = scene.inputs
     for i, time in enumerate(schedule.times):

@@ -97,11 +97,13 @@ class SamplingStepper(Stepper, Protocol):
 
 
 def output_times(stop_time: float, output_interval: float) -> np.ndarray:
-    """0, h, 2h, … up to stop_time inclusive (stop_time added if h does not divide it)."""
+    """0, h, 2h, … up to stop_time inclusive (stop_time added if h does not divide it); the
+    last is stop_time itself, not k·h a rounding past it (3·0.1 is 0.30000000000000004)."""
     count = int(np.floor(stop_time / output_interval * (1 + 1e-12)))
     times = np.arange(count + 1) * output_interval
     if stop_time - times[-1] > 1e-9 * output_interval:
         times = np.append(times, stop_time)
+    times[-1] = stop_time
     return times
 
 
