@@ -30,3 +30,33 @@ def test_labels_are_spread_at_least_a_gap_apart_and_under_the_ceiling():
     assert all(b - a >= 50.0 - 1e-9 for a, b in zip(places, places[1:]))
     assert places[-1] <= 1000.0 and places[0] == 100.0
     assert _spread([1.0, 5.0], gap=1.0, ceiling=10.0) == [1.0, 5.0]
+
+
+def test_a_spectrum_reaches_the_modes_its_sampling_resolves(monkeypatch, tmp_path):
+    """Sampled at 10 µs (Nyquist 50 kHz), a run that rings at 10 kHz shows it: the frequency
+    axis (logarithmic) runs past the highest natural frequency under Nyquist, where it stopped
+    at 5.4 mesh harmonics (1350 Hz at 250 Hz) and hid every mode above; the harmonics marked
+    stop at 12, which a log axis can still tell apart."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+
+    from herringbone.analysis import plots
+
+    drawn = {}
+    monkeypatch.setattr(plots, "_save", lambda figure, path, **kw: drawn.update(figure=figure))
+    time = np.arange(0.0, 0.05, 1e-5)
+    ringing = np.sin(2 * np.pi * 250.0 * time) + 0.1 * np.sin(2 * np.pi * 1.04e4 * time)
+    results = {"time": time, "dte": 1e-6 * ringing, "F_mesh": 2e4 + 1e3 * ringing}
+    plots.plot_spectra(results, tmp_path / "s.png", 250.0, [113.0, 684.0, 1.04e4, 1.34e4, 6e4],
+                       "ringing", skip=0.025)
+    axes = drawn["figure"].axes
+    assert axes[1].get_xscale() == "log"
+    low, high = axes[1].get_xlim()
+    assert 1.34e4 < high <= 5e4  # the highest mode under Nyquist, not the one above it
+    spectrum = axes[1].get_lines()[0]
+    shown = spectrum.get_ydata()[np.abs(spectrum.get_xdata() - 1.04e4) < 100.0]
+    assert 0.085 <= shown.max() <= 0.1  # the 100 N ringing at 10.4 kHz, in kN
+    harmonics = [line for line in axes[0].get_lines() if line.get_color() == "C3"]
+    assert len(harmonics) == plots.HARMONICS_MARKED

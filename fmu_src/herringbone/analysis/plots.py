@@ -9,7 +9,8 @@ import numpy as np
 from ..files import replace_file
 from ..optional import require
 
-HARMONICS_SHOWN = 4  # mesh harmonics marked on spectra
+HARMONICS_SHOWN = 4  # a spectrum spans at least this many mesh harmonics
+HARMONICS_MARKED = 12  # and marks at most this many (more crowd a log axis into a band)
 
 
 def _pyplot():
@@ -121,9 +122,10 @@ def amplitude_spectrum(signal, interval):
 
 
 def _mark_frequencies(axes, mesh_frequency, natural, top):
-    for k in range(1, int(top / mesh_frequency) + 1):  # every harmonic in the plotted range
+    marked = min(int(top / mesh_frequency), HARMONICS_MARKED)
+    for k in range(1, marked + 1):
         axes.axvline(k * mesh_frequency, color="C3", lw=0.8, ls="--",
-                     label="mesh harmonics k·f_mesh" if k == 1 else None)
+                     label=f"mesh harmonics k·f_mesh, k ≤ {marked}" if k == 1 else None)
     for number, f in enumerate(f for f in natural if 0 < f <= top):
         axes.axvline(f, color="C2", lw=0.8, ls=":",
                      label="natural frequencies" if number == 0 else None)
@@ -131,21 +133,25 @@ def _mark_frequencies(axes, mesh_frequency, natural, top):
 
 def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) -> None:
     """Amplitude spectra of dte (µm) and F_mesh (kN) of a run from `skip` s on, with the
-    mesh harmonics and the natural frequencies marked; log amplitude."""
+    mesh harmonics and the natural frequencies marked; log amplitude over log frequency, up to
+    the highest natural frequency the sampling resolves (Nyquist's), so that a mode ringing
+    far above the mesh frequency shows, and at least HARMONICS_SHOWN harmonics."""
     plt = _pyplot()
     keep = results["time"] >= skip
     interval = float(np.diff(results["time"][keep]).mean())
-    top = min(0.5 / interval, max(HARMONICS_SHOWN + 0.5, 1) * mesh_frequency * 1.2)
+    nyquist = 0.5 / interval
+    resolved = [f for f in natural if 0 < f < nyquist]
+    top = min(nyquist, 1.2 * max([(HARMONICS_SHOWN + 0.5) * mesh_frequency, *resolved]))
     figure, axes = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
     for panel, name, scale, unit in ((axes[0], "dte", 1e6, "µm"),
                                      (axes[1], "F_mesh", 1e-3, "kN")):
         frequency, amplitude = amplitude_spectrum(results[name][keep] * scale, interval)
-        panel.semilogy(frequency[1:], amplitude[1:], color="k", lw=0.9, label=name)
+        panel.loglog(frequency[1:], amplitude[1:], color="k", lw=0.9, label=name)
         _mark_frequencies(panel, mesh_frequency, natural, top)
         panel.set_ylabel(f"{name} amplitude, {unit}")
         panel.grid(True, which="both", alpha=0.3)
         _legend_beside(panel)
-    axes[1].set_xlim(0, top)
+    axes[1].set_xlim(frequency[1], top)
     axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz (record length)",
                      (0.01, 0.02), xycoords="axes fraction", fontsize=8)
     axes[1].set_xlabel("frequency, Hz")
