@@ -1,6 +1,7 @@
 """The pictures' annotations: modes named by what moves in them, labels kept apart."""
 from herringbone import load_scene
-from herringbone.analysis.campbell import _spread, elastic_frequencies, elastic_modes
+from herringbone.analysis.campbell import elastic_frequencies, elastic_modes
+from herringbone.analysis.plots import spread_apart
 
 
 def test_a_train_on_rigid_bearings_has_only_torsional_modes():
@@ -26,10 +27,10 @@ def test_reference_modes_are_named_by_their_dominant_motion():
 
 
 def test_labels_are_spread_at_least_a_gap_apart_and_under_the_ceiling():
-    places = _spread([100.0, 110.0, 115.0, 900.0, 990.0], gap=50.0, ceiling=1000.0)
+    places = spread_apart([100.0, 110.0, 115.0, 900.0, 990.0], gap=50.0, ceiling=1000.0)
     assert all(b - a >= 50.0 - 1e-9 for a, b in zip(places, places[1:]))
     assert places[-1] <= 1000.0 and places[0] == 100.0
-    assert _spread([1.0, 5.0], gap=1.0, ceiling=10.0) == [1.0, 5.0]
+    assert spread_apart([1.0, 5.0], gap=1.0, ceiling=10.0) == [1.0, 5.0]
 
 
 def test_a_spectrum_reaches_the_modes_its_sampling_resolves(monkeypatch, tmp_path):

@@ -558,3 +558,26 @@ def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
             if np.isfinite(y[k]) and np.isfinite(y[k + 1])] == [(2865.0, 2893.0),
                                                                  (2893.0, 2923.0)]
     plt.close(figure)
+
+
+def test_resonance_marks_list_their_orders_in_order_and_keep_their_labels_apart():
+    """The legend gives the orders k = 1, 2, 3 in that order (it listed them as the speeds
+    met them: 3, 2, 1), and two resonances 17 rpm apart (4102 and 4119 rpm on the reference
+    scene) get labels a label's height apart instead of one over the other."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from herringbone.analysis.sweep_plots import LABEL_GAP, mark_resonances
+
+    figure, axes = plt.subplots(2, 1)
+    mark_resonances(axes, [683.7, 1497.3, 2059.4, 4397.2], 10, 100.0, 1000.0)
+    labels = [line.get_label() for line in axes[0].get_lines()
+              if not line.get_label().startswith("_")]
+    assert labels == [f"k·f_mesh = f_n, k = {k}" for k in (1, 2, 3)]
+    places = [text.xyann[0] for text in axes[0].texts]
+    gap = LABEL_GAP * 900.0 * 30.0 / math.pi
+    assert all(b - a >= gap * (1 - 1e-9) for a, b in zip(places, places[1:])), places
+    assert [text.get_text() for text in axes[0].texts][3:5] == [" 684 Hz", " 2059 Hz"]
+    plt.close(figure)

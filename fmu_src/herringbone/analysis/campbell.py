@@ -16,7 +16,7 @@ import numpy as np
 from ..arguments import speed_sweep_problem
 from ..model.assembly import GearTrainModel, natural_modes
 from ..model.parameters import RPM_PER_RAD_S
-from .plots import _pyplot, _save
+from .plots import _pyplot, _save, spread_apart
 from .report import HARMONICS, resonance_speeds
 
 
@@ -134,22 +134,9 @@ def check_speed_range(low: float, high: float) -> None:
         raise ValueError(f"speeds {low:g} to {high:g} rad/s: {problem}; allowed: 0 < low < high")
 
 
-def _spread(values, gap, ceiling):
-    """`values` (ascending) moved apart as little as possible so that neighbours are at least
-    `gap` apart and none is above `ceiling`: where labels go."""
-    placed = list(values)
-    for i in range(1, len(placed)):
-        placed[i] = max(placed[i], placed[i - 1] + gap)
-    if placed and placed[-1] > ceiling:
-        placed[-1] = ceiling
-        for i in range(len(placed) - 2, -1, -1):
-            placed[i] = min(placed[i], placed[i + 1] - gap)
-    return placed
-
-
 def _label_modes(axes, modes, top):
     """Each mode's frequency line named beside the plot, to the right, labels kept apart."""
-    places = _spread([m.frequency for m in modes], 0.045 * top, top)
+    places = spread_apart([m.frequency for m in modes], 0.045 * top, top)
     for mode, place in zip(modes, places):
         axes.annotate(mode.label, xy=(1.0, mode.frequency), xytext=(1.02, place),
                       xycoords=("axes fraction", "data"), textcoords=("axes fraction", "data"),

@@ -111,6 +111,19 @@ def plot_time_histories(results: dict, path, title: str) -> None:
     _save(figure, path)
 
 
+def spread_apart(values, gap, ceiling):
+    """`values` (ascending) moved apart as little as possible so that neighbours are at least
+    `gap` apart and none is above `ceiling`: where labels go."""
+    placed = list(values)
+    for i in range(1, len(placed)):
+        placed[i] = max(placed[i], placed[i - 1] + gap)
+    if placed and placed[-1] > ceiling:
+        placed[-1] = ceiling
+        for i in range(len(placed) - 2, -1, -1):
+            placed[i] = min(placed[i], placed[i + 1] - gap)
+    return placed
+
+
 def amplitude_spectrum(signal, interval):
     """One-sided amplitude spectrum (same unit as the signal) of the fluctuation about the
     mean, Hann-windowed and corrected for the window's coherent gain: a sinusoid of amplitude

@@ -3,10 +3,12 @@ speeds of `herringbone info` marked), a parameter curve or grid map, and a water
 points' dte spectra with the mesh orders and natural frequencies."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..model.parameters import RPM_PER_RAD_S, unit_of
-from .plots import _pyplot, _save, amplitude_spectrum
+from .plots import _pyplot, _save, amplitude_spectrum, spread_apart
 from .report import HARMONICS, resonance_speeds
 
 
@@ -127,17 +129,27 @@ def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> 
     _save(figure, path)
 
 
+# rpm between two resonance labels, as a share of the speeds swept: a label's height at 7 pt
+LABEL_GAP = 0.018
+
+
 def mark_resonances(axes, natural, z_pinion, low, high) -> None:
     """Each resonance k·f_mesh = f_n between the speeds low and high (rad/s): a dashed line
-    on every panel, labelled with f_n on the first."""
-    labelled = set()
-    for speed, k, f in resonances_between(natural, z_pinion, low, high):
+    on every panel, one legend entry per order k in the order of k, and f_n written at the
+    foot of the first panel, labels moved apart where lines lie close."""
+    resonances = resonances_between(natural, z_pinion, low, high)
+    for k in sorted({k for _, k, _ in resonances}):
+        for panel in axes:  # the legend's entries, in the order of k
+            panel.plot([], [], color=f"C{3 + k}", lw=0.8, ls="--",
+                       label=f"k·f_mesh = f_n, k = {k}")
+    rpm = [speed * RPM_PER_RAD_S for speed, _, _ in resonances]
+    places = spread_apart(rpm, LABEL_GAP * (high - low) * RPM_PER_RAD_S, math.inf)
+    for (_, k, f), at, place in zip(resonances, rpm, places):
         for panel in axes:
-            panel.axvline(speed * RPM_PER_RAD_S, color=f"C{3 + k}", lw=0.8, ls="--",
-                          label=None if k in labelled else f"k·f_mesh = f_n, k = {k}")
-        labelled.add(k)
-        axes[0].annotate(f" {f:.0f} Hz", (speed * RPM_PER_RAD_S, 0.0), rotation=90,
-                         xycoords=("data", "axes fraction"), fontsize=7, ha="right",
+            panel.axvline(at, color=f"C{3 + k}", lw=0.8, ls="--")
+        axes[0].annotate(f" {f:.0f} Hz", (at, 0.0), xytext=(place, 0.0), rotation=90,
+                         xycoords=("data", "axes fraction"),
+                         textcoords=("data", "axes fraction"), fontsize=7, ha="right",
                          va="bottom", color=f"C{3 + k}")
 
 
