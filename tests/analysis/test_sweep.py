@@ -581,3 +581,14 @@ def test_resonance_marks_list_their_orders_in_order_and_keep_their_labels_apart(
     assert all(b - a >= gap * (1 - 1e-9) for a, b in zip(places, places[1:])), places
     assert [text.get_text() for text in axes[0].texts][3:5] == [" 684 Hz", " 2059 Hz"]
     plt.close(figure)
+
+
+def test_the_largest_k_v_of_a_grid_gives_the_speed_in_rpm_beside_the_speed():
+    """A grid of speed and torque: "w0_pinion = 450 rad/s (4297 rpm), M_motor = 500 N.m",
+    the rpm beside the speed it converts, not after the torque."""
+    from herringbone.analysis.sweep import resonation_summary
+
+    table = pd.DataFrame({"w0_pinion": [300.0, 450.0], "M_motor": [500.0, 500.0],
+                          "speed_rpm": [2865.0, 4297.0], "K_v": [1.2, 1.5]})
+    assert resonation_summary(table) == ("w0_pinion = 450 rad/s (4297 rpm), "
+                                         "M_motor = 500 N.m")

@@ -403,5 +403,9 @@ def resonation_summary(table) -> str:
     ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
     row = table.loc[table["K_v"].idxmax()]
     names = list(table.columns[:list(table.columns).index("speed_rpm")])
-    text = ", ".join(f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}" for name in names)
-    return text + (f" ({row['speed_rpm']:.0f} rpm)" if SPEED in names else "")
+
+    def value(name):  # the speed in rpm beside it, not after the other quantities
+        rpm = f" ({row['speed_rpm']:.0f} rpm)" if name == SPEED else ""
+        return f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}{rpm}"
+
+    return ", ".join(value(name) for name in names)
