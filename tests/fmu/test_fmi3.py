@@ -183,3 +183,37 @@ def test_fmi3_a_bad_step_size_and_calls_out_of_order_are_errors_and_the_instance
     assert all("after the FMU was initialized: refused, the run goes on" in text
                for _, text in instance.messages[2:]) and len(instance.messages) == 4
     steps(instance, 2e-4, 2)
+
+
+def _si_exponents(unit: str) -> dict:
+    """The SI base exponents of a unit written as the FMUs write them ("N.m.s/rad",
+    "N.m.s2/rad2"): factors joined by '.', one '/', a power as trailing digits; N = kg·m/s²."""
+    import re
+
+    exponents: dict = {}
+    numerator, _, denominator = unit.partition("/")
+    for sign, part in ((1, numerator), (-1, denominator)):
+        for factor in filter(None, part.split(".")):
+            name, power = re.fullmatch(r"([a-zA-Z]+)(\d*)", factor).groups()
+            power = sign * int(power or 1)
+            base = {"N": {"kg": 1, "m": 1, "s": -2}}.get(name, {name: 1})
+            for dimension, value in base.items():
+                exponents[dimension] = exponents.get(dimension, 0) + power * value
+    return {dimension: value for dimension, value in exponents.items() if value}
+
+
+def test_every_unit_declares_its_si_base_units(fmus):
+    """Each <Unit> of both FMUs carries a <BaseUnit> with the SI exponents of its name (worked
+    out here from the name, apart from the builder's table), so that a host can check and
+    convert the units of what it connects; "1" has none."""
+    for version in (2, 3):
+        root = ET.fromstring(zipfile.ZipFile(fmus["reference", version])
+                             .read("modelDescription.xml"))
+        units = root.findall("UnitDefinitions/Unit")
+        assert len(units) >= 10
+        for unit in units:
+            base = unit.find("BaseUnit")
+            assert base is not None, (version, unit.get("name"))
+            declared = {dimension: int(power) for dimension, power in base.attrib.items()}
+            name = unit.get("name")
+            assert declared == ({} if name == "1" else _si_exponents(name)), (version, name)

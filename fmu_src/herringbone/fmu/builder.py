@@ -227,10 +227,24 @@ def _fix_fmi3_description(root: ET.Element, no_feedthrough: bool) -> None:
             output.set("dependencies", "")
 
 
+# The SI base units of every unit the FMUs name, as FMI's <BaseUnit> exponents (FMI 2.0
+# section 2.2.2, 3.0 section 2.4.3), so that a host can check and convert what it connects
+# ("1": a pure number, no exponent).
+BASE_UNITS = {
+    "1": {}, "s": {"s": 1}, "m": {"m": 1}, "kg": {"kg": 1}, "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1}, "kg.m2": {"kg": 1, "m": 2},
+    "N": {"kg": 1, "m": 1, "s": -2}, "N.m": {"kg": 1, "m": 2, "s": -2},
+    "N/m": {"kg": 1, "s": -2}, "N.s/m": {"kg": 1, "s": -1},
+    "N.m/rad": {"kg": 1, "m": 2, "s": -2, "rad": -1},
+    "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
+    "N.m.s2/rad2": {"kg": 1, "m": 2, "rad": -2},
+}
+
+
 def _add_unit_definitions(root: ET.Element) -> None:
-    """A <Unit> (with its <DisplayUnit>s) in <UnitDefinitions> for every unit a real variable
-    names that is not declared yet; <UnitDefinitions> is created where needed, in its place in
-    the schema's order."""
+    """A <Unit> (with its <BaseUnit> from BASE_UNITS and its <DisplayUnit>s) in
+    <UnitDefinitions> for every unit a real variable names that is not declared yet;
+    <UnitDefinitions> is created where needed, in its place in the schema's order."""
     used: dict[str, set[str]] = {}
     for real in [*root.iter("Real"), *root.iter("Float64")]:  # FMI 2.0, FMI 3.0
         unit_name, display_name = real.get("unit"), real.get("displayUnit")
@@ -251,6 +265,10 @@ def _add_unit_definitions(root: ET.Element) -> None:
         unit = declared.get(name)
         if unit is None:  # not `or`: an Element without children is falsy
             unit = ET.SubElement(definitions, "Unit", name=name)
+            if name in BASE_UNITS:  # first: the schema puts it before the display units
+                ET.SubElement(unit, "BaseUnit",
+                              {dimension: str(power)
+                               for dimension, power in BASE_UNITS[name].items()})
         known = {d.get("name") for d in unit.findall("DisplayUnit")}
         for display in sorted(used[name] - known):
             ET.SubElement(unit, "DisplayUnit", name=display)
