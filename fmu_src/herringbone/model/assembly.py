@@ -320,7 +320,7 @@ class GearTrainModel:
         precision, which stiffnesses far apart make it; the message names the extremes."""
         given = {name: value for name, value in self.scene.parameters.items()
                  if PARAMETERS[name].unit == "N/m" and value > 0.0}
-        low, high = min(given, key=given.get), max(given, key=given.get)
+        low, high = (pick(given, key=lambda name: given[name]) for pick in (min, max))
         return (f"the static deflection has no solution: the train's stiffness matrix is "
                 f"singular in double precision, its stiffnesses from {low} = {given[low]:g} N/m "
                 f"to {high} = {given[high]:g} N/m, {given[high] / given[low]:.2g} times it; "
