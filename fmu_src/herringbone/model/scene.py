@@ -182,7 +182,7 @@ def load_scene(path) -> Scene:
                          "of a shipped scene (`herringbone scenes`)", str(path))
     if not path.is_file():
         names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
-                 f"{', '.join(scene_files())} (`herringbone scenes`)"
+                 f"{', '.join(sorted(scene_files()))} (`herringbone scenes`)"
                  if is_scene_name(given) else "")
         raise SceneError(f"no such scene file{names}", str(path))
     try:
