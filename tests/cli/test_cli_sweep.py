@@ -59,7 +59,8 @@ def test_an_fmu_of_another_scene_is_refused_by_the_parameter_that_differs(scene_
     assert main(arguments) == 2
     error = one_error_line(capsys)
     assert (f"through-fmu {fmu}: built from another scene than staggered: stagger is 0.0 in "
-            "the FMU's scene, 0.5 in staggered; allowed: an FMU of the sweep's scene") in error
+            "the FMU's scene, 0.5 in staggered; allowed: an FMU of the sweep's scene "
+            "(herringbone build-fmu staggered)") in error  # a shipped scene by its name
     staggered = herringbone.load_scene("staggered")
     with pytest.raises(ValueError, match="stagger is 0.0 in the FMU's scene"):
         herringbone.sweep(staggered, speeds=[300.0, 400.0], fmu=fmu, workers=0)
