@@ -479,3 +479,21 @@ def test_scenes_lists_every_shipped_scene_by_name_with_a_whole_sentence(capsys):
         said = line.split(None, 1)[1]
         assert said.endswith((".", " …")) and len(said) <= HEADLINE_WIDTH + 1, line
         assert not said.startswith("Run:"), line
+
+
+def test_a_run_whose_torques_load_the_back_flanks_says_so(tmp_path, capsys):
+    """M_motor < 0 presses the back flanks together, on which the model has no contact: the
+    run goes on as the model says (the teeth separate, F_mesh 0), and its summary says why
+    beside the negative static mesh force, which it printed bare."""
+    scene = tmp_path / "backwards_torque.toml"
+    scene.write_text((MODELS / "reference.toml").read_text()
+                     .replace("M_motor = 500.0", "M_motor = -500.0")
+                     .replace("M_load = 1800.0", "M_load = -1800.0"))
+    assert main(["run", str(scene), "--stop-time", "2e-3", "--output-interval", "1e-4",
+                 "--no-progress", "-o", str(tmp_path / "run.csv")]) == 0
+    (line,) = [text for text in capsys.readouterr().out.splitlines()
+               if text.startswith("static mesh force")]
+    assert line == ("static mesh force M_motor/Rp = -23036.4 N (negative: M_motor < 0 loads "
+                    "the back flanks, on which the model has no contact: the teeth separate)")
+    mesh_force = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=1, usecols=4)
+    assert len(mesh_force) == 21 and (mesh_force == 0.0).all()  # F_mesh [N]: no contact

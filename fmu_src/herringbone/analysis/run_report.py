@@ -44,7 +44,8 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
              f"({', '.join(model.coordinates)})",
              f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time)}",
-             f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N",
+             f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N"
+             + _back_flanks(model.static_mesh_force()),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
              f"{'max of samples':>16}{'at the end':>14}"]
@@ -55,6 +56,16 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
             lines.append(f"{name:<20}{unit:<8}{shown[0]:>14.6g}{shown.min():>16.6g}"
                          f"{shown.max():>16.6g}{shown[-1]:>14.6g}")
     return "\n".join(lines)
+
+
+def _back_flanks(static_force: float) -> str:
+    """What a negative static mesh force (N) means for the run: M_motor < 0 presses the back
+    flanks together, on which the model has no contact (docs/model.md section 3), so the
+    teeth separate while it lasts; '' for a force >= 0."""
+    if static_force >= 0.0:
+        return ""
+    return (" (negative: M_motor < 0 loads the back flanks, on which the model has no "
+            "contact: the teeth separate)")
 
 
 def _wall_time(stop: float, wall_time: float, start_time: float | None) -> str:
