@@ -388,3 +388,18 @@ def test_chart_reads_as_a_decay_rate_that_does_not_creep_towards_instability(ref
     grouped = stability.stability_chart(reference_scene, speeds, on_progress=done.append)
     assert sum(done) == len(speeds) and len(done) > 1
     assert np.allclose(grouped.largest_modulus, chart.largest_modulus, rtol=1e-13, atol=0)
+
+
+def test_the_charts_legend_stands_beside_the_plot_off_its_curve(undamped_chart, monkeypatch,
+                                                                tmp_path):
+    """An undamped train's chart has bands all over its speeds and peaks up to its top: the
+    legend stands to the right of the axes, where it covers none of them."""
+    from herringbone.analysis import plots
+
+    drawn = {}
+    monkeypatch.setattr(plots, "_save", lambda figure, path, **kw: drawn.update(figure=figure))
+    stability.plot_stability_chart(undamped_chart, tmp_path / "chart.png")
+    (axes,) = drawn["figure"].axes[:1]
+    drawn["figure"].canvas.draw()
+    legend = axes.get_legend().get_window_extent()
+    assert legend.x0 > axes.get_window_extent().x1

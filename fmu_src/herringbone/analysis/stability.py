@@ -328,12 +328,12 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
     frequency in Hz on the top axis), with the line 0 (growth above, decay below) and the
     unstable bands shaded."""
-    from .plots import _pyplot, _save
+    from .plots import _legend_beside, _pyplot, _save
 
     plt = _pyplot()
     rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
-    figure, axes = plt.subplots(figsize=(9, 4.5))
+    figure, axes = plt.subplots(figsize=(11, 4.5))
     axes.plot(chart.speeds * rpm, chart.largest_exponent, color="C0", lw=1.2,
               label="largest Floquet exponent ln|λ|max / T")
     axes.axhline(0.0, color="k", lw=0.8, ls="--", label="0: neither growth nor decay")
@@ -352,7 +352,7 @@ def plot_stability_chart(chart: StabilityChart, path, title=None):
     top = axes.secondary_xaxis("top", functions=(to_hertz, to_rpm))
     top.set_xlabel("mesh frequency, Hz")
     axes.set_title(title or "Parametric stability of the linear mesh (Floquet exponents)")
-    axes.legend(loc="best")
+    _legend_beside(axes)  # off the curve and the bands, wherever they lie
     axes.grid(True, alpha=0.3)
     _save(figure, path, dpi=120)
 
