@@ -343,6 +343,10 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      ("--rpm without --speeds", "allowed: --rpm with --speeds FROM TO COUNT"), "herringbone"),
     ("campbell-rpm-without-speeds", "--rpm", ("campbell", "{scene}", "--rpm"),
      ("--rpm without --speeds", "allowed: --rpm with --speeds FROM TO COUNT"), "herringbone"),
+    # an output in a folder still to be made, then a refusal: the folder is not left behind
+    ("run-tolerance-after-an-output-in-a-new-folder", "--tolerance",
+     RUN + ("-o", "{tmp}/new/deeper/run.csv", "--tolerance", "0"),
+     ("--tolerance 0", "allowed: [1e-12, 0.01]"), "herringbone"),
     ("stability-output-in-no-folder", "--output", STABILITY + ("-o", "{file}/chart.png"),
      ("--output", "is a file, not a folder"), "herringbone"),
     ("sweep-speed-negative", "--speed",
@@ -406,14 +410,14 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      ("--ssp", "jump_resonance has neither", "[components]", "allowed: a scene with motor and "
       "load"), "build_fmu"),
     ("build_fmu-examples-and-output", "--output",
-     ("--examples", "{tmp}", "-o", "{tmp}/x.fmu"),
+     ("--examples", "{tmp}/ex", "-o", "{tmp}/x.fmu"),
      ("--output not allowed with argument --examples",), "build_fmu"),
     ("build_fmu-ssp-and-examples", "--ssp",
      ("{scene}", "--ssp", "{tmp}/x.ssp", "--examples", "{tmp}"),
      ("--examples not allowed with argument --ssp",), "build_fmu"),
-    ("build_fmu-examples-simulate", "--simulate", ("--examples", "{tmp}", "--simulate"),
+    ("build_fmu-examples-simulate", "--simulate", ("--examples", "{tmp}/ex", "--simulate"),
      ("--simulate with --examples", "allowed: one of the two"), "build_fmu"),
-    ("build_fmu-examples-fmi-three", "--fmi", ("--examples", "{tmp}", "--fmi", "3"),
+    ("build_fmu-examples-fmi-three", "--fmi", ("--examples", "{tmp}/ex", "--fmi", "3"),
      ("--fmi 3 with --examples", "FMI 2.0", "leave out --fmi"), "build_fmu"),
 ]
 OPTION_CASES = [Case(f"argv-{id}", "option", name, arguments, words, ("argv",), (program,))

@@ -13,6 +13,7 @@ the slave (fmu/slave.py) to check with.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import numbers
 import os
@@ -324,8 +325,10 @@ def number(text: str) -> float:
 
 def output_path_problem(path: Path) -> str | None:
     """Why a file cannot be written at `path`, or None: the nearest existing ancestor must be
-    a folder we may write in, and `path` no folder; the folder of `path` is made here, and a
-    file written in it and removed, so that no long run ends on an output it cannot write."""
+    a folder we may write in, and `path` no folder; the folder of `path` is made here and a
+    file written in it, so that no long run ends on an output it cannot write, and both are
+    removed again (the writer makes the folder), so that a command refused after its options
+    were read leaves nothing behind."""
     path = Path(path)
     if path.is_dir():
         return f"{path} is a folder"
@@ -337,12 +340,17 @@ def output_path_problem(path: Path) -> str | None:
     if not os.access(ancestor, os.W_OK | os.X_OK):
         return f"the folder {ancestor} is not writable"
     # where access() cannot tell (root, /proc, a read-only mount): make the folder and a file
+    made = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=path.parent):
             pass
     except OSError as error:
         return f"cannot write in {path.parent}: {error.strerror}"
+    finally:
+        for folder in made:  # deepest first
+            with contextlib.suppress(OSError):
+                folder.rmdir()
     return None
 
 
