@@ -377,8 +377,10 @@ def output_file(*suffixes: str):
     return checked
 
 
-# where a gear FMU carries its scene (fmu/builder.build_gear_fmu puts it there)
-FMU_SCENE_MEMBER = "resources/scene.toml"
+# where a gear FMU carries its scene: the file in its resources (fmu/builder.build_gear_fmu
+# puts it there, fmu/core.py loads it), and that file in the FMU's archive
+FMU_SCENE_FILE = "scene.toml"
+FMU_SCENE_MEMBER = f"resources/{FMU_SCENE_FILE}"
 GEAR_FMU_ALLOWED = "the path of a gear FMU (herringbone build-fmu SCENE builds one)"
 
 

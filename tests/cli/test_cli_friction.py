@@ -35,7 +35,7 @@ def no_work(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("the work began before the arguments were checked")
 
-    for module, name in (("analysis.sweep", "run_sweep"), ("analysis.stability",
+    for module, name in (("analysis.sweep", "run_checked_points"), ("analysis.stability",
                                                            "stability_chart"),
                          ("analysis.run_progress", "simulate_with_progress"),
                          ("analysis.campbell", "plot_campbell"),

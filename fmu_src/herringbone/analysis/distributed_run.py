@@ -44,11 +44,8 @@ def load_integrator(scene) -> bool:
 
 def map_points(function, points, shared, workers=None, scheduler=None, progress=True):
     """[function(scene, point, protocol, fmu) for point in points], shared = (scene, protocol,
-    fmu), in the order of points. workers = 0 without a scheduler: here; else on Dask."""
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 0):
-        raise ValueError(f"workers is {workers!r}; allowed: a whole number >= 0 "
-                         "(0: no Dask, run here)")
+    fmu), in the order of points. workers = 0 without a scheduler: here; else on Dask.
+    `workers` and `scheduler` as sweep.check_options checked them."""
     if scheduler is None and workers == 0:
         results = []
         with progress_bar(len(points), "sweep", progress, unit="point") as bar:

@@ -127,12 +127,20 @@ def run_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(),
     starts a LocalCluster of N single-threaded worker processes (None: one per core);
     scheduler: address of a running Dask scheduler (workers is then ignored). Every argument
     and every point is checked before any process starts (check_sweep, method "time")."""
+    check_sweep(scene, speeds, params, protocol, "time", workers=workers,
+                scheduler=scheduler, fmu=fmu, progress=progress)
+    return run_checked_points(scene, speeds, params, protocol, workers, scheduler, fmu,
+                              progress)
+
+
+def run_checked_points(scene, speeds, params, protocol, workers=None, scheduler=None,
+                       fmu=None, progress=True):
+    """run_sweep's work, its arguments checked already (check_sweep: every point, the FMU's
+    scene), so that a caller that checked them does not check them again."""
     pd = require("pandas", "a sweep's table")
 
     from .distributed_run import map_points
 
-    check_sweep(scene, speeds, params, protocol, "time", workers=workers,
-                scheduler=scheduler, fmu=fmu, progress=progress)
     points = grid(sweep_axes(scene, speeds, params))
     results = map_points(run_point, points, (scene, protocol, fmu), workers, scheduler,
                          progress)
@@ -223,7 +231,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     method = check_sweep(scene, speeds, params, protocol, method, **options)
     doubling = options.pop("doubling", True)  # False only with shooting (check_sweep)
     if method == "time":
-        return run_sweep(scene, speeds, params, protocol, **options)[0].assign(
+        return run_checked_points(scene, speeds, params, protocol, **options)[0].assign(
             stability="time", method="time")
     return shooting_sweep(scene, speeds, protocol, options.get("progress", True), params,
                           doubling)

@@ -120,7 +120,12 @@ def declare(parser) -> None:
 
 def execute(args, parser) -> int:
     """Check everything, run the sweep, write the table first, then the pictures."""
-    from ..analysis.sweep import chained_time_sweep, check_sweep, run_sweep, shooting_sweep
+    from ..analysis.sweep import (
+        chained_time_sweep,
+        check_sweep,
+        run_checked_points,
+        shooting_sweep,
+    )
     from ..analysis.sweep_point import Protocol
     from ..analysis.sweep_report import describe, write_outputs
 
@@ -156,10 +161,10 @@ def execute(args, parser) -> int:
                                                          progress=not args.no_progress)
                            for direction, order in (("up", speeds), ("down", speeds[::-1]))}
     else:
-        table, series = run_sweep(scene, speeds, params, protocol,
-                                  workers=None if args.workers is None else int(args.workers),
-                                  scheduler=args.scheduler, fmu=args.through_fmu,
-                                  progress=not args.no_progress)
+        table, series = run_checked_points(
+            scene, speeds, params, protocol,
+            workers=None if args.workers is None else int(args.workers),
+            scheduler=args.scheduler, fmu=args.through_fmu, progress=not args.no_progress)
     wall = time.perf_counter() - started
     written = write_outputs(scene, table, series, folder, time_sweeps)
     print(describe(scene, table, wall))

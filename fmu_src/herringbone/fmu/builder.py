@@ -23,6 +23,7 @@ import zipfile
 from pathlib import Path
 
 from .. import shipped
+from ..arguments import FMU_SCENE_FILE
 from ..files import replace_file
 from . import carried as carried_package
 
@@ -341,7 +342,7 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
     load_scene(scene)  # a bad scene is reported here, in the scene's own words
     scene = shipped.resolve_scene(scene)
     with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
-        scene_copy = Path(tmp) / "scene.toml"
+        scene_copy = Path(tmp) / FMU_SCENE_FILE
         shutil.copyfile(scene, scene_copy)
         carried = carry_compiled_integrator(scene, Path(tmp))
         source, module = ((GEAR_SLAVE, GEAR_SLAVE_MODULE) if fmi_version == 2

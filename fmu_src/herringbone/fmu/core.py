@@ -41,6 +41,7 @@ import numpy as np  # noqa: E402
 import herringbone  # noqa: E402
 from herringbone.arguments import (  # noqa: E402
     FMU_MAX_STEP,
+    FMU_SCENE_FILE,
     FMU_SOLVER_METHOD,
     FMU_SOLVER_TOLERANCE,
 )
@@ -64,7 +65,6 @@ from herringbone.model.parameters import (  # noqa: E402
     parameters_of,
 )
 
-SCENE_FILE = "scene.toml"
 DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (docs/model.md)"
 # Runaway guard: a doStep of h may take STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max
 # internal steps (|λ|max the fastest eigenvalue). Measured on the shipped scenes at the default
@@ -79,6 +79,7 @@ STEP_BUDGET_PER_MAX_STEP = 2
 MOST_STEPS = 2**62
 # a run's times must resolve the train's fastest time scale to this share (_resolution_problem)
 RESOLVED_SHARE = 1e-3
+EPSILON = float(np.finfo(float).eps)
 STATE_FORMAT = "herringbone-fmu-state-2"  # the serialized FMU state's layout (_get_fmu_state)
 STATE_KEYS = {"format", "values", "start_time", "initialized", "experiment_tolerance",
               "problem", "input_problem", "run"}
@@ -123,12 +124,17 @@ def step_budget(step_size, fastest_rate, max_step) -> int:
     return int(min(STEP_BUDGET_FLOOR + steps, MOST_STEPS))
 
 
-def _resolution_problem(end, fastest_rate) -> str | None:
-    """Why a doStep may not end at `end` (s), or None: where double precision's spacing of
-    times is over RESOLVED_SHARE of the train's fastest time scale 1/|λ|max (`fastest_rate`,
-    1/s), the integrator's steps and event times are rounding, not the train (a doStep of
-    1e300 s, or an experiment started at 1e9 s)."""
-    limit = RESOLVED_SHARE / (fastest_rate * np.finfo(float).eps)
+def latest_end(fastest_rate) -> float:
+    """The latest time (s) a doStep may end at: where double precision's spacing of times
+    reaches RESOLVED_SHARE of the train's fastest time scale 1/|λ|max (`fastest_rate`, 1/s),
+    past which the integrator's steps and event times are rounding, not the train. Fixed for a
+    stepper: taken once where it is built."""
+    return RESOLVED_SHARE / (fastest_rate * EPSILON)
+
+
+def _resolution_problem(end, limit, fastest_rate) -> str | None:
+    """Why a doStep may not end at `end` (s), past `limit` (latest_end), or None (a doStep of
+    1e300 s, or an experiment started at 1e9 s, is refused)."""
     if abs(end) <= limit:
         return None
     return (f"doStep to t = {end:g} s: there double precision resolves "
@@ -179,7 +185,7 @@ class GearCore:
         start the train at t = 0 with the scene's own values."""
         # before anything is compiled
         first_start.prepare(self.resources, HostLine(self, logger_address).say)
-        self.scene = herringbone.load_scene(Path(self.resources) / SCENE_FILE)
+        self.scene = herringbone.load_scene(Path(self.resources) / FMU_SCENE_FILE)
         self.values = dict(self.scene.parameters)
         self.values.update({name: p.default for name, p in SOLVER_SETTINGS.items()})
         motor_torque, load_torque = self.scene.inputs.at(0.0)
@@ -195,6 +201,7 @@ class GearCore:
         self.input_problem = None  # what stops doSteps until the inputs are valid, logged once
         self.run = None  # compiled_stepper.Run, advanced in place by every doStep
         self.stepper = None
+        self.latest_end = math.inf  # latest_end of self.stepper, set where it is built
         self.built_from = None  # the values self.stepper was built from, inputs included
         self.declared = {}  # value reference -> Declaration
         self.real_output_entries = {}  # value reference -> entry of output_values (reals)
@@ -295,7 +302,8 @@ class GearCore:
         initialization, its step size, an input, its start time. None of them harms the
         instance: the next doStep without the problem goes on."""
         problem = (self._order_problem("DoStep") or _step_size_problem(step_size)
-                   or _resolution_problem(current_time + step_size, self.stepper.fastest_rate))
+                   or _resolution_problem(current_time + step_size, self.latest_end,
+                                          self.stepper.fastest_rate))
         for name in INPUTS:
             if problem is None and not math.isfinite(self.values[name]):
                 problem = f"input {name} is {self.values[name]}; allowed: any finite number"
@@ -537,6 +545,7 @@ class GearCore:
             self.stepper = CompiledStepper(GearTrainModel(scene), built_from["solver_tolerance"],
                                            method=built_from["solver_method"],
                                            max_step=built_from["max_step"] or math.inf)
+            self.latest_end = latest_end(self.stepper.fastest_rate)
             self.built_from = built_from
         except herringbone.SceneError as error:
             # the scene's own words, without its file: the FMU's variables are the parameters

@@ -340,10 +340,10 @@ def _complete_parameters(given, components, source):
 def _experiment(table, source):
     values = {}
     for key, value in table.items():
-        if key not in ("stop_time", "output_interval"):
+        if key not in TABLES["experiment"]:
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
-            raise SceneError(f"unknown key '{key}'{hint}; allowed: stop_time, output_interval",
-                             source, "experiment", key)
+            raise SceneError(f"unknown key '{key}'{hint}; allowed: "
+                             f"{', '.join(TABLES['experiment'])}", source, "experiment", key)
         problem = number_problem(value, POSITIVE, "s")
         if problem is not None:
             raise SceneError(f"{key} {problem}", source, "experiment", key)
