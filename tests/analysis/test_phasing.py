@@ -19,6 +19,7 @@ from herringbone.analysis.report import scene_report
 from herringbone.cli import main as herringbone_main
 from herringbone.model.geometry import GearGeometry
 from herringbone.model.mesh import Mesh
+from herringbone.shipped import scene_files
 
 REFERENCE = herringbone.scene_from_dict({})
 P_X = GearGeometry.from_parameters(REFERENCE.parameters).axial_pitch
@@ -244,3 +245,26 @@ def test_info_reports_a_bad_scene_in_one_line(tmp_path, capsys):
     assert captured.err.count("\n") == 1 and "eps_q" in captured.err
     assert herringbone_main(["info", str(tmp_path / "missing.toml")]) == 2
     assert "no such scene file" in capsys.readouterr().err
+
+
+# --- a face too narrow for continuous contact ---------------------------------------------------
+
+@pytest.mark.parametrize("name", sorted(scene_files()))
+def test_every_shipped_scene_keeps_a_point_on_the_face(name):
+    parameters = herringbone.load_scene(name).parameters
+    assert Mesh(parameters).share_without_contact() == 0.0
+
+
+def test_a_narrow_face_is_without_contact_outside_its_two_stream_spans(monkeypatch):
+    """Both halves alike, each stream of ε = b/p_x on the face for that fraction of the period:
+    the pre- and post-pole streams (delays 0 and 0.2) together cover 2ε of it, and K_ε = 0.
+    `info` says how much of the period no point is on the face."""
+    scene = REFERENCE.with_parameters(b_left=1e-4, b_right=1e-4)
+    eps = 1e-4 / P_X
+    assert scene_phasing(scene).k_eps == 0
+    assert Mesh(scene.parameters).share_without_contact() == pytest.approx(1.0 - 2.0 * eps,
+                                                                           abs=1e-12)
+    use_stand_in_modes(monkeypatch)
+    assert ("(no point is on the face for 99.4 % of each mesh period: the pair transmits no "
+            "torque then" in scene_report(scene))
+    assert "no point is on the face" not in scene_report(REFERENCE)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from scipy.optimize import brentq
 
 from ..model.geometry import GearGeometry
-from ..model.mesh import PHASE_TOLERANCE, fraction_of_period
+from ..model.mesh import PHASE_TOLERANCE, Mesh, fraction_of_period
 from ..model.mesh import streams as mesh_streams
 
 
@@ -123,3 +123,16 @@ def scene_phasing(scene_or_parameters) -> ScenePhasing:
                         q21=parameters["eps_q"] * geometry.axial_pitch,
                         streams=pairs, law=alternation_law(pairs),
                         k_eps=min(count for _, _, count in count_intervals(pairs)))
+
+
+def without_contact_note(parameters: dict) -> str:
+    """A line on a face too narrow for its streams' phasing: how much of each mesh period no
+    point is on it (Mesh.share_without_contact), when the pair transmits no torque and the
+    teeth meet again by impact; '' where some point is always on the face."""
+    share = Mesh(parameters).share_without_contact()
+    if share == 0.0:
+        return ""
+    return (f"no point is on the face for {100.0 * share:.3g} % of each mesh period: the pair "
+            "transmits no torque then, and the teeth meet again by impact (a wider face keeps "
+            "a point on it)")
+

@@ -14,7 +14,7 @@ from ..model.assembly import mass_matrix, natural_modes
 from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
 from ..model.parameters import RPM_PER_RAD_S
-from .phasing import scene_phasing
+from .phasing import scene_phasing, without_contact_note
 
 HARMONICS = (1, 2, 3)
 MAX_RPM = 30_000.0  # resonance speeds above this are not listed: beyond any practical pinion speed
@@ -62,6 +62,9 @@ def scene_report(scene) -> str:
     lines += [f"  alternation law        {phasing.law} (read from phase 0)",
               f"  K_eps                  {phasing.k_eps} points (K_eps/eps_beta per half "
               f"{phasing.k_eps_ratio:.3f})"]
+    gap = without_contact_note(p)
+    if gap:
+        lines.append(f"  ({gap})")
     if p["edge_ramp"] > 0:
         lines.append(f"  (edge_ramp {1e3 * p['edge_ramp']:g} mm widens each point's span: the "
                      "model counts more points than this law)")

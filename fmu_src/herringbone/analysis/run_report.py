@@ -46,6 +46,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
              f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time)}",
              f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N"
              + _back_flanks(model.static_mesh_force()),
+             *_without_contact(scene.parameters),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
              f"{'max of samples':>16}{'at the end':>14}"]
@@ -66,6 +67,15 @@ def _back_flanks(static_force: float) -> str:
         return ""
     return (" (negative: M_motor < 0 loads the back flanks, on which the model has no "
             "contact: the teeth separate)")
+
+
+def _without_contact(parameters: dict) -> list[str]:
+    """phasing.without_contact_note as the summary's line, where the face leaves the pair
+    without contact for part of each mesh period."""
+    from .phasing import without_contact_note
+
+    note = without_contact_note(parameters)
+    return [note[0].upper() + note[1:]] if note else []
 
 
 def _wall_time(stop: float, wall_time: float, start_time: float | None) -> str:

@@ -137,6 +137,15 @@ class Mesh:
         average ∫w dz / p_x = b / p_x points (the edge ramp keeps the area of w)."""
         return self.c_point * sum(self.geometry.axial_overlap(s.half) for s in self.streams)
 
+    def share_without_contact(self) -> float:
+        """The fraction of a mesh period in which no point is on the face (0 to 1): a face too
+        narrow for its streams' phasing (K_ε = 0) leaves the pair unloaded then, the train's
+        two sides free of each other until the next point enters."""
+        bounds = np.append(self.switch_phases, self.switch_phases[0] + 1.0)
+        return float(sum(end - start for interval, (start, end)
+                         in enumerate(zip(bounds[:-1], bounds[1:]))
+                         if len(self.contact_set(0, interval)) == 0))
+
     def locate(self, pinion_angle: float, backwards: bool = False) -> tuple[int, int]:
         """(cycle, interval) of the phase interval that holds φp; an angle on a switch belongs to
         the interval that starts there (points enter at z = 0 inclusive), or where the pinion
