@@ -61,3 +61,31 @@ def test_a_spectrum_reaches_the_modes_its_sampling_resolves(monkeypatch, tmp_pat
     assert 0.085 <= shown.max() <= 0.1  # the 100 N ringing at 10.4 kHz, in kN
     harmonics = [line for line in axes[0].get_lines() if line.get_color() == "C3"]
     assert len(harmonics) == plots.HARMONICS_MARKED
+
+
+def test_a_spectrum_keeps_its_amplitude_axis_on_what_it_shows(monkeypatch, tmp_path):
+    """Sampled at 1 µs, a tone of 250 Hz spans log frequency to 1350 Hz: the amplitude axis
+    runs down to the least amplitude shown there (or SPECTRUM_DECADES under the peak), not to
+    the leakage of the bins up to 500 kHz that the frequency axis leaves out, decades lower."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+
+    from herringbone.analysis import plots
+
+    drawn = {}
+    monkeypatch.setattr(plots, "_save", lambda figure, path, **kw: drawn.update(figure=figure))
+    time = np.arange(0.0, 0.04, 1e-6)
+    tone = np.sin(2 * np.pi * 250.0 * time)
+    plots.plot_spectra({"time": time, "dte": 1e-6 * tone, "F_mesh": 2e4 + 1e3 * tone},
+                       tmp_path / "s.png", 250.0, [113.0, 684.0], "tone", skip=0.02)
+    for axes in drawn["figure"].axes[:2]:
+        line = axes.get_lines()[0]
+        frequency, amplitude = line.get_xdata(), line.get_ydata()
+        left, right = axes.get_xlim()
+        shown = amplitude[frequency <= right]
+        low, high = axes.get_ylim()
+        assert amplitude.min() < 1e-3 * shown.min()  # the leakage left out lies decades lower
+        assert low == max(shown.min(), shown.max() * 10.0 ** -plots.SPECTRUM_DECADES)
+        assert high > shown.max()

@@ -11,6 +11,10 @@ from ..optional import require
 
 HARMONICS_SHOWN = 4  # a spectrum spans at least this many mesh harmonics
 HARMONICS_MARKED = 12  # and marks at most this many (more crowd a log axis into a band)
+# a spectrum's amplitude axis spans at most this many decades under its peak: the bins
+# between the lines of a clean record fall to rounding (1e-17 of the peak), and below the
+# integrator's tolerance (1e-7 of the force scale) nothing is the train's
+SPECTRUM_DECADES = 7
 
 
 def _pyplot():
@@ -144,6 +148,14 @@ def _mark_frequencies(axes, mesh_frequency, natural, top):
                      label="natural frequencies" if number == 0 else None)
 
 
+def _amplitude_floor(panel, amplitude: np.ndarray) -> None:
+    """The amplitude axis from the least amplitude shown, or SPECTRUM_DECADES under the
+    largest where that lies lower, to matplotlib's top."""
+    shown = amplitude[amplitude > 0.0]
+    if shown.size:
+        panel.set_ylim(bottom=max(shown.min(), shown.max() * 10.0 ** -SPECTRUM_DECADES))
+
+
 def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) -> None:
     """Amplitude spectra of dte (µm) and F_mesh (kN) of a run from `skip` s on, with the
     mesh harmonics and the natural frequencies marked; log amplitude over log frequency, up to
@@ -160,6 +172,7 @@ def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) 
                                      (axes[1], "F_mesh", 1e-3, "kN")):
         frequency, amplitude = amplitude_spectrum(results[name][keep] * scale, interval)
         panel.loglog(frequency[1:], amplitude[1:], color="k", lw=0.9, label=name)
+        _amplitude_floor(panel, amplitude[1:][frequency[1:] <= top])
         _mark_frequencies(panel, mesh_frequency, natural, top)
         panel.set_ylabel(f"{name} amplitude, {unit}")
         panel.grid(True, which="both", alpha=0.3)
