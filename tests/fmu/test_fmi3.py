@@ -183,6 +183,12 @@ def test_fmi3_a_bad_step_size_and_calls_out_of_order_are_errors_and_the_instance
     assert all("after the FMU was initialized: refused, the run goes on" in text
                for _, text in instance.messages[2:]) and len(instance.messages) == 4
     steps(instance, 2e-4, 2)
+    instance.terminate()
+    with pytest.raises(FMICallException, match="status 3"):
+        instance.doStep(currentCommunicationPoint=4e-4, communicationStepSize=1e-4)
+    assert instance.messages[-1][1].startswith(
+        "gear: fmi3DoStep after fmi3Terminate: refused; allowed: doStep once "
+        "fmi3EnterInitializationMode and fmi3ExitInitializationMode have initialized the FMU")
 
 
 def _si_exponents(unit: str) -> dict:

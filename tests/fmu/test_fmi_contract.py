@@ -198,24 +198,116 @@ def test_a_max_step_makes_its_steps_and_no_runaway(gear):
 
 
 def test_calls_out_of_their_order_are_refused_with_a_message_and_harm_nothing(gear):
-    """doStep before initialization is refused (Discard) with a message; enter and exit
-    initialization again after it are refused with a message (pythonfmu has no fmi2Error:
-    answered OK) and the run goes on as if they had not been made, not started again."""
+    """Each call where the Reference FMUs allow it, as the FMI 2.0 state machine has it: a
+    doStep before initialization or after terminate is refused (Discard) with a message;
+    exitInitializationMode without enter, enter, exit and setupExperiment again after
+    initialization, a second terminate and a set after terminate are refused with a message
+    (pythonfmu has no fmi2Error: answered OK), and the run goes on as if they had not been
+    made, not started again, moved or changed."""
     clean = run_steps(gear(), 4)
     instance = gear(initialize=False)
     with pytest.raises(FMICallException) as error:
         instance.slave.doStep(instance.time, STEP)
     assert error.value.status == DISCARD
-    assert len(errors(instance, "fmi2DoStep before fmi2ExitInitializationMode")) == 1
-    instance.initialize()
+    instance.slave.exitInitializationMode()
+    instance.slave.enterInitializationMode()
+    with pytest.raises(FMICallException):
+        instance.slave.doStep(instance.time, STEP)
+    instance.slave.exitInitializationMode()
     run_steps(instance, 2)
     instance.slave.enterInitializationMode()
     instance.slave.exitInitializationMode()
-    assert len(errors(instance, "fmi2EnterInitializationMode after the FMU was initialized",
-                      "refused")) == 1
-    assert len(errors(instance, "fmi2ExitInitializationMode after the FMU was initialized",
-                      "refused")) == 1
+    instance.slave.setupExperiment(startTime=5.0, tolerance=1e-3)
     assert np.array_equal(run_steps(instance, 2), clean[2:])
+    instance.slave.terminate()
+    instance.slave.terminate()
+    instance.set(M_motor=600.0)
+    with pytest.raises(FMICallException) as error:
+        instance.step(STEP)
+    assert error.value.status == DISCARD
+    assert np.array_equal(list(instance.get(list(FORCES)).values()), clean[3])
+    said = [text.split(": ", 1)[1] for status, text in instance.messages if status == ERROR]
+    assert said == [
+        "fmi2DoStep before fmi2EnterInitializationMode: refused; allowed: doStep once "
+        "fmi2EnterInitializationMode and fmi2ExitInitializationMode have initialized the FMU, "
+        "until fmi2Terminate",
+        "fmi2ExitInitializationMode before fmi2EnterInitializationMode: refused; allowed: "
+        "once, after fmi2EnterInitializationMode",
+        "fmi2DoStep in initialization mode: refused; allowed: doStep once "
+        "fmi2EnterInitializationMode and fmi2ExitInitializationMode have initialized the FMU, "
+        "until fmi2Terminate",
+        "fmi2EnterInitializationMode after the FMU was initialized: refused, the run goes on; "
+        "allowed: once, before the first doStep (fmi2Reset starts again)",
+        "fmi2ExitInitializationMode after the FMU was initialized: refused, the run goes on; "
+        "allowed: once, after fmi2EnterInitializationMode",
+        "fmi2SetupExperiment after the FMU was initialized: refused, the run goes on; "
+        "allowed: once, before fmi2EnterInitializationMode",
+        "fmi2Terminate after fmi2Terminate: refused; allowed: once, after "
+        "fmi2ExitInitializationMode",
+        "fmi2SetReal after fmi2Terminate: refused; allowed: before fmi2Terminate",
+        "fmi2DoStep after fmi2Terminate: refused; allowed: doStep once "
+        "fmi2EnterInitializationMode and fmi2ExitInitializationMode have initialized the FMU, "
+        "until fmi2Terminate"]
+
+
+def test_a_step_past_the_experiments_stop_time_is_refused(gear):
+    """fmi2SetupExperiment's stop time: a doStep that would end past it is refused (Discard,
+    where the Reference FMUs answer Error) with a message, one that ends on it to a master's
+    rounding is taken."""
+    instance = gear(stop_time=3 * STEP)
+    run_steps(instance, 2)
+    with pytest.raises(FMICallException) as error:
+        instance.step(2 * STEP)
+    assert error.value.status == DISCARD
+    assert errors(instance, "ends past the experiment's stop time 0.0003 s "
+                  "(fmi2SetupExperiment); allowed: doSteps that end by it")
+    instance.slave.doStep(instance.time, STEP * (1 + 1e-9))
+
+
+def test_outputs_read_in_initialization_mode_follow_what_the_host_set(gear):
+    """The outputs are calculated initial unknowns: read in initialization mode they are
+    those of the values set there (the train's start, docs/model.md section 6), as they read
+    after exitInitializationMode, not those of the scene's start values."""
+    instance = gear(initialize=False)
+    assert list(instance.get(["F_mesh", "w_pinion"]).values()) == pytest.approx(
+        [23036.42, 157.08], abs=0.01)
+    instance.slave.enterInitializationMode()
+    instance.set(M_motor=1000.0, M_load=3600.0, w0_pinion=100.0)
+    during = instance.get(["F_mesh", "w_pinion", "w_load"])
+    assert list(during.values()) == pytest.approx([2 * 23036.42, 100.0, 100.0 / 3.6], abs=0.01)
+    instance.slave.exitInitializationMode()
+    assert instance.get(["F_mesh", "w_pinion", "w_load"]) == during
+    instance.step(STEP)
+    assert np.isfinite(list(instance.get(list(FORCES)).values())).all()
+
+
+@pytest.mark.parametrize("categories, heard_in", [
+    (["logAll"], "logAll"),
+    (["logStatusError"], "logStatusError"),
+    (["logStatusWarning", "logAll"], "logAll"),
+    ([], "logStatusError"),
+    (["logStatusWarning", "logStatusDiscard"], None),
+])
+def test_a_host_that_names_log_categories_hears_a_problem_or_gets_it_on_stderr(
+        gear, capfd, categories, heard_in):
+    """fmi2SetDebugLogging with categories: pythonfmu passes a message only in a category the
+    host named. One that names logAll (declared as every message) or logStatusError hears an
+    input problem and gets fmi2Discard; one that names neither does not hear it, and gets it
+    on stderr and an fmi2Fatal, as a host with logging off (the message was lost before)."""
+    instance = gear(categories=categories)
+    run_steps(instance, 1)
+    instance.set(M_motor=math.nan)
+    with pytest.raises(FMICallException) as error:
+        instance.step(STEP)
+    said = "gear: input M_motor is nan; allowed: any finite number"
+    heard = [category for (status, text), category
+             in zip(instance.messages, instance.categories) if said in text]
+    if heard_in is None:
+        assert error.value.status == FATAL and heard == []
+        assert f"gear: error: {said[len('gear: '):]}" in capfd.readouterr().err
+    else:
+        assert error.value.status == DISCARD and heard == [heard_in]
+        assert "M_motor" not in capfd.readouterr().err
 
 
 def _serialize(instance):

@@ -20,14 +20,16 @@ class Instance:
     """Instantiate, set start values, initialize; then step, read outputs, save and restore."""
 
     def __init__(self, fmu_path, start_values=None, name="gear", start_time=0.0,
-                 tolerance=None, initialize=True):
+                 tolerance=None, initialize=True, categories=None, stop_time=None):
         self.description = read_model_description(str(fmu_path))
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.unzipped = extract(str(fmu_path))
         self.messages = []  # (status, text) of every log message
+        self.categories = []  # the category of each
 
         def on_log(environment, instance, status, category, message):
             self.messages.append((status, message.decode()))
+            self.categories.append(category.decode() if category else None)
 
         self.callbacks = fmi2CallbackFunctions()
         self.callbacks.logger = fmi2CallbackLoggerTYPE(on_log)
@@ -38,7 +40,9 @@ class Instance:
                                modelIdentifier=self.description.coSimulation.modelIdentifier,
                                instanceName=name)
         self.slave.instantiate(callbacks=self.callbacks, loggingOn=True)
-        self.slave.setupExperiment(startTime=start_time, tolerance=tolerance)
+        if categories is not None:  # the log categories the host enables (all: none named)
+            self.slave.setDebugLogging(True, categories)
+        self.slave.setupExperiment(startTime=start_time, tolerance=tolerance, stopTime=stop_time)
         self.time = start_time
         if initialize:
             self.initialize(start_values)

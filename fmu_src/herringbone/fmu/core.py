@@ -80,13 +80,32 @@ MOST_STEPS = 2**62
 # a run's times must resolve the train's fastest time scale to this share (_resolution_problem)
 RESOLVED_SHARE = 1e-3
 EPSILON = float(np.finfo(float).eps)
-STATE_FORMAT = "herringbone-fmu-state-2"  # the serialized FMU state's layout (_get_fmu_state)
-STATE_KEYS = {"format", "values", "start_time", "initialized", "experiment_tolerance",
+STATE_FORMAT = "herringbone-fmu-state-3"  # the serialized FMU state's layout (_get_fmu_state)
+STATE_KEYS = {"format", "values", "start_time", "stop_time", "mode", "experiment_tolerance",
               "problem", "input_problem", "run"}
 RUN_STATE_KEYS = {"time", "state", "cycle", "interval", "loaded", "step_hint", "outputs",
                   "first_steps", "internal_steps", "stepper_inputs"}
 WARNING, ERROR = 1, 3  # the same numbers in fmi2Status and fmi3Status
 STATUS_NAMES = {WARNING: "warning", ERROR: "error"}
+
+# The instance's place in the FMI state machine, and where each call may come (as the
+# Reference FMUs allow them: a call elsewhere is refused with a message, _order_problem)
+INSTANTIATED, INITIALIZATION, STEPPING, TERMINATED = (
+    "instantiated", "initialization", "stepping", "terminated")
+MODE_WORDS = {INSTANTIATED: "before {prefix}EnterInitializationMode",
+              INITIALIZATION: "in initialization mode",
+              STEPPING: "after the FMU was initialized", TERMINATED: "after {prefix}Terminate"}
+CALLS = {  # call (without its prefix): (the modes it may come in, when that is, in words)
+    "SetupExperiment": ({INSTANTIATED}, "once, before {prefix}EnterInitializationMode"),
+    "EnterInitializationMode": ({INSTANTIATED}, "once, before the first doStep ({prefix}Reset "
+                                "starts again)"),
+    "ExitInitializationMode": ({INITIALIZATION}, "once, after {prefix}EnterInitializationMode"),
+    "DoStep": ({STEPPING}, "doStep once {prefix}EnterInitializationMode and "
+               "{prefix}ExitInitializationMode have initialized the FMU, until "
+               "{prefix}Terminate"),
+    "Terminate": ({STEPPING}, "once, after {prefix}ExitInitializationMode"),
+    "Set": ({INSTANTIATED, INITIALIZATION, STEPPING}, "before {prefix}Terminate"),
+}
 
 # The solver's settings, declared next to their meaning like the model's parameters.
 SOLVER_SETTINGS = {
@@ -191,8 +210,10 @@ class GearCore:
         motor_torque, load_torque = self.scene.inputs.at(0.0)
         self.values.update(M_motor=motor_torque, M_load=load_torque)
         self.start_values = dict(self.values)
-        self.start_time, self.experiment_tolerance = 0.0, None  # from the host's experiment
-        self.initialized = False  # exitInitializationMode passed: fixed parameters are fixed
+        # from the host's experiment (FMI 2.0: fmi2SetupExperiment; stop_time None: none)
+        self.start_time, self.stop_time, self.experiment_tolerance = 0.0, None, None
+        self.mode = INSTANTIATED
+        self.started_from = None  # (values, start time) the run was started from (_start)
         # model.output_vector at the current position (zeros until a valid start): the
         # outputs' getters read it where the scene's layout puts them
         scene_model = GearTrainModel(self.scene)
@@ -256,37 +277,58 @@ class GearCore:
                            getter=lambda: self.output_values.item(entry), unit=output.unit,
                            output_entry=entry)
 
+    @property
+    def initialized(self):
+        """exitInitializationMode passed: the fixed parameters are fixed, doSteps run."""
+        return self.mode in (STEPPING, TERMINATED)
+
     @staticmethod
     def _whole(value):
         return int(value) if math.isfinite(value) else 0  # NaN: no valid start (see _fail)
 
     # --- the FMI calls, whatever the version ---------------------------------------------------
 
-    def _set_experiment(self, start_time, tolerance=None):
+    def _set_experiment(self, start_time, tolerance=None, stop_time=None):
         """The run starts at start_time (the model's time origin: the train at t0 is where the
-        scene puts it at 0). A tolerance takes the place of solver_tolerance unless the host
-        set solver_tolerance to something other than its start value."""
+        scene puts it at 0) and no doStep may end past `stop_time` (s; None: no end). A
+        tolerance takes the place of solver_tolerance unless the host set solver_tolerance to
+        something other than its start value. Only before enterInitializationMode (refused
+        with a message after, and nothing changes)."""
+        problem = self._order_problem("SetupExperiment")
+        if problem is not None:
+            return self._report(problem)
         self.start_time = float(start_time)
+        self.stop_time = None if stop_time is None else float(stop_time)
         self.experiment_tolerance = tolerance
-        if self.run is not None and not self.initialized:
-            self.run.clock[0] = self.start_time  # outputs before initialization: same place
+        if self.run is not None:  # outputs before initialization: the same place, moved
+            self.run.clock[0] = self.start_time
+            self.started_from = (self.started_from[0], self.start_time)
 
     def _enter_initialization(self):
-        """enterInitializationMode: only before initialization (refused with a message
-        after)."""
+        """enterInitializationMode: once, before initialization (refused with a message
+        elsewhere)."""
         problem = self._order_problem("EnterInitializationMode")
         if problem is not None:
-            self._report(problem)
+            return self._report(problem)
+        self.mode = INITIALIZATION
 
     def _exit_initialization(self):
-        """exitInitializationMode: the run starts from the values set; a second one is
-        refused with a message and the run goes on (it would start it again)."""
+        """exitInitializationMode: the run starts from the values set; refused with a message
+        where initialization mode was not entered, or after (it would start the run again)."""
         problem = self._order_problem("ExitInitializationMode")
         if problem is not None:
             return self._report(problem)
         self._apply_experiment_tolerance()
-        self.initialized = True
-        self._start()
+        self.mode = STEPPING
+        self._start_if_changed()
+
+    def _terminate(self):
+        """terminate: the run ends; doSteps and sets are refused after it (fmi2Reset or a
+        state set starts again)."""
+        problem = self._order_problem("Terminate")
+        if problem is not None:
+            return self._report(problem)
+        self.mode = TERMINATED
 
     def _step(self, current_time, step_size):
         """Advance by one communication step; returns the problem that stops it (already
@@ -303,7 +345,8 @@ class GearCore:
         instance: the next doStep without the problem goes on."""
         problem = (self._order_problem("DoStep") or _step_size_problem(step_size)
                    or _resolution_problem(current_time + step_size, self.latest_end,
-                                          self.stepper.fastest_rate))
+                                          self.stepper.fastest_rate)
+                   or self._stop_time_problem(current_time, step_size))
         for name in INPUTS:
             if problem is None and not math.isfinite(self.values[name]):
                 problem = f"input {name} is {self.values[name]}; allowed: any finite number"
@@ -316,19 +359,30 @@ class GearCore:
             self._report(problem)
         return problem
 
-    def _order_problem(self, call):
-        """Why `call` (an FMI function's name without its prefix) may not come now, or None:
-        a doStep only once initialized, enter/exitInitializationMode only before."""
+    def _order_problem(self, call, named=None):
+        """Why `call` (a key of CALLS: an FMI function's name without its prefix) may not come
+        in the instance's mode, or None (`named`: the function's name where CALLS has a
+        family of them, SetReal for Set)."""
+        modes, allowed = CALLS[call]
+        if self.mode in modes:
+            return None
         prefix = self.API["prefix"]
-        if call == "DoStep" and not self.initialized:
-            return (f"{prefix}DoStep before {prefix}ExitInitializationMode: refused; allowed: "
-                    f"doStep once {prefix}EnterInitializationMode and "
-                    f"{prefix}ExitInitializationMode have initialized the FMU")
-        if call != "DoStep" and self.initialized:
-            return (f"{prefix}{call} after the FMU was initialized: refused, the run goes "
-                    f"on; allowed: once, before the first doStep ({prefix}Reset starts "
-                    "again)")
-        return None
+        when = MODE_WORDS[self.mode].format(prefix=prefix)
+        goes_on = ", the run goes on" if self.mode == STEPPING else ""
+        return (f"{prefix}{named or call} {when}: refused{goes_on}; allowed: "
+                f"{allowed.format(prefix=prefix)}")
+
+    def _stop_time_problem(self, current_time, step_size):
+        """Why a doStep may not end where it would, past the experiment's stop time (the
+        Reference FMUs answer Error), or None; a master's rounding of its times is forgiven
+        as in _step_problem."""
+        end = current_time + step_size
+        if self.stop_time is None or end - self.stop_time <= (1e-6 * step_size
+                                                              + 1e-12 * abs(self.stop_time)):
+            return None
+        return (f"doStep from t = {current_time:.16g} s by {step_size:.16g} s ends past the "
+                f"experiment's stop time {self.stop_time:.16g} s ({self.API['setup']}); "
+                "allowed: doSteps that end by it")
 
     def _advance(self, current_time, step_size):
         torques = (self.values["M_motor"], self.values["M_load"])
@@ -361,6 +415,8 @@ class GearCore:
         # A master reads the same outputs after every doStep: they all sit in output_values,
         # taken by one numpy index of their entries, made for the last list asked for rather
         # than a getter or a lookup a variable (CHANGELOG has the figures)
+        if not self.initialized:
+            self._start_if_changed()
         asked = tuple(vrs)
         if asked != self.read_plan[0]:
             entries = self.real_output_entries
@@ -372,6 +428,8 @@ class GearCore:
     def _get(self, vrs, kind):
         """The values of `vrs`; one that is not a `kind` variable reads REFUSED[kind] (NaN for a
         real) and is reported."""
+        if not self.initialized:
+            self._start_if_changed()
         values = []
         for vr in vrs:
             declaration = self._variable(vr, kind, "read")
@@ -380,6 +438,10 @@ class GearCore:
         return values
 
     def _set_all(self, vrs, values, kind):
+        """Set `vrs` to `values` in turn; after terminate, none (refused with a message)."""
+        problem = self._order_problem("Set", f"Set{self.API['kinds'].get(kind, kind)}")
+        if problem is not None:
+            return self._report(problem)
         for vr, value in zip(vrs, values):
             declaration = self._variable(vr, kind, "set")
             if declaration is not None and declaration.setter is None:
@@ -419,7 +481,7 @@ class GearCore:
         """Everything the run goes on from, as JSON data: the position (floats exactly, by
         repr; the contact set by its cycle and interval), the steps taken, the values."""
         state = {"format": STATE_FORMAT, "values": dict(self.values),
-                 "start_time": self.start_time, "initialized": self.initialized,
+                 "start_time": self.start_time, "stop_time": self.stop_time, "mode": self.mode,
                  "experiment_tolerance": self.experiment_tolerance,
                  "problem": self.problem, "input_problem": self.input_problem, "run": None}
         if self.run is not None:
@@ -452,7 +514,7 @@ class GearCore:
         variables."""
         if not (isinstance(state, dict) and state.get("format") == STATE_FORMAT
                 and set(state) == STATE_KEYS and isinstance(state["values"], dict)
-                and set(state["values"]) == set(self.values)):
+                and set(state["values"]) == set(self.values) and state["mode"] in MODE_WORDS):
             return False
         return state["run"] is None or (isinstance(state["run"], dict)
                                         and set(state["run"]) == RUN_STATE_KEYS)
@@ -460,8 +522,9 @@ class GearCore:
     def _restore(self, state):
         """Take the values and the run of `state` (one of this FMU's)."""
         self.values = dict(state["values"])
-        self.start_time, self.initialized = state["start_time"], state["initialized"]
-        self.experiment_tolerance = state["experiment_tolerance"]
+        self.start_time, self.stop_time = state["start_time"], state["stop_time"]
+        self.mode, self.experiment_tolerance = state["mode"], state["experiment_tolerance"]
+        self.started_from = (dict(self.values), self.start_time)
         self.problem, self.input_problem = state["problem"], state["input_problem"]
         self.run = None
         self.output_values = np.zeros_like(self.output_values)
@@ -499,9 +562,17 @@ class GearCore:
 
     # --- the model behind it -----------------------------------------------------------------
 
+    def _start_if_changed(self):
+        """_start, unless the run was started from the values and start time as they are now
+        (and its problems, if any, reported): before initialization the outputs follow what the
+        host sets, as the FMI standard asks of outputs read in initialization mode."""
+        if self.started_from != (self.values, self.start_time):
+            self._start()
+
     def _start(self):
         """Validate the values and place the train in its initial state (docs/model.md section 6)
         at the start time."""
+        self.started_from = (dict(self.values), self.start_time)
         self.problem, self.input_problem, self.run = None, None, None
         problem = self._check_values() or self._build_if_changed()
         if problem is not None:
@@ -598,7 +669,7 @@ class GearCore:
         """Log `message`; also on stderr unless the host is known to hear the log."""
         # hosts format log messages printf-style: a bare '%' crashes them
         self._log(f"{self.instance_name}: {message}".replace("%", "%%"), status)
-        if self.host_logs() is not True:
+        if self.host_logs(status) is not True:
             print(f"{self.instance_name}: {STATUS_NAMES[status]}: {message}", file=sys.stderr,
                   flush=True)
 
@@ -618,7 +689,7 @@ class GearCore:
     def _log(self, text, status):
         raise NotImplementedError
 
-    def host_logs(self):
-        """Whether the host hears this instance's log messages: True, False, or None (not
-        known)."""
+    def host_logs(self, status=ERROR):
+        """Whether the host hears this instance's log messages of `status`: True, False, or
+        None (not known)."""
         return None

@@ -7,7 +7,10 @@ stderr only where the host would not show it, and to announce a compile before i
 
 pythonfmu 0.7's C++ Fmi2Logger (its src/pythonfmu/fmi2.cpp and Logger.hpp): a vtable pointer,
 the debug-logging flag at byte FLAG, the instance name (a std::string: data pointer, then size)
-at NAME, the host's fmi2CallbackFunctions pointer at FUNCTIONS. It is read only under pythonfmu
+at NAME, the categories of fmi2SetDebugLogging (a std::vector of std::string: its first and
+past-the-end pointers) at CATEGORIES, the host's fmi2CallbackFunctions pointer at FUNCTIONS.
+A message reaches the host where the flag is set and the categories are none or hold the
+message's own. It is read only under pythonfmu
 0.7, and only after the name found there is the instance's own, the check that the layout is
 the one described here; anything else answers None ("not known").
 """
@@ -20,7 +23,8 @@ import weakref
 from collections.abc import Callable
 from types import FrameType
 
-FLAG, NAME, FUNCTIONS = 8, 16, 72
+FLAG, NAME, CATEGORIES, FUNCTIONS = 8, 16, 48, 72
+STRING_SIZE = 32  # libstdc++'s std::string: data pointer, size, a 16-byte buffer
 # fmi2CallbackLogger(environment, instance name, status, category, message)
 _CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
                              ctypes.c_char_p, ctypes.c_char_p)
@@ -50,6 +54,25 @@ def logging_on(address: int | None, instance_name: str) -> bool | None:
         return None
     assert address is not None
     return bool(ctypes.c_bool.from_address(address + FLAG).value)
+
+
+def hears(address: int | None, instance_name: str, category: str) -> bool | None:
+    """Whether pythonfmu passes the instance's log messages of `category` to the host: logging
+    is on and fmi2SetDebugLogging enabled no categories, or this one among them; None where
+    that cannot be known."""
+    on = logging_on(address, instance_name)
+    if not on:
+        return on
+    assert address is not None
+    first, end = _pointer(address, CATEGORIES), _pointer(address, CATEGORIES + 8)
+    if not first or not end or first == end:
+        return True
+    wanted = category.encode()
+    for string in range(first, end, STRING_SIZE):
+        size, data = ctypes.c_size_t.from_address(string + 8).value, _pointer(string, 0)
+        if data and size == len(wanted) and ctypes.string_at(data, size) == wanted:
+            return True
+    return False
 
 
 def host_logger(address: int | None, instance_name: str) -> Callable[[int, bytes], None] | None:

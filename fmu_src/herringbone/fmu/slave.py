@@ -1,11 +1,11 @@
 """The gear train as an FMI 2.0 co-simulation slave: pythonfmu's Fmi2Slave over the
 version-independent core (fmu/core.py), which holds the slave's logic and its variables' table.
 
-How errors reach the host (README "Errors in each host"): pythonfmu 0.7 can answer a call
-only with fmi2OK, fmi2Discard (do_step returning False) or fmi2Fatal (any Python exception,
-which also destroys the instance), and passes log messages on only when the host enabled
-logging. So a problem is logged once at error status; where the host did not enable logging it
-is also written to the process's stderr and the call that meets it raises (fmi2Fatal: fmpy
+How errors reach the host (docs/hosts.md, "Errors in each host"): pythonfmu 0.7 can answer a
+call only with fmi2OK, fmi2Discard (do_step returning False) or fmi2Fatal (any Python
+exception, after which the standard allows no call), and passes log messages on only when the
+host enabled logging, in the categories it named. So a problem is logged once at error status;
+where the host does not hear it (_category) it is also written to the process's stderr and the call that meets it raises (fmi2Fatal: fmpy
 raises FMICallException). Where the host logs (libcosim always does, and a Fatal aborts it)
 nothing raises: doStep answers fmi2Discard while the problem lasts. A call that cannot be
 honoured but harms nothing (setting an output, or a fixed parameter after initialization;
@@ -16,7 +16,7 @@ from typing import Any
 
 # before pythonfmu: the core checks the dependencies (herringbone.fmu.runtime) before anything
 # imports numpy; `isort: split` keeps it there
-from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
+from herringbone.fmu.core import DESCRIPTION, ERROR, Declaration, GearCore
 
 # isort: split
 from pythonfmu import Boolean, DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, String
@@ -64,20 +64,36 @@ class HerringboneGear(BalancedSlave, GearCore, Fmi2Slave):
         return variable.value_reference
 
     def _log(self, text: str, status: int) -> None:
-        """Queue `text` with pythonfmu's logger at `status` (an fmi2Status value)."""
-        self.log(text, Fmi2Status(status))
+        """Queue `text` with pythonfmu's logger at `status` (an fmi2Status value), in the
+        category the host hears it in (_category)."""
+        self.log(text, Fmi2Status(status), self._category(status)[0])
+
+    def _category(self, status: int) -> tuple[str, bool | None]:
+        """The log category for a message of `status`, and whether the host hears it there
+        (None: not known): the status's own (logStatusError, ...), or logAll where the host
+        enabled only that. pythonfmu passes a message only in a category the host named in
+        fmi2SetDebugLogging, matched by name, and the model description declares logAll as
+        every message."""
+        own = f"logStatus{Fmi2Status(status).name.capitalize()}"
+        if own not in self.log_categories:
+            own = "logAll"
+        heard = pythonfmu_logger.hears(self.logger_address, self.instance_name, own)
+        if heard is False and pythonfmu_logger.hears(self.logger_address, self.instance_name,
+                                                     "logAll"):
+            return "logAll", True
+        return own, heard
 
     # --- FMI callbacks: times in s, values in the variables' units ---------------------------
 
     def setup_experiment(self, start_time: float, stop_time: float | None = None,
                          tolerance: float | None = None) -> None:
-        """fmi2SetupExperiment: the run starts at `start_time`; a `tolerance` takes the
-        place of solver_tolerance unless the host set that itself (GearCore._set_experiment).
-        The stop time is not used: the run goes where the doSteps take it."""
-        self._set_experiment(start_time, tolerance)
+        """fmi2SetupExperiment: the run starts at `start_time`, and a doStep that would end
+        past `stop_time` is refused; a `tolerance` takes the place of solver_tolerance unless
+        the host set that itself (GearCore._set_experiment)."""
+        self._set_experiment(start_time, tolerance, stop_time)
 
     def enter_initialization_mode(self) -> None:
-        """fmi2EnterInitializationMode: refused with a message once initialized."""
+        """fmi2EnterInitializationMode: refused with a message where it may not come."""
         self._enter_initialization()
 
     def exit_initialization_mode(self) -> None:
@@ -93,6 +109,10 @@ class HerringboneGear(BalancedSlave, GearCore, Fmi2Slave):
             self._raise_if_unheard()
             return False
         return True
+
+    def terminate(self) -> None:
+        """fmi2Terminate: the run ends (doSteps and sets are refused after it)."""
+        self._terminate()
 
     def get_real(self, vrs: list[int]) -> list[float]:
         """fmi2GetReal: the values of `vrs` (NaN, reported, for one that is not a Real)."""
@@ -126,7 +146,8 @@ class HerringboneGear(BalancedSlave, GearCore, Fmi2Slave):
         """fmi2SetString: as set_real."""
         self._set_all(vrs, values, "string")
 
-    def host_logs(self) -> bool | None:
-        """Whether pythonfmu passes this instance's log messages to the host: it does not tell
-        the slave, so this reads its logger (fmu.pythonfmu_logger); None where not known."""
-        return pythonfmu_logger.logging_on(self.logger_address, self.instance_name)
+    def host_logs(self, status: int = ERROR) -> bool | None:
+        """Whether pythonfmu passes this instance's log messages of `status` to the host: it
+        does not tell the slave, so this reads its logger (fmu.pythonfmu_logger), with the
+        categories the host enabled; None where not known."""
+        return self._category(status)[1]

@@ -126,7 +126,7 @@ class HerringboneGear(GearCore, Fmi3Slave):
     # --- FMI callbacks -----------------------------------------------------------------------
 
     def enter_initialization_mode(self):
-        """fmi3EnterInitializationMode: refused with a message once initialized."""
+        """fmi3EnterInitializationMode: refused with a message where it may not come."""
         self._enter_initialization()
 
     def exit_initialization_mode(self):
@@ -146,6 +146,10 @@ class HerringboneGear(GearCore, Fmi3Slave):
         if self._step(current_time, step_size) is not None:
             return Fmi3StepResult(status=Fmi3Status.error)
         return Fmi3StepResult()
+
+    def terminate(self):
+        """fmi3Terminate: the run ends (doSteps and sets are refused after it)."""
+        self._terminate()
 
     def get_float64(self, vrs):
         """Values of the Float64 variables `vrs` (outputs, inputs, parameters, time)."""
@@ -188,11 +192,12 @@ class HerringboneGear(GearCore, Fmi3Slave):
         """Set String variables, checked as set_float64's."""
         self._set_all(vrs, values, "string")
 
-    def host_logs(self):
+    def host_logs(self, status=None):
         """Whether the host gave a log callback, which pythonfmu3 calls with every message
         (not only when loggingOn): read from cppfmu's Logger, whose address pythonfmu3 hands to
         the slave (the instance environment, then the callback: cppfmu_common.hpp). None (not
-        known) for another pythonfmu3 version or without a logger (outside an FMU)."""
+        known) for another pythonfmu3 version or without a logger (outside an FMU); the
+        same for every `status`."""
         if not self.logger_address or pythonfmu3.__version__ != "0.3.4":
             return None
         callback = ctypes.c_void_p.from_address(self.logger_address
