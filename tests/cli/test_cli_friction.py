@@ -522,3 +522,16 @@ def test_a_run_of_a_shipped_scene_has_no_word_on_contact_gaps(tmp_path, capsys):
     assert main(["run", "reference", "--stop-time", "1e-3", "--no-progress",
                  "-o", str(tmp_path / "run.csv")]) == 0
     assert "no point is on the face" not in capsys.readouterr().out.lower()
+
+
+def test_a_run_that_starts_with_points_in_tension_says_why_f_mesh_starts_high(tmp_path, capsys):
+    """contact_loss: the start's static equilibrium (every point loaded, docs/model.md section
+    6) leaves three of its six points in tension, which start unloaded: F_mesh starts at
+    4165 N against the static 2304 N, and the summary says why beside it."""
+    assert main(["run", "contact_loss", "--stop-time", "1e-3", "--no-progress",
+                 "-o", str(tmp_path / "run.csv")]) == 0
+    (line,) = [text for text in capsys.readouterr().out.splitlines()
+               if text.startswith("static mesh force")]
+    assert line == ("static mesh force M_motor/Rp = 2303.6 N; F_mesh starts at 4165.4 N: the "
+                    "start's static equilibrium (every point loaded) leaves points in tension, "
+                    "which start unloaded, and the run starts with a transient")

@@ -45,7 +45,8 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
              f"({', '.join(model.coordinates)})",
              f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time)}",
              f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N"
-             + _back_flanks(model.static_mesh_force()),
+             + _back_flanks(model.static_mesh_force())
+             + _tension_at_start(model.static_mesh_force(), results["F_mesh"][0]),
              *_without_contact(scene.parameters),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
@@ -67,6 +68,17 @@ def _back_flanks(static_force: float) -> str:
         return ""
     return (" (negative: M_motor < 0 loads the back flanks, on which the model has no "
             "contact: the teeth separate)")
+
+
+def _tension_at_start(static_force: float, start_force: float) -> str:
+    """Why F_mesh (N) starts away from the static mesh force (N) of a torque that presses the
+    teeth: the start's equilibrium, every point loaded, leaves points in tension that start
+    unloaded (docs/model.md section 6); '' where it starts on it (to 1e-6)."""
+    if static_force <= 0.0 or abs(start_force - static_force) <= 1e-6 * static_force:
+        return ""
+    return (f"; F_mesh starts at {start_force:.1f} N: the start's static equilibrium (every "
+            "point loaded) leaves points in tension, which start unloaded, and the run starts "
+            "with a transient")
 
 
 def _without_contact(parameters: dict) -> list[str]:
