@@ -5,12 +5,12 @@ How errors reach the host (docs/hosts.md, "Errors in each host"): pythonfmu 0.7 
 call only with fmi2OK, fmi2Discard (do_step returning False) or fmi2Fatal (any Python
 exception, after which the standard allows no call), and passes log messages on only when the
 host enabled logging, in the categories it named. So a problem is logged once at error status;
-where the host does not hear it (_category) it is also written to the process's stderr and the call that meets it raises (fmi2Fatal: fmpy
-raises FMICallException). Where the host logs (libcosim always does, and a Fatal aborts it)
-nothing raises: doStep answers fmi2Discard while the problem lasts. A call that cannot be
-honoured but harms nothing (setting an output, or a fixed parameter after initialization;
-reading a variable through the wrong type) is refused with a message and answered fmi2OK:
-pythonfmu has no fmi2Error to give.
+where the host does not hear it (_category) it is also written to the process's stderr and the
+call that meets it raises (fmi2Fatal: fmpy raises FMICallException). Where the host logs
+(libcosim always does, and a Fatal aborts it) nothing raises: doStep answers fmi2Discard while
+the problem lasts. A call that cannot be honoured but harms nothing (setting an output, or a
+fixed parameter after initialization; reading a variable through the wrong type) is refused
+with a message and answered fmi2OK: pythonfmu has no fmi2Error to give.
 """
 from typing import Any
 

@@ -37,7 +37,7 @@ from ..model.assembly import GearTrainModel
 from ..model.equations import PeriodTable
 from .compiled import buffers, dop853, exponential, walk
 from .contract import IntegrationError, Position
-from .segments import Segment
+from .segments import CHATTER_MESSAGE, Segment
 
 METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
 DEFAULT_TOLERANCE = COMPILED_DEFAULT_TOLERANCE  # its home: arguments.py
@@ -165,13 +165,6 @@ def explicit_step_bound(modes, tolerance: float) -> float:
         middle = 0.5 * (low + high)
         low, high = (middle, high) if true_to_modes(middle) else (low, middle)
     return low
-
-
-CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
-                   "load at once (sharp face edges, edge_ramp = 0) and throw it back, at low "
-                   "speed faster than it comes on; give edge_ramp > 0 (the contact ellipse's "
-                   "half-length along the face, e.g. 1e-3 m), which lets the load come on "
-                   "gradually")
 
 
 # what each failing walk.Status means, for the error raised

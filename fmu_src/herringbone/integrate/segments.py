@@ -47,6 +47,13 @@ CONTACT_BAND = 1e-10
 # and the shortest interval is 1e-10 of a pitch (mesh.PHASE_TOLERANCE), so the band never holds
 # a whole interval.
 PHASE_BAND = 1e-12
+# what a run that chatters on a contact switch is told, by either integrator
+CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
+                   "load at once (sharp face edges, edge_ramp = 0) and throw it back faster "
+                   "than it comes on (at low speed, or with a pinion light beside its mesh "
+                   "stiffness: check I_pinion and m_pinion); give edge_ramp > 0 (the contact "
+                   "ellipse's half-length along the face, e.g. 1e-3 m), which lets the load "
+                   "come on gradually")
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,7 @@ from ..model.assembly import GearTrainModel
 from . import segments
 from .compiled import reference_events
 from .contract import IntegrationError, Position
+from .segments import CHATTER_MESSAGE
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)
 MAX_STALLED_SEGMENTS = 100
@@ -73,9 +74,6 @@ STALL_RESOLUTION = 64 * np.finfo(float).eps  # of the time: a segment this short
 STALL_MESSAGE = ("contact switches without progress. If the pinion sits on a switch, its points "
                  "take load at once (edge_ramp = 0) and throw it back: give edge_ramp > 0 "
                  "(e.g. 1e-3 m)")
-CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that enter there take "
-                   "load at once (sharp face edges, edge_ramp = 0) and throw it back; give "
-                   "edge_ramp > 0 (e.g. 1e-3 m), which lets the load come on gradually")
 
 
 @dataclass
