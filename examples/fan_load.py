@@ -41,7 +41,9 @@ class FanLoad(BalancedSlave, Fmi2Slave):
 
     def problem(self) -> str | None:
         """Why the parameters are unusable, or None."""
-        return None if self.k_fan >= 0 else f"FanLoad: need k_fan >= 0; got {self.k_fan}"
+        if self.k_fan >= 0:
+            return None
+        return f"{self.instance_name}: need k_fan >= 0; got {self.k_fan}"
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         # Reported here rather than raised: see InductionMotor.do_step.

@@ -54,7 +54,8 @@ class InductionMotor(BalancedSlave, Fmi2Slave):
         """Why the parameters are unusable, or None."""
         if self.M_breakdown > 0 and 0 < self.s_breakdown <= 1 and self.w_sync > 0:
             return None
-        return (f"InductionMotor: need M_breakdown > 0, 0 < s_breakdown <= 1, w_sync > 0; "
+        return (f"{self.instance_name}: need M_breakdown > 0, 0 < s_breakdown <= 1, "
+                f"w_sync > 0; "
                 f"got {self.M_breakdown}, {self.s_breakdown}, {self.w_sync}")
 
     def do_step(self, current_time: float, step_size: float) -> bool:

@@ -306,3 +306,23 @@ def test_libcosim_settles_at_operating_point(built_fmus, tmp_path):
         assert result["final"][signal] == samples[signal][-1]
     assert_ran_packaged_copy(result)
     check_settles_at_operating_point(samples, expected, STEP)
+
+
+@pytest.mark.parametrize("example, value, said", [
+    ("fan", {"k_fan": -1.0}, "fan: need k_fan >= 0; got -1.0"),
+    ("motor", {"M_breakdown": -1.0}, "motor: need M_breakdown > 0, 0 < s_breakdown <= 1"),
+])
+def test_the_example_fmus_name_their_instance_in_their_messages(built_fmus, example, value,
+                                                                said):
+    """As the gear FMU does: a host with several instances of a model reads which one the
+    message is about (they named their model, FanLoad, InductionMotor)."""
+    from fmpy.fmi1 import FMICallException
+    from helpers.fmu_host import Instance
+
+    instance = Instance(built_fmus[example], name=example, start_values=value)
+    try:
+        with pytest.raises(FMICallException):
+            instance.step(1e-3)
+        assert any(text.startswith(said) for _, text in instance.messages), instance.messages
+    finally:
+        instance.free()
