@@ -143,3 +143,30 @@ def test_a_run_without_tqdm_runs_without_a_bar(monkeypatch, capsys, tmp_path, ba
     assert len(notes) == (1 if bar else 0)
     assert all("pip install 'herringbone[analysis]'" in note for note in notes)
     assert output.read_text().count("\n") == 12  # the header and 11 samples, 0 to 1e-3 s
+
+
+@pytest.mark.parametrize("name", [[], ["extreme-scenes"]], ids=["default", "named"])
+def test_benchmark_without_the_repository_still_helps(monkeypatch, capsys, name):
+    """Installed without its repository (no benchmarks/ folder beside the package),
+    `herringbone benchmark --help` prints the help (it ended with exit 2 and a site-packages
+    path), and running one says in one line where the benchmarks are and what to do."""
+    from herringbone.cli import benchmark, main
+
+    monkeypatch.setattr(benchmark, "benchmarks_folder", lambda: None)
+    assert main(["benchmark", *name, "--help"]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("usage: herringbone benchmark ") and err == ""
+    assert all(script in out for script in benchmark.SCRIPTS)
+    assert main(["benchmark", *name, "--quick"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith("herringbone benchmark: ") and err.count("\n") == 1
+    assert "site-packages" not in err and "python3" not in err
+    assert "clone the repository" in err and "benchmarks/ folder" in err
+
+
+def test_benchmark_help_from_the_checkout_lists_the_script_options(capsys):
+    from herringbone.cli import benchmark, main
+
+    assert benchmark.benchmarks_folder() is not None  # the tests run from the checkout
+    assert main(["benchmark", "extreme-scenes", "--help"]) == 0
+    assert "--periods" in capsys.readouterr().out

@@ -4,19 +4,30 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+import textwrap
 from pathlib import Path
 
 from ..suggest import did_you_mean
 
 NAME = "benchmark"
-# The benchmarks are repository tools (they build FMUs with build_fmu.py), not part of the package.
-BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
 SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "extreme_scenes"}
 DEFAULT = "error-vs-runtime"  # what `herringbone benchmark` runs without a name
 HELP = (f"[{' | '.join(SCRIPTS)}] [OPTIONS]: run benchmarks/error_vs_runtime.py (the default) "
         "or benchmarks/extreme_scenes.py of the source checkout; `herringbone benchmark "
         "--help` lists the options")
 PROG = f"herringbone {NAME}"
+NOT_INSTALLED = ("the benchmarks are not part of the installed package: they are scripts in the "
+                 "benchmarks/ folder of the herringbone repository; clone the repository, "
+                 "`pip install -e .` in the clone and run `herringbone benchmark` there")
+
+
+def benchmarks_folder() -> Path | None:
+    """The source checkout's benchmarks/ folder, None where this herringbone was installed
+    without its repository (the folder above the package is then site-packages' parent)."""
+    # The benchmarks are repository tools (they build FMUs with build_fmu.py), not in the package.
+    folder = Path(__file__).resolve().parents[3] / "benchmarks"
+    return folder if all((folder / f"{script}.py").is_file() for script in SCRIPTS.values()) \
+        else None
 
 
 def declare(parser) -> None:
@@ -28,6 +39,17 @@ def execute(args, parser) -> int:
     return execute_raw([])
 
 
+def print_help_without_checkout() -> None:
+    """What `herringbone benchmark --help` says where the scripts, which list their own
+    options, are not there: the benchmarks, and how to get them."""
+    paragraphs = (f"Run benchmarks/error_vs_runtime.py ({DEFAULT}, the default) or "
+                  "benchmarks/extreme_scenes.py (extreme-scenes) of the source checkout; each "
+                  f"script declares its own options, which `{PROG} NAME --help` lists from a "
+                  "checkout.", f"Not available here: {NOT_INSTALLED}.")
+    print(f"usage: {PROG} [{' | '.join(SCRIPTS)}] [OPTIONS]\n")
+    print("\n\n".join(textwrap.fill(paragraph, 79) for paragraph in paragraphs))
+
+
 def execute_raw(arguments: list[str]) -> int:
     """Run the chosen script's main with the rest of the command line, its usage and messages
     naming the command as typed (`herringbone benchmark NAME`); its exit code."""
@@ -37,14 +59,19 @@ def execute_raw(arguments: list[str]) -> int:
               f"(`{PROG} --help` lists the options)", file=sys.stderr)
         return 2
     name = arguments.pop(0) if arguments[:1] and arguments[0] in SCRIPTS else DEFAULT
-    script = BENCHMARKS / f"{SCRIPTS[name]}.py"
-    if not script.is_file():
-        print(f"{PROG}: the benchmarks need the source checkout: {script} is not there (this "
-              "herringbone was installed without its repository); clone the repository, "
-              "`pip install -e .` it and run `herringbone benchmark` from there", file=sys.stderr)
+    folder = benchmarks_folder()
+    if folder is None:
+        if {"-h", "--help"} & set(arguments):  # the help is always there, checkout or not
+            print_help_without_checkout()
+            return 0
+        print(f"{PROG}: {NOT_INSTALLED} (`{PROG} --help` says what they do)", file=sys.stderr)
         return 2
+    script = folder / f"{SCRIPTS[name]}.py"
     spec = importlib.util.spec_from_file_location(f"benchmarks_{script.stem}", script)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.main(arguments, prog=f"{PROG} {name}")
+    try:  # the script's argparse ends --help and its errors with SystemExit, as main's does
+        return module.main(arguments, prog=f"{PROG} {name}")
+    except SystemExit as stop:
+        return stop.code if isinstance(stop.code, int) else 2
