@@ -41,12 +41,16 @@ def multiplier_step(modes: np.ndarray, duration: float, error: float) -> float:
     """The longest fixed DOP853 step (s) that puts each mode λ's multiplier e^{λ·duration}
     within `error` of its value: its eigenvalue error C·|λ|⁹·h⁸ times duration times
     |e^{λ·duration}| at most `error` (a strongly damped mode's multiplier is small, and so is
-    its error). The rigid rotation (λ = 0) is left out."""
+    its error). The rigid rotation (λ = 0) is left out; inf where no mode bounds the step (each
+    decays so far over `duration` that its multiplier's error cannot reach `error`)."""
     fastest = np.abs(modes).max()
     modes = modes[np.abs(modes) > 1e-6 * fastest]
-    allowed = error * np.exp(-modes.real * duration) / duration
-    steps = (allowed / (error_constant() * np.abs(modes) ** 9)) ** (1.0 / 8.0)
-    return float(steps.min())
+    # in logarithms: a mode damped by e^{-Re λ·duration} beyond e^709 (a long period at low
+    # speed) overflows e^{…} itself, and its bound is then just far above the others'
+    log_steps = (np.log(error / (duration * error_constant())) - modes.real * duration
+                 - 9.0 * np.log(np.abs(modes))) / 8.0
+    least = float(log_steps.min())
+    return float(np.exp(least)) if least < np.log(np.finfo(float).max) else np.inf
 
 
 class VariationalFlow:
