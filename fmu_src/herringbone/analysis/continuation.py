@@ -44,9 +44,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..integrate.contract import IntegrationError
-from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S
+from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S, unit_of, with_unit
 from ..model.scene import SceneError
-from .progress_bar import progress_bar
+from .progress_bar import Status, progress_bar
 from .steady_state import (
     DIFFERENCE_STEP,
     NEWTON_TOLERANCE,
@@ -575,6 +575,16 @@ class Continuation:
         return False
 
 
+def branch_status(run: Continuation) -> str:
+    """How far the branch has got, for the progress bar: the continued quantity at its last
+    point and the points so far ("w0_pinion 17.3 rad/s, 120 points"). Between two requested
+    values it may take hundreds of points (467 between 10 and 30 rad/s on the reference
+    scene), which the bar's count of requested values does not show."""
+    name, points = run.axis.name, len(run.points)
+    return (f"{name} {with_unit(f'{run.points[-1].value:.4g}', unit_of(name))}, "
+            f"{points} point{'' if points == 1 else 's'}")
+
+
 def follow(run: Continuation, progress: bool = False, doubling: bool = True) -> Branch:
     """The branch from the first requested value at which an orbit converges (Continuation.
     begin_at; the ones before it run by time integration) up past the last, through folds;
@@ -586,9 +596,12 @@ def follow(run: Continuation, progress: bool = False, doubling: bool = True) -> 
     most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
     with progress_bar(len(grid), f"continuation in {run.axis.name}", progress,
                       unit="value") as bar:
+        status = Status(bar)
+
         def moved():
             bar.update(int(np.searchsorted(grid, run.points[-1].value + slack,
                                            side="right")) - bar.n)
+            status.show(branch_status(run))
 
         index = 0
         while index < len(grid) and not run.begin_at(grid[index]):

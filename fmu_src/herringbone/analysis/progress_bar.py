@@ -8,6 +8,7 @@ to run. The job's results are the same either way.
 from __future__ import annotations
 
 import sys
+import time
 
 from ..optional import MissingDependency, require
 
@@ -20,10 +21,10 @@ LOG_INTERVAL = 10.0
 
 class QuietBar:
     """What the jobs use of a tqdm bar, showing nothing: its count `n`, `update`, `reset`,
-    `set_description`, and use as a context manager."""
+    `set_description`, `set_postfix_str`, `refresh`, and use as a context manager."""
 
     def __init__(self, total=None):
-        self.total, self.n = total, 0
+        self.total, self.n, self.postfix = total, 0, ""
 
     def update(self, amount=1) -> None:
         """Count `amount` more done."""
@@ -35,6 +36,13 @@ class QuietBar:
 
     def set_description(self, description: str) -> None:
         """Nothing to show."""
+
+    def set_postfix_str(self, postfix: str = "", refresh: bool = True) -> None:
+        """Keep `postfix` (nothing shows it)."""
+        self.postfix = postfix
+
+    def refresh(self) -> None:
+        """Nothing to redraw."""
 
     def __enter__(self):
         return self
@@ -59,6 +67,24 @@ def progress_bar(total, description: str, enabled: bool = True, unit: str = "s")
     if not redrawn(sys.stderr):
         options["mininterval"] = LOG_INTERVAL
     return tqdm(total=total, unit=unit, desc=description, file=sys.stderr, **options)
+
+
+class Status:
+    """How far the item in hand has got, after a bar's count (tqdm's postfix: "w0_pinion
+    17.3 rad/s, 120 points"), for an item that takes long: the count alone stood still at
+    "1/2 [00:43<00:43]" over the 467 branch points between 10 and 30 rad/s. Redrawn at the
+    bar's own pace (its mininterval: a log gets a line every LOG_INTERVAL s, not one a call)."""
+
+    def __init__(self, bar):
+        self.bar, self.shown = bar, time.monotonic()  # the bar was just drawn
+
+    def show(self, status: str) -> None:
+        """Put `status` after the count; redraw where the bar's mininterval has passed."""
+        self.bar.set_postfix_str(status, refresh=False)
+        now = time.monotonic()
+        if now - self.shown >= getattr(self.bar, "mininterval", 0.0):
+            self.bar.refresh()
+            self.shown = now
 
 
 def redrawn(stream) -> bool:
