@@ -1,4 +1,6 @@
 """The pictures' annotations: modes named by what moves in them, labels kept apart."""
+import pytest
+
 from herringbone import load_scene
 from herringbone.analysis.campbell import elastic_frequencies, elastic_modes
 from herringbone.analysis.plots import spread_apart
@@ -89,3 +91,64 @@ def test_a_spectrum_keeps_its_amplitude_axis_on_what_it_shows(monkeypatch, tmp_p
         assert amplitude.min() < 1e-3 * shown.min()  # the leakage left out lies decades lower
         assert low == max(shown.min(), shown.max() * 10.0 ** -plots.SPECTRUM_DECADES)
         assert high > shown.max()
+
+
+def test_a_parameter_sweeps_picture_names_its_speed_and_marks_contact_loss(monkeypatch,
+                                                                          tmp_path):
+    """`herringbone sweep reference --param dbeta_left 0 0.002 11 --speed 500`: the title
+    held only "reference: K_v over dbeta_left", and nothing marked the 2 points where a helix
+    half lost contact that the summary reported. Now the title gives the fixed speed (rad/s
+    and rpm) and an open square marks each such point."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+    import pandas as pd
+
+    from herringbone.analysis import sweep_plots, sweep_report
+
+    drawn = {}
+    monkeypatch.setattr(sweep_plots, "_save", lambda figure, path, **kw: drawn.update(
+        figure=figure))
+    values = np.linspace(0.0, 0.002, 11)
+    table = pd.DataFrame({"dbeta_left": values, "speed_rpm": 500.0 * 30.0 / np.pi,
+                          "K_v": 1.2 + 100.0 * values,
+                          "contact_lost_share": [0.0] * 9 + [0.05, 0.2]})
+    sweep_report.write_outputs(load_scene("reference"), table, None, tmp_path)
+    axes = drawn["figure"].axes[0]
+    assert axes.get_title() == "reference: K_v over dbeta_left at 500 rad/s (4775 rpm)"
+    marked = [line for line in axes.get_lines() if line.get_label() == sweep_plots.CONTACT_LOST]
+    assert len(marked) == 1 and list(marked[0].get_xdata()) == list(values[9:])
+    assert sweep_plots.CONTACT_LOST in [text.get_text()
+                                        for text in axes.get_legend().get_texts()]
+
+
+def test_a_runs_spectrum_takes_whole_mesh_periods_at_its_end(monkeypatch, tmp_path):
+    """`herringbone run reference --stop-time 0.02 --output-interval 1e-5 --plot`: the
+    spectra took the second half, 10 ms = 2.5 mesh periods at 250 Hz, so the mesh line and
+    its odd harmonics fell between bins. Now they take the last 2 whole periods (8 ms,
+    800 samples, bins 125 Hz apart: every harmonic on one) and the annotation says so."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+
+    import herringbone
+    from herringbone.analysis import plots, run_report
+
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda figure, path, **kw: drawn.append(figure))
+    scene = load_scene("reference")
+    results = herringbone.simulate(scene, stop_time=0.02, output_interval=1e-5)
+    run_report.plot_run(scene, results, tmp_path / "reference.csv")
+    axes = drawn[-1].axes
+    frequency = axes[0].get_lines()[0].get_xdata()  # from the first bin on
+    mesh = scene.parameters["w0_pinion"] * scene.parameters["z_pinion"] / (2 * np.pi)
+    spacing = frequency[1] - frequency[0]
+    assert spacing == pytest.approx(mesh / 2, rel=1e-4)
+    for k in range(1, 6):  # each harmonic within 1e-3 of a bin's spacing of a bin
+        assert np.abs(frequency - k * mesh).min() <= 1e-3 * spacing, k
+    assert "the last 2 mesh periods" in axes[0].get_title()
+    assert any("record length: 2 mesh periods" in text.get_text() for text in axes[1].texts)
+    keep, periods = plots.whole_mesh_periods(np.arange(0.0, 0.0025, 1e-5), 250.0)
+    assert periods == 1 and keep.all()  # under a period in all: the whole run

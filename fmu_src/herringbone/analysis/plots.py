@@ -4,6 +4,8 @@ input was in rad/s), frequencies in Hz, forces in kN, dte in µm. Each function 
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..files import replace_file
@@ -156,13 +158,35 @@ def _amplitude_floor(panel, amplitude: np.ndarray) -> None:
         panel.set_ylim(bottom=max(shown.min(), shown.max() * 10.0 ** -SPECTRUM_DECADES))
 
 
-def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) -> None:
-    """Amplitude spectra of dte (µm) and F_mesh (kN) of a run from `skip` s on, with the
-    mesh harmonics and the natural frequencies marked; log amplitude over log frequency, up to
-    the highest natural frequency the sampling resolves (Nyquist's), so that a mode ringing
-    far above the mesh frequency shows, and at least HARMONICS_SHOWN harmonics."""
+def whole_mesh_periods(time, mesh_frequency: float) -> tuple[np.ndarray, int]:
+    """(which samples, how many mesh periods): the largest whole number of mesh periods, at
+    least one, that fits in the second half of a run (its start-up transient left out), at
+    the run's end. Over a whole number of periods each mesh harmonic falls on a bin of the
+    spectrum; over the second half of a 20 ms run at 250 Hz, 2.5 periods, the odd ones fell
+    between two. N samples stand for N intervals (the spectrum's record length), so the
+    window's first sample, which its last repeats a whole number of periods later, is left
+    out; a run shorter than the period is taken whole."""
+    time = np.asarray(time, dtype=float)
+    interval = float(np.diff(time).mean())
+    period = 1.0 / mesh_frequency
+    # the 1e-9: a second half of exactly n periods is n, not n − 1 by rounding
+    periods = max(1, math.floor(0.5 * (time[-1] - time[0]) / period * (1.0 + 1e-9)))
+    samples = min(round(periods * period / interval), len(time))
+    keep = np.zeros(len(time), dtype=bool)
+    keep[len(time) - samples:] = True
+    return keep, periods
+
+
+def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0,
+                 keep=None, record: str = "record length") -> None:
+    """Amplitude spectra of dte (µm) and F_mesh (kN) of a run from `skip` s on (or of the
+    samples `keep` says, e.g. whole_mesh_periods', which `record` names in the annotation),
+    with the mesh harmonics and the natural frequencies marked; log amplitude over log
+    frequency, up to the highest natural frequency the sampling resolves (Nyquist's), so that
+    a mode ringing far above the mesh frequency shows, and at least HARMONICS_SHOWN
+    harmonics."""
     plt = _pyplot()
-    keep = results["time"] >= skip
+    keep = results["time"] >= skip if keep is None else keep
     interval = float(np.diff(results["time"][keep]).mean())
     nyquist = 0.5 / interval
     resolved = [f for f in natural if 0 < f < nyquist]
@@ -178,7 +202,7 @@ def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0) 
         panel.grid(True, which="both", alpha=0.3)
         _legend_beside(panel)
     axes[1].set_xlim(frequency[1], top)
-    axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz (record length)",
+    axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz ({record})",
                      (0.01, 0.02), xycoords="axes fraction", fontsize=8)
     axes[1].set_xlabel("frequency, Hz")
     axes[0].set_title(title)

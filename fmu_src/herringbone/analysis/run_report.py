@@ -104,10 +104,12 @@ def _wall_time(stop: float, wall_time: float, start_time: float | None) -> str:
 
 
 def plot_run(scene, results, csv_path: Path) -> list[Path]:
-    """`run --plot`: time histories and amplitude spectra (second half of the run) beside the
-    run's CSV, <stem>_time.png and <stem>_spectrum.png; returns their paths."""
+    """`run --plot`: time histories and amplitude spectra beside the run's CSV,
+    <stem>_time.png and <stem>_spectrum.png; returns their paths. The spectra take the
+    largest whole number of mesh periods in the second half of the run, at its end
+    (plots.whole_mesh_periods: the mesh harmonics on the spectrum's bins)."""
     from .campbell import elastic_frequencies
-    from .plots import plot_spectra, plot_time_histories
+    from .plots import plot_spectra, plot_time_histories, whole_mesh_periods
 
     stem = csv_path.with_suffix("")
     histories, spectra = Path(f"{stem}_time.png"), Path(f"{stem}_spectrum.png")
@@ -115,7 +117,10 @@ def plot_run(scene, results, csv_path: Path) -> list[Path]:
     plot_time_histories(results, histories, f"{scene.name}: time histories "
                         f"(w0 {speed * RPM_PER_RAD_S:.0f} rpm)")
     mesh_frequency = speed * scene.parameters["z_pinion"] / (2.0 * math.pi)
+    keep, periods = whole_mesh_periods(results["time"], mesh_frequency)
+    counted = f"{periods} mesh period{'' if periods == 1 else 's'}"
     plot_spectra(results, spectra, mesh_frequency, elastic_frequencies(scene),
-                 f"{scene.name}: amplitude spectra, second half of the run "
-                 f"(f_mesh {mesh_frequency:.1f} Hz)", skip=0.5 * results["time"][-1])
+                 f"{scene.name}: amplitude spectra, the last {counted} of the run "
+                 f"(f_mesh {mesh_frequency:.1f} Hz)", keep=keep,
+                 record=f"record length: {counted}")
     return [histories, spectra]

@@ -164,6 +164,7 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
             draw_branch([axes], table, [("K_v", "k")], along=name)
         else:
             axes.plot(table[name], table["K_v"], "o-", color="k", ms=3, label="K_v")
+        mark_contact_loss(axes, table, name, "K_v")
         axes.set_xlabel(_axis_label(name))
         axes.set_ylabel("dynamic factor K_v")
         axes.legend()
@@ -173,10 +174,28 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
         grid = table.pivot(index=second, columns=first, values="K_v")
         mesh = axes.pcolormesh(grid.columns, grid.index, grid.to_numpy(), shading="nearest")
         figure.colorbar(mesh, ax=axes, label="dynamic factor K_v")
+        if mark_contact_loss(axes, table, first, second, colour="w"):
+            axes.legend(fontsize=8)
         axes.set_xlabel(_axis_label(first))
         axes.set_ylabel(_axis_label(second))
     axes.set_title(title)
     _save(figure, path)
+
+
+CONTACT_LOST = "a helix half out of contact (contact_lost_share > 0)"
+
+
+def mark_contact_loss(axes, table, x: str, y: str, colour: str = "C3") -> bool:
+    """An open square at each point of `table` where a helix half lost contact in its window
+    or orbit (contact_lost_share > 0), at its columns (x, y); whether there was one. Without
+    it the picture showed nothing of the loss the summary reported."""
+    if "contact_lost_share" not in table:
+        return False
+    lost = (table["contact_lost_share"] > 0).to_numpy()
+    if lost.any():
+        axes.plot(table[x].to_numpy()[lost], table[y].to_numpy()[lost], "s", ms=8,
+                  mfc="none", mew=1.2, color=colour, ls="none", label=CONTACT_LOST)
+    return bool(lost.any())
 
 
 def _axis_label(name: str) -> str:

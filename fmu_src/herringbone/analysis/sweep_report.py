@@ -50,9 +50,19 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[
     else:
         picture = Path(f"{stem}.png")
         plot_parameter_sweep(table, names, picture, f"{scene.name}: K_v over "
-                             f"{' and '.join(names)}")
+                             f"{' and '.join(names)}{fixed_speed(table)}")
         written.append(picture)
     return written
+
+
+def fixed_speed(table) -> str:
+    """" at 500 rad/s (4775 rpm)": the pinion speed of a sweep that holds it, for its
+    picture's title; "" where the speed varies (one of the swept quantities)."""
+    speeds = table["speed_rpm"].unique()
+    if len(speeds) != 1:
+        return ""
+    rpm = float(speeds[0])
+    return f" at {rpm / RPM_PER_RAD_S:.6g} rad/s ({rpm:.0f} rpm)"
 
 
 def describe(scene, table, wall: float, args=None) -> str:
