@@ -148,8 +148,13 @@ SETTLE_TIME = Argument("settle_time", "--settle-time", "seconds settled before t
                        "instead of the time derived from --settle-residual", NON_NEGATIVE)
 WINDOW_PERIODS = Argument("window_periods", "--window-periods", "mesh periods recorded per "
                           "point", Range(1.0, None), whole=True)
+# the recorded window's sampling; the figures (K_v, peaks, rms) are taken from a whole multiple
+# of it that resolves the train's fastest mode (analysis/sweep_point.figure_refinement)
 SAMPLES_PER_PERIOD = Argument("samples_per_period", "--samples-per-period", "samples per mesh "
-                              "period", Range(4.0, None), whole=True)
+                              "period recorded for the spectra and waterfall, and the fewest "
+                              "the figures take: they sample a whole multiple of it that gives "
+                              "the fastest natural mode 32 a period, and each contact switch "
+                              "finer", Range(4.0, None), whole=True)
 
 
 def check_scene(scene) -> Scene:

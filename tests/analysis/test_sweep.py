@@ -19,7 +19,7 @@ from herringbone import cli
 from herringbone.analysis.report import resonance_speeds
 from herringbone.analysis.stability import largest_multiplier
 from herringbone.analysis.sweep import run_sweep, sweep
-from herringbone.analysis.sweep_point import Protocol, timing, window_figures
+from herringbone.analysis.sweep_point import Protocol, run_window, timing, window_figures
 from herringbone.model.assembly import GearTrainModel, natural_modes
 
 MODELS = MODELS
@@ -28,9 +28,12 @@ SPEEDS = [157.08, 400.0, 1000.0]
 
 
 def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
-    """Each row's figures from herringbone.simulate of the same protocol (sampled from t = 0,
-    so its steps stop at other times during the settle): equal within the integrator's
-    tolerance, 1e-7 of the static force (measured: at most 1.2e-8, F_mesh_min at 1000 rad/s)."""
+    """Each row's figures from herringbone.simulate of the same protocol, sampled as the
+    figures are (every figure_interval from t = 0, so its steps stop at other times during the
+    settle): equal within the integrator's tolerance, 1e-7 of the static force, but for the
+    mesh force's extremes, which the sweep takes from finer samples at each contact switch
+    (sweep_point.switch_samples), where the even samples miss up to 2 % of the static force
+    (1.5e-2 measured here, F_mesh_min)."""
     table = sweep(reference_scene, speeds=SPEEDS, protocol=SHORT, workers=0, progress=False,
                   method="time")
     assert list(table["w0_pinion"]) == SPEEDS
@@ -41,12 +44,15 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
         periods = row["settle_time_s"] * row["mesh_frequency_Hz"]
         assert periods == pytest.approx(round(periods), abs=1e-9) and row["settle_time_s"] >= 0.02
         assert row["window_time_s"] == pytest.approx(8 / row["mesh_frequency_Hz"], rel=1e-12)
-        results = herringbone.simulate(scene, stop_time=when.settle + when.window - when.interval,
-                                       output_interval=when.interval, tolerance=SHORT.tolerance)
-        first = round(when.settle / when.interval)
-        window = {name: values[first:first + when.samples] for name, values in results.items()}
+        assert row["samples"] == 256 and row["figure_samples"] == 256 * when.refinement > 256
+        results = herringbone.simulate(
+            scene, stop_time=when.settle + when.window - when.figure_interval,
+            output_interval=when.figure_interval, tolerance=SHORT.tolerance)
+        first = round(when.settle / when.figure_interval)
+        window = {name: values[first:first + when.figure_samples]
+                  for name, values in results.items()}
         assert window["time"][0] == pytest.approx(when.settle, abs=1e-12)
-        assert len(window["time"]) == when.samples == 256
+        assert len(window["time"]) == when.figure_samples
         force = row["static_mesh_force_N"]
         assert force == pytest.approx(500.0 / GearTrainModel(scene).geometry.radius_pinion)
         single = window_figures(window, force)
@@ -54,9 +60,43 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
             scale = 1.0 if name in ("K_v", "contact_lost_share") else \
                 1e6 * force / GearTrainModel(scene).mesh.mean_stiffness() if "dte" in name \
                 else force
-            assert abs(row[name] - value) <= SHORT.tolerance * scale, name
+            if name in ("K_v", "F_mesh_max_N"):
+                assert 0.0 <= row[name] - value <= 2e-2 * scale, name
+            elif name == "F_mesh_min_N":
+                assert 0.0 <= value - row[name] <= 2e-2 * scale, name
+            else:
+                assert abs(row[name] - value) <= SHORT.tolerance * scale, name
         assert row["floquet_max"] == pytest.approx(
             float(largest_multiplier(scene, row["w0_pinion"])), rel=1e-12)
+
+
+# speed (rad/s), settle (s), window (mesh periods): a low speed, whose mesh period holds some
+# 420 periods of the fastest (13.2 kHz) mode, and a normal one
+PEAK_POINTS = [(30.0, 0.02, 2), (490.0, 0.02, 16)]
+
+
+@pytest.mark.parametrize("speed, settle, periods", PEAK_POINTS)
+def test_peaks_are_those_of_a_finely_sampled_run(reference_scene, speed, settle, periods):
+    """K_v, F_mesh min and a bearing's peak of a sweep point are those of herringbone.simulate
+    over the same window sampled every 0.1 µs (the force falls 0.9 % of the static force a µs
+    after a contact switch, its peak: that sampling reads it within 1e-3), within 2e-3 of the
+    static force: the fastest mode's ringing resolved (sweep_point.FASTEST_MODE_SAMPLES) and
+    each switch sampled finer. 64 samples a mesh period read K_v 1.414 at 30 rad/s where it
+    is 1.502, 1.711 at 490 rad/s where it is 1.761."""
+    scene = reference_scene.with_parameters(w0_pinion=speed)
+    protocol = Protocol(settle_time=settle, window_periods=periods, floquet=False)
+    row = sweep(scene, speeds=[speed], protocol=protocol, workers=0, progress=False,
+                method="time").iloc[0]
+    when = timing(scene, protocol)
+    fine = herringbone.simulate(scene, stop_time=when.settle + when.window,
+                                output_interval=1e-7, tolerance=protocol.tolerance)
+    inside = (fine["time"] >= when.settle - 1e-12) & (fine["time"] <= when.settle + when.window
+                                                      - when.interval + 1e-12)
+    force = row["static_mesh_force_N"]
+    assert row["K_v"] == pytest.approx(fine["F_mesh"][inside].max() / force, abs=2e-3)
+    assert row["F_mesh_min_N"] == pytest.approx(fine["F_mesh"][inside].min(), abs=2e-3 * force)
+    bearing = np.abs(fine["F_brg_pinion_left"][inside]).max()
+    assert row["F_brg_pinion_left_peak_N"] == pytest.approx(bearing, abs=2e-3 * force)
 
 
 def test_settle_is_the_decay_of_the_least_damped_mode(reference_scene):
@@ -185,14 +225,21 @@ def test_parameter_grid_of_two(reference_scene):
 @pytest.mark.slow
 def test_through_fmu_matches_the_compiled_sweep(reference_scene, scene_fmu):
     """Each point through the FMU with fmpy: the FMU steps the same integrator, stopping at
-    every sample from t = 0, so it agrees with simulate() to the bound of the first test."""
+    every recorded sample from t = 0, so its figures, those of the recorded samples, agree
+    with those of the compiled sweep's recorded samples to the bound of the first test (the
+    compiled sweep's own figures sample finer: docs/sweeps.md)."""
     table = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0, progress=False,
                   method="time")
     through = sweep(reference_scene, speeds=SPEEDS[:2], protocol=SHORT, workers=0,
                     fmu=scene_fmu("reference"), progress=False, method="time")
     assert through.columns.equals(table.columns)
-    assert np.abs(through["K_v"] - table["K_v"]).max() <= 1e-9
-    assert np.abs(through["dte_p2p_um"] - table["dte_p2p_um"]).max() <= 1e-6
+    assert (through["figure_samples"] == through["samples"]).all()
+    for row, speed in zip(through.itertuples(), SPEEDS[:2]):
+        at = reference_scene.with_parameters(w0_pinion=speed)
+        recorded = window_figures(dict(run_window(at, SHORT)), row.static_mesh_force_N)
+        assert abs(row.K_v - recorded["K_v"]) <= 1e-9
+        assert abs(row.dte_p2p_um - recorded["dte_p2p_um"]) <= 1e-6
+    assert (through["K_v"] < table["K_v"]).all()  # the peaks between the recorded samples
 
 
 def test_shooting_is_the_default_and_agrees_with_settled_time_points(reference_scene):
@@ -592,3 +639,20 @@ def test_the_largest_k_v_of_a_grid_gives_the_speed_in_rpm_beside_the_speed():
                           "speed_rpm": [2865.0, 4297.0], "K_v": [1.2, 1.5]})
     assert resonation_summary(table) == ("w0_pinion = 450 rad/s (4297 rpm), "
                                          "M_motor = 500 N.m")
+
+
+def test_a_summary_through_the_fmu_says_its_figures_are_of_the_recorded_samples(
+        reference_scene):
+    """Through the FMU a point's figures are those of its recorded samples (fmpy reads the
+    FMU's outputs there), which read the ringing's peaks low: the summary says so there, and
+    only there."""
+    from argparse import Namespace
+
+    from herringbone.analysis.sweep_report import describe
+
+    table = sweep(reference_scene, speeds=SPEEDS[:1], protocol=SHORT, workers=0,
+                  progress=False, method="time")
+    said = "through the FMU: the figures are those of the FMU's outputs at the recorded samples"
+    assert said in describe(reference_scene, table, 1.0, Namespace(through_fmu="gear.fmu"))
+    assert said not in describe(reference_scene, table, 1.0, Namespace(through_fmu=None))
+    assert said not in describe(reference_scene, table, 1.0)

@@ -31,8 +31,10 @@ the projection on the unknowns; its 2(n−1) eigenvalues are the orbit's nontriv
 multipliers (the trivial pair 1, 1 — phase and momentum — is left out).
 
 The figures of an orbit are those of a time sweep's window (sweep_point.window_figures),
-sampled at the same phases of θ as the time protocol samples: its samples lie at
-θ_start + (whole pitches) + j·pitch/samples_per_period, θ_start the rigid angle of its start.
+sampled at the same phases of θ as the time protocol samples its figures: its samples lie at
+θ_start + (whole pitches) + j·pitch/(samples_per_period·refinement), θ_start the rigid angle
+of its start and refinement sweep_point.figure_refinement's (the fastest mode resolved), with
+each contact switch sampled finer (sweep_point.switch_samples).
 """
 from __future__ import annotations
 
@@ -50,7 +52,12 @@ from ..integrate.variational import VariationalFlow, multiplier_step
 from ..model import equations
 from ..model.assembly import GearTrainModel
 from ..model.geometry import GearGeometry
-from .sweep_point import static_mesh_force, window_figures
+from .sweep_point import (
+    WindowStatistics,
+    figure_refinement,
+    sample_chunks,
+    static_mesh_force,
+)
 
 # the compiled integrator's tolerance for the period integrations. The map it computes is one
 # smooth discrete map (a perturbation of 1e-6 takes the same steps), so Newton and the
@@ -82,7 +89,7 @@ MULTIPLIER_ERROR = 1e-6
 STEP_MARGIN = 0.8
 # a multiplier is on the unit circle (neither stable nor unstable) within this much
 UNIT_CIRCLE_BAND = 1e-6
-SAMPLES_PER_PERIOD = 64  # as sweep_point.Protocol's default
+SAMPLES_PER_PERIOD = 64  # as sweep_point.Protocol's default (refined: figure_refinement)
 # A period integration gives up (StepBudgetExceeded, an IntegrationError: the iterate fails)
 # past this many steps per radian of the fastest mode, plus LEAST_STEP_BUDGET: a Newton iterate
 # far from the orbit may lose and regain contact over and over (the gear pair alone at 700 rad/s
@@ -402,28 +409,31 @@ class PeriodMap:
 
     def figures(self, state: np.ndarray, speed: float,
                 samples_per_period: int = SAMPLES_PER_PERIOD) -> dict[str, float]:
-        """window_figures over one orbit period, sampled at the time protocol's phases (on the
-        map's own Run, from `state` as `flow` starts, each sample the compiled outputs)."""
+        """window_figures over one orbit period, sampled at the time protocol's phases of its
+        figures (sweep_point: `samples_per_period` a mesh period, refined so that the fastest
+        mode has FASTEST_MODE_SAMPLES a period, and each contact switch sampled finer), on the
+        map's own Run from `state` as `flow` starts, in compiled calls of many samples."""
         model = self.model
         start = start_position(model, self.torques[0])
         theta_start = self.rigid_angle(start.state, start.segment.contact_set)
         theta_section = self.rigid_angle(state, self.section_set)
         period = self.period(speed)
-        count = self.mesh_periods * samples_per_period
-        offsets = theta_start + np.arange(count) * self.pitch / samples_per_period - theta_section
+        per_period = samples_per_period * figure_refinement(model, self.pitch / speed,
+                                                            samples_per_period)
+        count = self.mesh_periods * per_period
+        offsets = theta_start + np.arange(count) * self.pitch / per_period - theta_section
         times = np.sort(np.mod(offsets / speed, period))
-        samples = np.empty((count, len(self.run.outputs)))
         self.evaluations += 1
         self.reset_run(state)
         run = self.run
         run.outputs[:] = model.output_vector(state, self.section_set,
                                              run.loaded[:len(self.section_set)])
-        budget = self.step_budget(period)
-        for k, t in enumerate(times):
-            self.stepper.run_to(run, t, self.torques, budget)
-            samples[k] = run.outputs
-        return window_figures({name: samples[:, i] for name, i in model.output_layout},
-                              self.static_force)
+        statistics = WindowStatistics(model.output_layout)
+        for _, rows, switches in sample_chunks(self.stepper, run, self.torques, count,
+                                               times.__getitem__, self.step_budget(period)):
+            statistics.add(rows)
+            statistics.add_extremes(switches)
+        return statistics.figures(self.static_force)
 
 
 def newton(period_map: PeriodMap, unknowns: np.ndarray, speed: float,

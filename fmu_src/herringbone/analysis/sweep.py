@@ -110,6 +110,7 @@ def scene_at(scene, point: Point):
 def run_point(scene, point: Point, protocol: Protocol, fmu=None):
     """The task of one point: (its table row, its window's time, dte and F_mesh)."""
     at = scene_at(scene, point)
+    window: dict  # run_window's carries its figures' finer samples (sweep_point.Window)
     if fmu is None:
         window = run_window(at, protocol)
     else:
@@ -226,7 +227,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     >>> scene = herringbone.load_scene("reference")
     >>> table = herringbone.sweep(scene, speeds=[200.0, 400.0, 600.0], progress=False)
     >>> table.loc[table.on_grid, "K_v"].round(2).tolist()  # the dynamic factor at each speed
-    [1.5, 1.47, 1.49]
+    [1.5, 1.47, 1.5]
     """
     method = check_sweep(scene, speeds, params, protocol, method, **options)
     doubling = options.pop("doubling", True)  # False only with shooting (check_sweep)

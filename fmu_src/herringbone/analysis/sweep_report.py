@@ -70,6 +70,10 @@ def describe(scene, table, wall: float, args=None) -> str:
     lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
              *(_branch_lines(table) if by_shooting(table) else _time_lines(table)),
              *_k_v_lines(table)]
+    if getattr(args, "through_fmu", None) is not None:
+        lines.append("through the FMU: the figures are those of the FMU's outputs at the "
+                     "recorded samples, which read the ringing's peaks after each contact "
+                     "switch low (without --through-fmu they resolve it)")
     if SPEED in swept_names(table) and len(swept_names(table)) == 1:
         low, high = table[SPEED].min(), table[SPEED].max()
         marks = resonances_between(elastic_frequencies(scene), scene.parameters["z_pinion"],

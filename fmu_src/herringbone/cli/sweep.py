@@ -110,7 +110,8 @@ def declare(parser) -> None:
                         "cluster, e.g. tcp://HOST:8786 (its workers need herringbone installed)")
     parser.add_argument("--through-fmu", type=existing_fmu, metavar="FMU",
                         help="run each point through this gear FMU with fmpy (one built from "
-                             "SCENE: herringbone build-fmu SCENE)")
+                             "SCENE: herringbone build-fmu SCENE); its figures are those of "
+                             "the recorded samples, which read the ringing's peaks low")
     add_progress(parser)
     parser.add_argument("-o", "--output", type=_output_folder, metavar="FOLDER",
                         help="a folder to write: the table <scene>_sweep_<swept>.csv and its "
