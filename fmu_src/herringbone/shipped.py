@@ -38,6 +38,14 @@ def scene_files() -> dict[str, Path]:
     return found
 
 
+def named_as_typed(scene) -> str:
+    """How a user names a loaded Scene: a shipped one by its name ("reference"), as the
+    command line takes it, any other by its file."""
+    shipped = scene_files().get(scene.name)
+    return scene.name if shipped is not None and shipped == Path(scene.source) else \
+        str(scene.source)
+
+
 def is_scene_name(scene) -> bool:
     """Whether `scene` (a str or Path) is written as a bare name: no folder, no suffix."""
     text = str(scene)

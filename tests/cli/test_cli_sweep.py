@@ -142,6 +142,16 @@ def test_a_point_that_cannot_run_is_refused_before_any_worker_starts(arguments, 
     assert words in error and "allowed" in error
 
 
+def test_a_refused_point_names_a_shipped_scene_as_typed(capsys, no_work):
+    """A tooth count changes the ratio, so the scene's torques stop balancing at the point:
+    refused naming the scene as typed (`reference`), not its file in site-packages."""
+    assert main(["sweep", "reference", "--param", "z_pinion", "10", "20", "3", "--speed",
+                 "500"]) == 2
+    error = one_error_line(capsys)
+    assert error.startswith("herringbone sweep: reference at w0_pinion = 500, z_pinion = 15: "
+                            "M_load = 1800 N·m does not balance"), error
+
+
 @pytest.mark.parametrize("name", ["x.csv", "curve.PNG", "table.parquet"])
 def test_an_output_that_names_a_file_is_refused_and_no_folder_made(name, tmp_path, capsys,
                                                                    no_work):

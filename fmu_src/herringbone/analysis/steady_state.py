@@ -52,6 +52,7 @@ from ..integrate.variational import VariationalFlow, multiplier_step
 from ..model import equations
 from ..model.assembly import GearTrainModel
 from ..model.geometry import GearGeometry
+from ..shipped import named_as_typed
 from .sweep_point import (
     WindowStatistics,
     figure_refinement,
@@ -139,8 +140,9 @@ def check_balanced(scene) -> tuple[float, float]:
     """The scene's constant torques (M_motor, M_load), which must balance (M_load =
     u·M_motor, to 1e-9 of it): else the train accelerates and has no steady state."""
     if len(scene.inputs.times) != 1:
-        raise ShootingError(f"{scene.source}: a steady state needs constant input torques; "
-                            "the scene has an input table (allowed: [inputs] M_motor, M_load)")
+        raise ShootingError(f"{named_as_typed(scene)}: a steady state needs constant input "
+                            "torques; the scene has an input table (allowed: [inputs] "
+                            "M_motor, M_load)")
     motor, load = (float(t) for t in scene.inputs.at(0.0))
     ratio = gear_ratio(scene)
     if abs(load - ratio * motor) > 1e-9 * max(abs(load), abs(ratio * motor), 1e-300):

@@ -24,6 +24,7 @@ import numpy as np
 from ..arguments import SWEEP_METHODS, check_scene, check_speeds, check_values
 from ..model.parameters import INPUTS, unit_of, values_problem, with_unit
 from ..optional import require
+from ..shipped import named_as_typed
 from ..suggest import did_you_mean
 from .progress_bar import progress_bar
 from .sweep_point import Protocol, point_row, run_window
@@ -277,7 +278,7 @@ def check_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol()
         problem = point_problem(scene_at(scene, point))
         if problem is not None:
             where = ", ".join(f"{name} = {value:g}" for name, value in point.values)
-            raise ValueError(f"{scene.source} at {where}: {problem}")
+            raise ValueError(f"{named_as_typed(scene)} at {where}: {problem}")
     if options.get("fmu") is not None:
         from .sweep_fmu import check_fmu
         check_fmu(options["fmu"], scene, list(axes))

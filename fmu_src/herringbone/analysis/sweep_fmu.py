@@ -14,7 +14,7 @@ import numpy as np
 
 from ..arguments import FMU_SCENE_MEMBER, GEAR_FMU_ALLOWED, gear_fmu_problem
 from ..model.parameters import INPUTS
-from ..shipped import scene_files
+from ..shipped import named_as_typed
 from .sweep_point import BEARINGS, Protocol, timing
 
 RECORDED = ("F_mesh", "F_mesh_left", "F_mesh_right", "dte", *BEARINGS)
@@ -32,11 +32,9 @@ def check_fmu(fmu, scene=None, swept=()) -> None:
         return
     difference = scene_difference(carried_scene(fmu), scene, swept)
     if difference is not None:
-        # a shipped scene by its name, as a user types it; any other by its file
-        shipped = scene_files().get(scene.name) == Path(scene.source)
         raise ValueError(f"through-fmu {fmu}: built from another scene than {scene.name}: "
                          f"{difference}; allowed: an FMU of the sweep's scene (herringbone "
-                         f"build-fmu {scene.name if shipped else scene.source})")
+                         f"build-fmu {named_as_typed(scene)})")
 
 
 def carried_scene(fmu):

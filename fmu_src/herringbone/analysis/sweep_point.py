@@ -41,6 +41,7 @@ from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from ..integrate.contract import Position, start_position
 from ..model.assembly import GearTrainModel
 from ..model.parameters import RPM_PER_RAD_S
+from ..shipped import named_as_typed
 
 RIGID_FRACTION = 1e-6  # eigenvalues below this fraction of the largest are the rigid rotation
 # Samples a period of the train's fastest mode that the figures take. A ringing sampled N
@@ -186,7 +187,7 @@ def run_window_from(scene, protocol: Protocol, start: Position | None = None):
     (a sweep that starts each point from the last one's end moves the rigid speed to the
     point's first: `at_speed`)."""
     if len(scene.inputs.times) != 1:
-        raise ValueError(f"{scene.source}: a sweep point needs constant input torques; "
+        raise ValueError(f"{named_as_typed(scene)}: a sweep point needs constant input torques; "
                          "the scene has an input table (allowed: [inputs] M_motor, M_load)")
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, protocol.tolerance)
