@@ -656,3 +656,13 @@ def test_a_summary_through_the_fmu_says_its_figures_are_of_the_recorded_samples(
     assert said in describe(reference_scene, table, 1.0, Namespace(through_fmu="gear.fmu"))
     assert said not in describe(reference_scene, table, 1.0, Namespace(through_fmu=None))
     assert said not in describe(reference_scene, table, 1.0)
+
+
+def test_the_tables_swept_columns_carry_their_units(reference_scene):
+    """The CSV's header gives a swept column's unit ("w0_pinion [rad/s]"); the API's table
+    gives it in attrs["units"], by either method, as the other columns name theirs."""
+    by_shooting = sweep(reference_scene, speeds=[200.0, 400.0], progress=False)
+    assert by_shooting.attrs["units"] == {"w0_pinion": "rad/s"}
+    grid = sweep(reference_scene, speeds=SPEEDS[:1], params={"M_motor": [300.0, 500.0]},
+                 protocol=SHORT, workers=0, progress=False)
+    assert grid.attrs["units"] == {"M_motor": "N.m"}

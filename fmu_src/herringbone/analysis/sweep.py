@@ -214,6 +214,8 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         M_motor_Nm), the same figures, floquet_max and floquet_exponent_per_s (1/s) of the
         orbit, stability ("stable", "unstable", "time": no orbit converged), method, on_grid,
         event, mesh_periods, branch; attrs: continued, folds, period_doublings, folds_2T.
+        attrs["units"]: {swept column: its unit} (w0_pinion: "rad/s"), the unit the other
+        columns name (F_mesh_max_N, dte_p2p_um, speed_rpm).
 
     Raises
     ------
@@ -233,10 +235,21 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     method = check_sweep(scene, speeds, params, protocol, method, **options)
     doubling = options.pop("doubling", True)  # False only with shooting (check_sweep)
     if method == "time":
-        return run_checked_points(scene, speeds, params, protocol, **options)[0].assign(
+        table = run_checked_points(scene, speeds, params, protocol, **options)[0].assign(
             stability="time", method="time")
-    return shooting_sweep(scene, speeds, protocol, options.get("progress", True), params,
-                          doubling)
+    else:
+        table = shooting_sweep(scene, speeds, protocol, options.get("progress", True), params,
+                               doubling)
+    return with_swept_units(table)
+
+
+def with_swept_units(table):
+    """The table with attrs["units"]: the unit of each swept column (those before speed_rpm:
+    w0_pinion in rad/s, a parameter or torque in its own), which the other columns name
+    (F_mesh_max_N) and the CSV's header gives ("w0_pinion [rad/s]")."""
+    swept = list(table.columns[:list(table.columns).index("speed_rpm")])
+    table.attrs["units"] = {name: unit_of(name) for name in swept}
+    return table
 
 
 def runs_by_time(scene, speeds, params, method, fmu) -> bool:
