@@ -187,3 +187,34 @@ def test_orbit_peaks_are_those_of_a_finely_sampled_run(reference_scene):
                                                  abs=2e-3)
     bearing = np.abs(rows[:, column["F_brg_pinion_left"]]).max()
     assert orbit.figures["F_brg_pinion_left_peak_N"] == pytest.approx(bearing, abs=2e-3 * force)
+
+
+def test_a_time_point_that_has_not_settled_is_flagged(jump_scene, tmp_path):
+    """Down the jump scene's upper branch with the default protocol (settle 5.6 ms: the
+    least-damped linear mode's decay), the first point from the static start and the point
+    just past the fold (2340 rad/s, falling to the lower branch: K_v 2.59 where its only orbit
+    has 1.62) are transients: their mesh force does not repeat over the window (window_drift
+    0.6 and 1.2 of the static force, a settled point's 1e-5). They are flagged in the table,
+    named by the summary and drawn open, where they were plotted as steady points."""
+    from herringbone.analysis.sweep_plots import draw_time_sweeps
+    from herringbone.analysis.sweep_point import SETTLED_DRIFT
+    from herringbone.analysis.sweep_report import describe
+
+    down = chained_time_sweep(jump_scene, [2440.0, 2400.0, 2340.0, 2330.0])
+    unsettled = down["window_drift"] > SETTLED_DRIFT
+    assert unsettled.tolist() == [True, False, True, False]
+    assert down["window_drift"].iloc[3] < 1e-4
+    said = describe(jump_scene, down, 1.0, time_sweeps={"down": down})
+    assert ("not settled at 2 points of the time sweep down (w0_pinion = 2440 rad/s; "
+            "w0_pinion = 2340 rad/s)") in said
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots()
+    draw_time_sweeps([axes], {"down": down}, [("K_v", None)])
+    open_points = [line for line in axes.get_lines() if line.get_markerfacecolor() == "none"]
+    assert len(open_points) == 1 and list(open_points[0].get_xdata()) == \
+        down["speed_rpm"][unsettled].tolist()
+    plt.close(figure)

@@ -646,15 +646,12 @@ def test_a_summary_through_the_fmu_says_its_figures_are_of_the_recorded_samples(
     """Through the FMU a point's figures are those of its recorded samples (fmpy reads the
     FMU's outputs there), which read the ringing's peaks low: the summary says so there, and
     only there."""
-    from argparse import Namespace
-
     from herringbone.analysis.sweep_report import describe
 
     table = sweep(reference_scene, speeds=SPEEDS[:1], protocol=SHORT, workers=0,
                   progress=False, method="time")
     said = "through the FMU: the figures are those of the FMU's outputs at the recorded samples"
-    assert said in describe(reference_scene, table, 1.0, Namespace(through_fmu="gear.fmu"))
-    assert said not in describe(reference_scene, table, 1.0, Namespace(through_fmu=None))
+    assert said in describe(reference_scene, table, 1.0, through_fmu=True)
     assert said not in describe(reference_scene, table, 1.0)
 
 

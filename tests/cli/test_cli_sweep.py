@@ -160,3 +160,15 @@ def test_an_output_that_names_a_file_is_refused_and_no_folder_made(name, tmp_pat
     error = one_error_line(capsys)
     assert f"--output {output}: names a" in error and "-o is a folder for sweep" in error
     assert not (tmp_path / "w").exists()
+
+
+def test_a_sweep_through_the_fmu_says_its_figures_are_of_the_recorded_samples(
+        scene_fmu, tmp_path, capsys):
+    """Its figures are those of the FMU's outputs at the recorded samples, which read the
+    ringing's peaks low: the command's summary says so (the API's describe did, and the
+    command did not hand it the option)."""
+    assert main(["sweep", REFERENCE, *SPEEDS, "--through-fmu", str(scene_fmu("reference")),
+                 "--workers", "0", "--settle-time", "0.02", "--window-periods", "4",
+                 "--no-progress", "-o", str(tmp_path)]) == 0
+    assert ("through the FMU: the figures are those of the FMU's outputs at the recorded "
+            "samples" in capsys.readouterr().out)

@@ -194,10 +194,10 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     protocol : Protocol
         How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
     method : {"shooting", "time"} or None
-        "shooting" (None's choice where it applies: one quantity — the speed, or a continuous
-        parameter or torque at one speed or none —, no FMU): the branches of periodic steady
-        states (analysis.continuation); elsewhere refused with the reason. "time" (None's
-        choice elsewhere): each point past its transient. Never chosen by `workers`.
+        "shooting" (None's choice where it applies: the speed, or a continuous parameter or
+        torque at one speed or none, no FMU): the branches of periodic steady states
+        (continuation), elsewhere refused with the reason; "time" (None's choice elsewhere):
+        each point past its transient. Never chosen by `workers`.
     **options
         workers (0: here, one point after the other; None: one Dask process per core; N >= 1
         and scheduler, a Dask scheduler's address: time only), fmu (through this gear FMU of
@@ -206,16 +206,15 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     Returns
     -------
     pandas.DataFrame
-        "time": a row per point in grid order: the swept values, speed_rpm, K_v, forces (N),
-        dte (µm), contact_lost_share, floquet_max (columns name their units), method and
-        stability "time". "shooting": a row per branch point in branch order (at each value
-        the branch passes, several where it folds back, and those between, on_grid False):
-        the continued quantity, speed_rpm, the torque following a swept one (M_load_Nm,
-        M_motor_Nm), the same figures, floquet_max and floquet_exponent_per_s (1/s) of the
-        orbit, stability ("stable", "unstable", "time": no orbit converged), method, on_grid,
-        event, mesh_periods, branch; attrs: continued, folds, period_doublings, folds_2T.
-        attrs["units"]: {swept column: its unit} (w0_pinion: "rad/s"), the unit the other
-        columns name (F_mesh_max_N, dte_p2p_um, speed_rpm).
+        "time": a row per point in grid order: the swept values, speed_rpm, K_v, forces (N), dte
+        (µm), contact_lost_share, window_drift, floquet_max (columns name their units), method and
+        stability "time". "shooting": a row per branch point in branch order (at each value the
+        branch passes, several where it folds back, and those between, on_grid False): the
+        continued quantity, speed_rpm, the torque following a swept one (M_load_Nm, M_motor_Nm),
+        the same figures, floquet_max and floquet_exponent_per_s (1/s) of the orbit, stability
+        ("stable", "unstable", "time": no orbit converged), method, on_grid, event, mesh_periods,
+        branch; attrs: continued, folds, period_doublings, folds_2T, and units, {swept column: its
+        unit} (w0_pinion: "rad/s"; the others name theirs).
 
     Raises
     ------
@@ -234,13 +233,10 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     """
     method = check_sweep(scene, speeds, params, protocol, method, **options)
     doubling = options.pop("doubling", True)  # False only with shooting (check_sweep)
-    if method == "time":
-        table = run_checked_points(scene, speeds, params, protocol, **options)[0].assign(
-            stability="time", method="time")
-    else:
-        table = shooting_sweep(scene, speeds, protocol, options.get("progress", True), params,
-                               doubling)
-    return with_swept_units(table)
+    return with_swept_units(
+        run_checked_points(scene, speeds, params, protocol, **options)[0].assign(
+            stability="time", method="time") if method == "time" else
+        shooting_sweep(scene, speeds, protocol, options.get("progress", True), params, doubling))
 
 
 def with_swept_units(table):

@@ -10,6 +10,7 @@ import numpy as np
 from ..model.parameters import RPM_PER_RAD_S, unit_of
 from .plots import _pyplot, _save, amplitude_spectrum, spread_apart
 from .report import HARMONICS, resonance_speeds
+from .sweep_point import SETTLED_DRIFT
 
 
 def resonances_between(frequencies, z_pinion, low, high):
@@ -85,13 +86,19 @@ def _once(panel, label: str) -> str | None:
 
 def draw_time_sweeps(axes, sweeps, columns) -> None:
     """Time-integration sweeps over the curve, e.g. {"up": table, "down": table} from
-    sweep.chained_time_sweep: triangles pointing the way each went."""
+    sweep.chained_time_sweep: triangles pointing the way each went, open where the point had
+    not settled (window_drift over SETTLED_DRIFT: its figures are of a transient)."""
     for name, table in (sweeps or {}).items():
         rising = table["w0_pinion"].iloc[-1] >= table["w0_pinion"].iloc[0]
+        unsettled = (table["window_drift"] > SETTLED_DRIFT).to_numpy() \
+            if "window_drift" in table else np.zeros(len(table), dtype=bool)
         for panel, (column, _) in zip(axes, columns):
-            panel.plot(table["speed_rpm"], table[column], "^" if rising else "v", color="C1"
-                       if rising else "C4", ms=5, ls="none",
-                       label=f"time sweep {name} (each point from the last)")
+            for chosen, face, label in ((~unsettled, None, "each point from the last"),
+                                        (unsettled, "none", "not settled")):
+                if chosen.any():
+                    panel.plot(table["speed_rpm"][chosen], table[column][chosen],
+                               "^" if rising else "v", color="C1" if rising else "C4", ms=5,
+                               ls="none", mfc=face, label=f"time sweep {name} ({label})")
 
 
 def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> None:

@@ -390,6 +390,24 @@ def window_figures(window: dict, static_force: float) -> dict[str, float]:
     return statistics.figures(static_force)
 
 
+# A window has settled where its mesh force repeats an even number of mesh periods on (a
+# period-2 orbit repeats too) to this share of the static force. Settled points of the shipped
+# scenes repeat to 2e-5 to 1e-3 of it; near a fold of jump_resonance, where the branch's
+# multiplier nears 1 and the start's transient dies slowly, points read 2e-2 to 1.2
+SETTLED_DRIFT = 1e-2
+
+
+def window_drift(window: dict, protocol: Protocol, static_force: float) -> float:
+    """How far the window's mesh force is from repeating: max |F_mesh(t + L·T) − F_mesh(t)|
+    over its recorded samples, L the largest even number of mesh periods T under
+    window_periods, as a share of the static force (N); NaN for a window under 3 periods."""
+    lag = 2 * ((protocol.window_periods - 1) // 2) * protocol.samples_per_period
+    force = np.asarray(window["F_mesh"], dtype=float)
+    if lag == 0 or lag >= len(force):
+        return math.nan
+    return float(np.abs(force[lag:] - force[:-lag]).max() / abs(static_force))
+
+
 def floquet_largest(scene) -> float:
     """|λ|max of the linear mesh at w0_pinion (herringbone.analysis.stability)."""
     from .stability import largest_multiplier
@@ -398,7 +416,8 @@ def floquet_largest(scene) -> float:
 
 
 def point_row(scene, window: dict, protocol: Protocol) -> dict[str, float]:
-    """A table row: the point's timing, static force, window figures and Floquet |λ|max."""
+    """A table row: the point's timing, static force, window figures, how far its window is
+    from repeating (window_drift) and Floquet |λ|max."""
     when = timing(scene, protocol)
     speed = scene.parameters["w0_pinion"]
     static_force = static_mesh_force(scene)
@@ -407,6 +426,7 @@ def point_row(scene, window: dict, protocol: Protocol) -> dict[str, float]:
            "settle_time_s": when.settle, "window_time_s": when.window,
            "samples": when.samples, "figure_samples": figure_samples(window),
            "static_mesh_force_N": static_force,
-           **window_figures(window, static_force)}
+           **window_figures(window, static_force),
+           "window_drift": window_drift(window, protocol, static_force)}
     row["floquet_max"] = floquet_largest(scene) if protocol.floquet else math.nan
     return row

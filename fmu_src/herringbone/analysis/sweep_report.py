@@ -18,6 +18,7 @@ from .sweep_plots import (
     plot_waterfall,
     resonances_between,
 )
+from .sweep_point import SETTLED_DRIFT
 
 
 def swept_names(table) -> list[str]:
@@ -65,12 +66,16 @@ def fixed_speed(table) -> str:
     return f" at {rpm / RPM_PER_RAD_S:.6g} rad/s ({rpm:.0f} rpm)"
 
 
-def describe(scene, table, wall: float, args=None) -> str:
-    """The summary printed after a sweep."""
+def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=None) -> str:
+    """The summary printed after a sweep (`through_fmu`: its points ran through a gear FMU;
+    `time_sweeps`: {"up": table, "down": table} of chained time sweeps run beside it)."""
     lines = [f"sweep of {scene.name}: {len(table)} points in {wall:.1f} s of wall time",
              *(_branch_lines(table) if by_shooting(table) else _time_lines(table)),
              *_k_v_lines(table)]
-    if getattr(args, "through_fmu", None) is not None:
+    lines += _unsettled_lines(table, "")
+    for direction, swept in (time_sweeps or {}).items():
+        lines += _unsettled_lines(swept, f" of the time sweep {direction}")
+    if through_fmu:
         lines.append("through the FMU: the figures are those of the FMU's outputs at the "
                      "recorded samples, which read the ringing's peaks after each contact "
                      "switch low (without --through-fmu they resolve it)")
@@ -84,6 +89,23 @@ def describe(scene, table, wall: float, args=None) -> str:
         lost = int((table["contact_lost_share"] > 0).sum())
         lines.append(f"a helix half out of contact at {lost} points (contact_lost_share > 0)")
     return "\n".join(lines)
+
+
+def _unsettled_lines(table, which: str) -> list[str]:
+    """The points of a table (`which`: of which sweep, in words) whose window had not settled
+    (window_drift over SETTLED_DRIFT): their figures are of a transient, not a steady state."""
+    if "window_drift" not in table:
+        return []
+    unsettled = table[table["window_drift"] > SETTLED_DRIFT]
+    if unsettled.empty:
+        return []
+    names = list(table.columns[:list(table.columns).index("speed_rpm")])
+    where = "; ".join(", ".join(f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}"
+                                for name in names) for _, row in unsettled.iterrows())
+    return [f"not settled at {len(unsettled)} point{'s' if len(unsettled) > 1 else ''}{which} "
+            f"({where}): the mesh force still changed by more than {SETTLED_DRIFT:.0%} of the "
+            "static force over the window, so their figures are of a transient; give a longer "
+            "--settle-time"]
 
 
 def _k_v_lines(table) -> list[str]:

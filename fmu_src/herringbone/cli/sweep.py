@@ -168,7 +168,8 @@ def execute(args, parser) -> int:
             scheduler=args.scheduler, fmu=args.through_fmu, progress=not args.no_progress)
     wall = time.perf_counter() - started
     written = write_outputs(scene, table, series, folder, time_sweeps)
-    print(describe(scene, table, wall))
+    print(describe(scene, table, wall, through_fmu=args.through_fmu is not None,
+                   time_sweeps=time_sweeps))
     for path in written:
         print(f"written: {path}")
     return 0
