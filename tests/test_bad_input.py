@@ -183,6 +183,17 @@ FILE_CASES = [
          ("not a valid TOML file",), ("api", "cli"), ("run",)),
     Case("unknown-parameter", "file", "module", "[parameters]\nmodule = 0.004\n",
          ("module", "unknown parameter"), ("api", "cli"), ("run",)),
+    # tomllib names the line of a key given twice, not the key: the line is shown
+    Case("duplicate-key", "file", "z_pinion", "[parameters]\nz_pinion = 10\nz_pinion = 12\n",
+         ("not a valid TOML file", "line 3", "`z_pinion = 12` (a key given twice?)"),
+         ("api", "cli"), ("run",)),
+    Case("table-in-parameters", "file", "gear", "[parameters.gear]\nz = 3\n",
+         ("unknown parameter 'gear'", "[parameters.gear] is a table", "no tables in it"),
+         ("api", "cli"), ("run",)),
+    Case("output-interval-over-stop-time", "file", "output_interval",
+         "[experiment]\nstop_time = 1e-3\noutput_interval = 2e-3\n",
+         ("output_interval 0.002 s exceeds stop_time 0.001 s",
+          "allowed: output_interval <= stop_time"), ("api", "cli"), ("run",)),
     Case("unknown-experiment-key", "file", "duration", "[experiment]\nduration = 1.0\n",
          ("duration", "stop_time, output_interval"), ("api", "cli"), ("run",)),
     Case("unknown-input-key", "file", "torque", "[inputs]\ntorque = 500.0\n",
@@ -209,7 +220,7 @@ FILE_CASES = [
     Case("file-value-out-of-range", "file", "m_pinion", "[parameters]\nm_pinion = -1.0\n",
          ("m_pinion", "> 0"), ("api", "cli"), ("run", "build_fmu")),
     Case("file-integer-nan", "file", "z_pinion", "[parameters]\nz_pinion = nan\n",
-         ("z_pinion", ">= 1"), ("api", "cli"), ("run", "build_fmu")),
+         ("z_pinion", "a whole number [1, 1000]"), ("api", "cli"), ("run", "build_fmu")),
 ]
 
 

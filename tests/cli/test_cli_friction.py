@@ -533,3 +533,20 @@ def test_a_run_that_starts_with_points_in_tension_says_why_f_mesh_starts_high(tm
     assert line == ("static mesh force M_motor/Rp = 2303.6 N; F_mesh starts at 4165.4 N: the "
                     "start's static equilibrium (every point loaded) leaves points in tension, "
                     "which start unloaded, and the run starts with a transient")
+
+
+def test_torques_that_do_not_balance_are_said_by_info_and_run(tmp_path, capsys):
+    """A scene that gives M_motor alone keeps the reference's M_load = 1800 N·m, which no
+    longer balances it: the train accelerates (the pinion from 157 to 380 rad/s in 20 ms)
+    without a word before; info and the run's summary say so, a balanced scene not."""
+    scene = tmp_path / "unbalanced.toml"
+    scene.write_text("[parameters]\nz_pinion = 14\n[inputs]\nM_motor = 2000.0\n")
+    said = ("M_load = 1800 N·m does not balance M_motor = 2000 N·m (u = 2.57143): the train "
+            "accelerates (steady running needs M_load = u·M_motor = 5142.86 N·m)")
+    assert main(["info", str(scene)]) == 0
+    assert said in capsys.readouterr().out.splitlines()
+    assert main(["run", str(scene), "--stop-time", "1e-3", "--no-progress",
+                 "-o", str(tmp_path / "run.csv")]) == 0
+    assert said in capsys.readouterr().out.splitlines()
+    assert main(["info", "reference"]) == 0
+    assert "does not balance" not in capsys.readouterr().out

@@ -5,6 +5,7 @@ import pytest
 
 import herringbone
 from herringbone import SceneError, load_scene
+from herringbone.model.scene import Experiment
 
 BAD_SCENES = [
     ('[parameters]\nm_pinion = -1.0\n', "m_pinion", "> 0"),
@@ -14,7 +15,7 @@ BAD_SCENES = [
     ('[parameters]\nstagger = -0.1\n', "stagger", "[0, 1)"),
     ('[parameters]\nb_left = 0.0\n', "b_left", "> 0"),
     ('[parameters]\nc_point = -2.5e8\n', "c_point", "> 0"),
-    ('[parameters]\nz_pinion = 0\n', "z_pinion", ">= 1"),
+    ('[parameters]\nz_pinion = 0\n', "z_pinion", "a whole number [1, 1000]"),
     ('[parameters]\nz_wheel = 3.5\n', "z_wheel", "whole number"),
     ('[parameters]\nm_n = "4 mm"\n', "m_n", "must be a number"),
     ('[parameters]\ncontact_loss = 1\n', "contact_loss", "true or false"),
@@ -96,8 +97,8 @@ def test_scene_error_carries_its_fields():
         herringbone.scene_from_dict({"parameters": {"z_pinion": 0}}, source="x.toml")
     error = raised.value
     assert (error.source, error.table, error.key) == ("x.toml", "parameters", "z_pinion")
-    assert error.problem == "z_pinion is 0; allowed: a whole number >= 1"
-    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: a whole number >= 1"
+    assert error.problem == "z_pinion is 0; allowed: a whole number [1, 1000]"
+    assert str(error) == "x.toml: [parameters] z_pinion is 0; allowed: a whole number [1, 1000]"
     again = pickle.loads(pickle.dumps(error))
     assert (str(again), again.key) == (str(error), "z_pinion")
 
@@ -190,3 +191,25 @@ def test_a_key_outside_its_table_or_a_misspelt_table_is_named_with_its_home(tmp_
         load_scene(path)
     assert words in str(error.value)
 
+
+
+def test_a_short_run_without_its_output_interval_samples_at_its_end(tmp_path):
+    """stop_time alone, shorter than output_interval's default (1e-4 s), was refused as
+    "output_interval 0.0001 exceeds stop_time 5e-05", a key the file does not hold: the
+    default is then the stop time (one sample at the run's end)."""
+    path = tmp_path / "short.toml"
+    path.write_text("[experiment]\nstop_time = 5e-5\n")
+    assert herringbone.load_scene(path).experiment == Experiment(5e-5, 5e-5)
+    path.write_text("[experiment]\nstop_time = 0.2\n")
+    assert herringbone.load_scene(path).experiment == Experiment(0.2, 1e-4)
+
+
+def test_a_flag_may_be_numpys_bool():
+    """np.bool_ is no bool: it was refused ("must be true or false, got bool np.False_")
+    where numpy's numbers are taken; it is taken as the bool it is."""
+    import numpy as np
+
+    scene = herringbone.load_scene("reference").with_parameters(contact_loss=np.bool_(False))
+    assert scene.parameters["contact_loss"] is False
+    table = herringbone.scene_from_dict({"components": {"bearings": np.bool_(False)}})
+    assert table.components["bearings"] is False

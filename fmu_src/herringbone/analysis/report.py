@@ -15,6 +15,7 @@ from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
 from ..model.parameters import RPM_PER_RAD_S
 from .phasing import scene_phasing, without_contact_note
+from .steady_state import unbalance_lines
 
 HARMONICS = (1, 2, 3)
 MAX_RPM = 30_000.0  # resonance speeds above this are not listed: beyond any practical pinion speed
@@ -72,7 +73,8 @@ def scene_report(scene) -> str:
     speed = p["w0_pinion"]
     f_mesh = abs(speed) * g.z_pinion / (2.0 * math.pi)
     lines += ["", f"Mesh frequency at w0_pinion = {speed:g} rad/s "
-                  f"({speed * RPM_PER_RAD_S:.0f} rpm): {f_mesh:.2f} Hz", ""]
+                  f"({speed * RPM_PER_RAD_S:.0f} rpm): {f_mesh:.2f} Hz",
+              *unbalance_lines(scene), ""]
     frequencies, shapes, names = natural_modes(scene, pinion_angle=None)
     masses = np.diag(mass_matrix(scene))
     # a numerically zero eigenvalue gives a frequency ~1e-8 of the largest one

@@ -37,6 +37,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     it took (`integrator`: what ran it, in words; `start_time`: the part of `wall_time`, s,
     before the first step, None where it is not known)."""
     from ..model.assembly import GearTrainModel
+    from .steady_state import unbalance_lines
 
     model = GearTrainModel(scene)
     stop = results["time"][-1]
@@ -47,7 +48,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
              f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N"
              + _back_flanks(model.static_mesh_force())
              + _tension_at_start(model.static_mesh_force(), results["F_mesh"][0]),
-             *_without_contact(scene.parameters),
+             *_without_contact(scene.parameters), *unbalance_lines(scene),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
              f"{'max of samples':>16}{'at the end':>14}"]

@@ -144,12 +144,36 @@ def check_balanced(scene) -> tuple[float, float]:
                             "torques; the scene has an input table (allowed: [inputs] "
                             "M_motor, M_load)")
     motor, load = (float(t) for t in scene.inputs.at(0.0))
-    ratio = gear_ratio(scene)
-    if abs(load - ratio * motor) > 1e-9 * max(abs(load), abs(ratio * motor), 1e-300):
-        raise ShootingError(f"M_load = {load:g} N·m does not balance M_motor = {motor:g} N·m "
-                            f"(u = {ratio:g}): the train accelerates and has no periodic "
-                            f"steady state; allowed: M_load = u·M_motor = {ratio * motor:g}")
+    unbalanced = unbalance(scene)
+    if unbalanced is not None:
+        raise ShootingError(f"{unbalanced}: the train accelerates and has no periodic steady "
+                            f"state; allowed: M_load = u·M_motor = {gear_ratio(scene) * motor:g}")
     return motor, load
+
+
+def unbalance(scene) -> str | None:
+    """"M_load = … N·m does not balance M_motor = … N·m (u = …)" where the scene's torques
+    are constant and M_load is not u·M_motor (to 1e-9 of it); None where they balance or
+    follow an input table (whose steps are the run's own)."""
+    if len(scene.inputs.times) != 1:
+        return None
+    motor, load = (float(t) for t in scene.inputs.at(0.0))
+    ratio = gear_ratio(scene)
+    if abs(load - ratio * motor) <= 1e-9 * max(abs(load), abs(ratio * motor), 1e-300):
+        return None
+    return (f"M_load = {load:g} N·m does not balance M_motor = {motor:g} N·m "
+            f"(u = {ratio:g})")
+
+
+def unbalance_lines(scene) -> list[str]:
+    """What `info` and a run's summary say of torques that do not balance (unbalance): the
+    train accelerates, as a scene that gives M_motor alone and keeps the reference's M_load
+    does; [] where they balance."""
+    unbalanced = unbalance(scene)
+    if unbalanced is None:
+        return []
+    return [f"{unbalanced}: the train accelerates (steady running needs M_load = u·M_motor = "
+            f"{gear_ratio(scene) * scene.inputs.at(0.0)[0]:g} N·m)"]
 
 
 def balanced_torques(scene, name: str, value: float) -> dict[str, float]:

@@ -10,6 +10,8 @@ import math
 import numbers
 from dataclasses import dataclass
 
+import numpy as np
+
 COMPONENTS = ("motor", "load", "bearings")
 # rpm per rad/s: the one conversion of a speed to revolutions per minute
 RPM_PER_RAD_S = 30.0 / math.pi
@@ -51,7 +53,10 @@ POSITIVE = Range(0.0, None, low_open=True)
 NON_NEGATIVE = Range(0.0, None)
 FRACTION = Range(0.0, 1.0, high_open=True)
 FINITE = Range()
-AT_LEAST_ONE = Range(1, None)
+# a tooth count: a ring gear of a thousand teeth is beyond any gearbox this model describes,
+# and 1e20 teeth were taken and failed at the first step ("step size fell below the time's
+# resolution") with pitch radii of 2e17 m
+TOOTH_COUNT = Range(1, 1000)
 HELIX_ANGLE = Range(0.0, math.pi / 2, low_open=True, high_open=True)
 
 
@@ -75,8 +80,8 @@ def _p(name, default, unit, description, kind=float, allowed=POSITIVE, component
 
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in [
     # geometry (docs/model.md section 2)
-    _p("z_pinion", 10, "1", "number of pinion teeth", int, AT_LEAST_ONE),
-    _p("z_wheel", 36, "1", "number of wheel teeth", int, AT_LEAST_ONE),
+    _p("z_pinion", 10, "1", "number of pinion teeth", int, TOOTH_COUNT),
+    _p("z_wheel", 36, "1", "number of wheel teeth", int, TOOTH_COUNT),
     _p("m_n", 0.004, "m", "normal module"),
     _p("beta", 0.398982, "rad", "helix angle on the pitch cylinder", allowed=HELIX_ANGLE),
     _p("b_left", 0.035, "m", "face width of the left helix half"),
@@ -190,11 +195,16 @@ def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
     return None
 
 
+def is_flag(value) -> bool:
+    """Whether `value` is true or false: a bool, or numpy's (np.bool_, which is no bool)."""
+    return isinstance(value, (bool, np.bool_))
+
+
 def check_value(parameter: Parameter, value) -> str | None:
     """Why `value` is not allowed for `parameter`, or None if it is (number_problem, with the
     parameter's unit; a flag must be true or false, and the message says what it got)."""
     if parameter.kind is bool:
-        return None if isinstance(value, bool) \
+        return None if is_flag(value) \
             else f"must be true or false, got {type(value).__name__} {value!r}"
     return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int)
 

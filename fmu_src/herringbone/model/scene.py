@@ -17,6 +17,7 @@ from __future__ import annotations
 import bisect
 import math
 import os
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -31,6 +32,7 @@ from .parameters import (
     PARAMETERS,
     POSITIVE,
     check_value,
+    is_flag,
     number_problem,
     parameters_of,
 )
@@ -185,11 +187,27 @@ def load_scene(path) -> Scene:
                  f"{', '.join(sorted(scene_files()))} (`herringbone scenes`)"
                  if is_scene_name(given) else "")
         raise SceneError(f"no such scene file{names}", str(path))
+    text = ""
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise SceneError(f"not a valid TOML file: {error}", str(path)) from None
+        raise SceneError(f"not a valid TOML file: {error}{_toml_line(error, text)}",
+                         str(path)) from None
     return scene_from_dict(data, name=path.stem, source=str(path))
+
+
+def _toml_line(error, text: str) -> str:
+    """The line a TOML error is at, as the file has it (": `z_pinion = 12`"), where its
+    message gives one: tomllib names the line, not the key ("Cannot overwrite a value (at
+    line 3, column 14)" of a key given twice); '' where it gives none."""
+    found = re.search(r"at line (\d+)", str(error))
+    lines = text.splitlines()
+    if found is None or not 1 <= int(found.group(1)) <= len(lines):
+        return ""
+    line = lines[int(found.group(1)) - 1].strip()
+    repeated = " (a key given twice?)" if "overwrite" in str(error) else ""
+    return f": `{line}`{repeated}" if line else ""
 
 
 SCENE_PATH_ALLOWED = ("a scene file (TOML) as a str or pathlib.Path, or the name of a shipped "
@@ -294,10 +312,10 @@ def _components(table, source):
         if key not in COMPONENTS:
             raise SceneError(f"unknown component '{key}'; allowed: {', '.join(COMPONENTS)}",
                              source, "components", key)
-        if not isinstance(value, bool):
+        if not is_flag(value):
             raise SceneError(f"{key} must be true or false, got {value!r}", source,
                              "components", key)
-        components[key] = value
+        components[key] = bool(value)
     return {c: components.get(c, True) for c in COMPONENTS}
 
 
@@ -309,6 +327,8 @@ def _check_parameters(given, components, source, call=None):
     for key, value in given.items():
         if key not in PARAMETERS:
             hint = (" (inputs belong in [inputs])" if key in INPUTS
+                    else f" ([parameters.{key}] is a table; allowed: parameters as keys under "
+                         "[parameters], no tables in it)" if isinstance(value, dict)
                     else did_you_mean(key, PARAMETERS))
             raise SceneError(f"unknown parameter '{key}'{hint}", source, "parameters", key, call)
         if key not in carried:
@@ -330,6 +350,8 @@ def _complete_parameters(given, components, source):
             values[name] = int(values[name])
         elif p.kind is float and values[name] is not None:
             values[name] = float(values[name])
+        elif p.kind is bool:  # numpy's np.bool_ too
+            values[name] = bool(values[name])
     if components["bearings"]:
         for gear in ("pinion", "wheel"):
             if values[f"J_{gear}"] is None:
@@ -348,10 +370,14 @@ def _experiment(table, source):
         if problem is not None:
             raise SceneError(f"{key} {problem}", source, "experiment", key)
         values[key] = float(value)
+    if "output_interval" not in values and "stop_time" in values:
+        # its default, 1e-4 s, would exceed a shorter run: one sample at its end then
+        values["output_interval"] = min(Experiment.output_interval, values["stop_time"])
     experiment = Experiment(**values)
     if experiment.output_interval > experiment.stop_time:
-        raise SceneError(f"output_interval {experiment.output_interval:g} exceeds stop_time "
-                         f"{experiment.stop_time:g}", source, "experiment", "output_interval")
+        raise SceneError(f"output_interval {experiment.output_interval:g} s exceeds stop_time "
+                         f"{experiment.stop_time:g} s; allowed: output_interval <= stop_time",
+                         source, "experiment", "output_interval")
     return experiment
 
 
