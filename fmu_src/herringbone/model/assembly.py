@@ -298,7 +298,14 @@ class GearTrainModel:
 
     def static_deflection(self, y, contact_set, motor_torque) -> np.ndarray:
         """Relative coordinates of the static equilibrium under M_motor balanced by
-        M_load = u·M_motor, every point of the set loaded (docs/model.md section 6)."""
+        M_load = u·M_motor, every point of the set loaded (docs/model.md section 6). A set
+        without a point (a face too narrow for its streams' phasing: K_ε = 0) holds the two
+        sides of the train apart, with no equilibrium under a torque: the train is then taken
+        undeflected, as a torque-free one."""
+        if len(contact_set) == 0:
+            deflection = np.zeros(self.size)
+            deflection[self.pinion] = y[self.pinion]
+            return deflection
         stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
         force = motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
         contact_rows = (self._contact_base_relative[None, :]
