@@ -268,3 +268,16 @@ def test_a_narrow_face_is_without_contact_outside_its_two_stream_spans(monkeypat
     assert ("(no point is on the face for 99.4 % of each mesh period: the pair transmits no "
             "torque then" in scene_report(scene))
     assert "no point is on the face" not in scene_report(REFERENCE)
+
+
+def test_the_rigid_rotation_is_listed_at_zero_hertz(monkeypatch):
+    """Beside modes in the MHz (inertias of 1e-9 kg·m²) the rigid rotation's eigenvalue is
+    rounding of a zero, 0.01 Hz, which `info` printed as a frequency."""
+    use_stand_in_modes(monkeypatch)
+    modes = herringbone.analysis.report.natural_modes(REFERENCE)
+    monkeypatch.setattr(herringbone.analysis.report, "natural_modes",
+                        lambda scene, pinion_angle=None: (
+                            np.array([0.013, 113.0, 688.0, 2.2e6]), modes[1], modes[2]))
+    (rigid,) = [line for line in scene_report(REFERENCE).splitlines()
+                if line.endswith("rigid rotation")]
+    assert rigid.split() == ["1", "0.00", "Hz", "rigid", "rotation"]

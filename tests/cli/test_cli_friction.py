@@ -103,6 +103,9 @@ def test_speeds_take_the_same_form_everywhere(capsys, no_work):
     (["run", REFERENCE, "--stoptime", "1"], "run", "'--stop-time'"),
     (["sweep", REFERENCE, "--param", "z_pinon", "10", "12", "2"], "sweep", "'z_pinion'"),
     (["sweep", REFERENCE, "--param", "zeta", "0.02", "0.05", "2"], "sweep", "'zeta_mesh'"),
+    # in other case: difflib ranked h_shaft_in, one letter off, above it
+    (["sweep", REFERENCE, "--param", "c_shaft_in", "1e4", "2e4", "2"], "sweep",
+     "'C_shaft_in'"),
     (["stability", REFERENCE, "--speed", "1", "2", "3", "--outptu", "x.png"], "stability",
      "'--output'"),
 ])
@@ -550,3 +553,21 @@ def test_torques_that_do_not_balance_are_said_by_info_and_run(tmp_path, capsys):
     assert said in capsys.readouterr().out.splitlines()
     assert main(["info", "reference"]) == 0
     assert "does not balance" not in capsys.readouterr().out
+
+
+def test_a_run_whose_static_deflection_is_not_small_says_so(tmp_path, capsys):
+    """Bearings of 1e4 N/m deflect 1.15 m under the reference's mesh force: the run's dte
+    starts at 2.3 m, 576 times the module, and the summary says the model does not hold
+    there (it said nothing); the reference scene's 92 µm (2.3 % of the module) is small."""
+    scene = tmp_path / "soft_bearings.toml"
+    text = (MODELS / "reference.toml").read_text()
+    for side in ("pinion_left", "pinion_right", "wheel_left", "wheel_right"):
+        text = text.replace(f"c_brg_{side} = 5e8", f"c_brg_{side} = 1e4")
+    scene.write_text(text)
+    for path, said in ((str(scene), True), ("reference", False)):
+        assert main(["run", path, "--stop-time", "1e-3", "--no-progress",
+                     "-o", str(tmp_path / "run.csv")]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        assert any(line.startswith("The static deflection is not small: dte 2.304e+06 µm at "
+                                   "the start, 576 times the normal module m_n = 4 mm")
+                   for line in lines) is said

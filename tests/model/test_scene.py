@@ -22,7 +22,7 @@ BAD_SCENES = [
     ('[parameters]\nmodule = 0.004\n', "module", "unknown parameter"),
     ('[parameters]\nM_motor = 500\n', "M_motor", "[inputs]"),
     ('[parameters]\nzeta_mesh = nan\n', "zeta_mesh", ">= 0"),
-    ('[parameters]\nw0_pinion = inf\n', "w0_pinion", "finite"),
+    ('[parameters]\nw0_pinion = inf\n', "w0_pinion", "[-100000, 100000] rad/s"),
     ('[components]\nbearings = false\n[parameters]\nc_brg_wheel_left = 1e9\n',
      "c_brg_wheel_left", "leaves out"),
     ('[components]\ngearbox = true\n', "gearbox", "motor, load, bearings"),

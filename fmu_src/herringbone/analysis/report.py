@@ -80,7 +80,8 @@ def scene_report(scene) -> str:
     # a numerically zero eigenvalue gives a frequency ~1e-8 of the largest one
     rigid_below = 1e-6 * max(frequencies.max(), 1.0)
     lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m"]
-    lines += [f"  {i + 1:2d} {f:12.2f} Hz  "
+    # the rigid rotation's frequency is rounding of a zero (0.01 Hz beside modes in the MHz)
+    lines += [f"  {i + 1:2d} {f if f >= rigid_below else 0.0:12.2f} Hz  "
               f"{mode_character(f, shapes[:, i], masses, names, rigid_below)}"
               for i, f in enumerate(frequencies)]
     lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s); "
