@@ -571,3 +571,20 @@ def test_a_run_whose_static_deflection_is_not_small_says_so(tmp_path, capsys):
         assert any(line.startswith("The static deflection is not small: dte 2.304e+06 µm at "
                                    "the start, 576 times the normal module m_n = 4 mm")
                    for line in lines) is said
+
+
+def test_a_chatter_where_no_point_is_on_the_face_says_so(tmp_path, capsys):
+    """A face of 1 µm (K_ε = 0) chatters at 7.1 ms: the teeth meet again by impact at every
+    entry, which the message now says beside the chatter's usual causes (it named low speed
+    and a light pinion alone, and told to give an edge ramp)."""
+    scene = tmp_path / "micron_face.toml"
+    scene.write_text((MODELS / "reference.toml").read_text()
+                     .replace("b_left = 0.035", "b_left = 1e-6")
+                     .replace("b_right = 0.035", "b_right = 1e-6"))
+    assert main(["run", str(scene), "--stop-time", "0.01", "--no-progress",
+                 "-o", str(tmp_path / "run.csv")]) == 2
+    error = one_error_line(capsys, "run")
+    assert "the pinion chatters on a contact switch" in error
+    assert error.rstrip().endswith(
+        "Here no point is on the face for 100 % of each mesh period (K_eps = 0): the teeth meet "
+        "again by impact at every entry, and a wider face keeps a point on it")

@@ -37,7 +37,7 @@ from ..model.assembly import GearTrainModel
 from ..model.equations import PeriodTable
 from .compiled import buffers, dop853, exponential, walk
 from .contract import IntegrationError, Position
-from .segments import CHATTER_MESSAGE, Segment
+from .segments import CHATTER_MESSAGE, Segment, chatter_message
 
 METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
 DEFAULT_TOLERANCE = COMPILED_DEFAULT_TOLERANCE  # its home: arguments.py
@@ -412,15 +412,15 @@ class CompiledStepper:
         if status != COMPLETED:
             self._fail(status, run, steps, times[written] if written < len(times) else end)
 
-    @staticmethod
-    def _fail(status: int, run: Run, steps: int, end: float) -> None:
+    def _fail(self, status: int, run: Run, steps: int, end: float) -> None:
         """Raise what walk.advance's `status` (not OK) says: StepBudgetExceeded, or
-        IntegrationError naming the failure."""
+        IntegrationError naming the failure (a chatter as the train's: chatter_message)."""
         if status == walk.Status.OVER_BUDGET:
             raise StepBudgetExceeded(f"stopped at t = {run.time:.9g} s after {steps} internal "
                                      f"steps short of t = {end:.9g} s")
-        raise IntegrationError(f"integration failed at t = {run.time:.9g} s: "
-                               f"{FAILURES[walk.Status(status)]}")
+        failure = (chatter_message(self.model) if status == walk.Status.CHATTER
+                   else FAILURES[walk.Status(status)])
+        raise IntegrationError(f"integration failed at t = {run.time:.9g} s: {failure}")
 
     def advance(self, position: Position, end: float, torques: tuple[float, float],
                 sample_times=(), on_sample=None) -> Position:

@@ -56,6 +56,19 @@ CHATTER_MESSAGE = ("the pinion chatters on a contact switch: the points that ent
                    "come on gradually")
 
 
+def chatter_message(model: GearTrainModel) -> str:
+    """CHATTER_MESSAGE, and where the face leaves the pair without a point on it for part of
+    each mesh period (K_ε = 0), that the chatter is the teeth meeting again by impacts there,
+    which no edge ramp settles (a face of 1 µm chattered at one tolerance and not at another,
+    told of low speed and a light pinion)."""
+    share = model.mesh.share_without_contact()
+    if share == 0.0:
+        return CHATTER_MESSAGE
+    return (f"{CHATTER_MESSAGE}. Here no point is on the face for {100.0 * share:.3g} % of each "
+            "mesh period (K_eps = 0): the teeth meet again by impact at every entry, and a "
+            "wider face keeps a point on it")
+
+
 @dataclass(frozen=True)
 class Segment:
     """What holds between two events: a contact set and which of its points carry load."""

@@ -36,7 +36,6 @@ from ..model.assembly import GearTrainModel
 from . import segments
 from .compiled import reference_events
 from .contract import IntegrationError, Position
-from .segments import CHATTER_MESSAGE
 
 # consecutive segments without progress before a run is declared stuck (chattering contact)
 MAX_STALLED_SEGMENTS = 100
@@ -139,7 +138,8 @@ class ScipyStepper:
                 reversals = reversals + 1 if event != last_phase_event else 0
                 last_phase_event = event
                 if reversals > MAX_PHASE_REVERSALS:
-                    raise IntegrationError(f"stuck at t = {reached:.9g} s: {CHATTER_MESSAGE}")
+                    raise IntegrationError(f"stuck at t = {reached:.9g} s: "
+                                           f"{segments.chatter_message(self.model)}")
             time = reached
             if event is not None:
                 lifted = not segment.loaded.any()
