@@ -16,6 +16,17 @@ from herringbone.cli import main
 REFERENCE = str(MODELS / "reference.toml")
 
 
+def reference_variant(folder, name: str, *replacements: tuple[str, str]):
+    """models/reference.toml written to folder/NAME.toml with each (old, new) replaced."""
+    text = (MODELS / "reference.toml").read_text()
+    for old, new in replacements:
+        assert old in text, old
+        text = text.replace(old, new)
+    path = folder / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
 def one_error_line(capsys, command: str) -> str:
     """The one line on stderr, checked to start with `herringbone COMMAND: `; nothing on
     stdout."""
@@ -486,10 +497,8 @@ def test_a_run_whose_torques_load_the_back_flanks_says_so(tmp_path, capsys):
     """M_motor < 0 presses the back flanks together, on which the model has no contact: the
     run goes on as the model says (the teeth separate, F_mesh 0), and its summary says why
     beside the negative static mesh force, which it printed bare."""
-    scene = tmp_path / "backwards_torque.toml"
-    scene.write_text((MODELS / "reference.toml").read_text()
-                     .replace("M_motor = 500.0", "M_motor = -500.0")
-                     .replace("M_load = 1800.0", "M_load = -1800.0"))
+    scene = reference_variant(tmp_path, "backwards_torque", ("M_motor = 500.0", "M_motor = -500.0"),
+                              ("M_load = 1800.0", "M_load = -1800.0"))
     assert main(["run", str(scene), "--stop-time", "2e-3", "--output-interval", "1e-4",
                  "--no-progress", "-o", str(tmp_path / "run.csv")]) == 0
     (line,) = [text for text in capsys.readouterr().out.splitlines()
@@ -504,10 +513,8 @@ def test_a_run_whose_face_leaves_the_pair_without_contact_says_so(tmp_path, caps
     """A face of 0.1 mm (ε_β = 0.003 a half) has no point on it for 99.4 % of each mesh period:
     the run goes on as the model says (F_mesh 0 most of the time), and its summary says why
     beside the static mesh force, which it printed as if the pair carried it."""
-    scene = tmp_path / "narrow_face.toml"
-    scene.write_text((MODELS / "reference.toml").read_text()
-                     .replace("b_left = 0.035", "b_left = 0.0001")
-                     .replace("b_right = 0.035", "b_right = 0.0001"))
+    scene = reference_variant(tmp_path, "narrow_face", ("b_left = 0.035", "b_left = 0.0001"),
+                              ("b_right = 0.035", "b_right = 0.0001"))
     assert main(["run", str(scene), "--stop-time", "2e-3", "--output-interval", "1e-4",
                  "--no-progress", "-o", str(tmp_path / "run.csv")]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -559,11 +566,9 @@ def test_a_run_whose_static_deflection_is_not_small_says_so(tmp_path, capsys):
     """Bearings of 1e4 N/m deflect 1.15 m under the reference's mesh force: the run's dte
     starts at 2.3 m, 576 times the module, and the summary says the model does not hold
     there (it said nothing); the reference scene's 92 µm (2.3 % of the module) is small."""
-    scene = tmp_path / "soft_bearings.toml"
-    text = (MODELS / "reference.toml").read_text()
-    for side in ("pinion_left", "pinion_right", "wheel_left", "wheel_right"):
-        text = text.replace(f"c_brg_{side} = 5e8", f"c_brg_{side} = 1e4")
-    scene.write_text(text)
+    scene = reference_variant(tmp_path, "soft_bearings", *(
+        (f"c_brg_{side} = 5e8", f"c_brg_{side} = 1e4")
+        for side in ("pinion_left", "pinion_right", "wheel_left", "wheel_right")))
     for path, said in ((str(scene), True), ("reference", False)):
         assert main(["run", path, "--stop-time", "1e-3", "--no-progress",
                      "-o", str(tmp_path / "run.csv")]) == 0
@@ -577,10 +582,8 @@ def test_a_chatter_where_no_point_is_on_the_face_says_so(tmp_path, capsys):
     """A face of 1 µm (K_ε = 0) chatters at 7.1 ms: the teeth meet again by impact at every
     entry, which the message now says beside the chatter's usual causes (it named low speed
     and a light pinion alone, and told to give an edge ramp)."""
-    scene = tmp_path / "micron_face.toml"
-    scene.write_text((MODELS / "reference.toml").read_text()
-                     .replace("b_left = 0.035", "b_left = 1e-6")
-                     .replace("b_right = 0.035", "b_right = 1e-6"))
+    scene = reference_variant(tmp_path, "micron_face", ("b_left = 0.035", "b_left = 1e-6"),
+                              ("b_right = 0.035", "b_right = 1e-6"))
     assert main(["run", str(scene), "--stop-time", "0.01", "--no-progress",
                  "-o", str(tmp_path / "run.csv")]) == 2
     error = one_error_line(capsys, "run")
