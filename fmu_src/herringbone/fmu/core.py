@@ -439,9 +439,9 @@ class GearCore:
 
     def _set_all(self, vrs, values, kind):
         """Set `vrs` to `values` in turn; after terminate, none (refused with a message)."""
-        problem = self._order_problem("Set", f"Set{self.API['kinds'].get(kind, kind)}")
-        if problem is not None:
-            return self._report(problem)
+        if self.mode not in CALLS["Set"][0]:  # the name made only then: hosts set every step
+            return self._report(self._order_problem(
+                "Set", f"Set{self.API['kinds'].get(kind, kind)}"))
         for vr, value in zip(vrs, values):
             declaration = self._variable(vr, kind, "set")
             if declaration is not None and declaration.setter is None:
