@@ -191,7 +191,7 @@ BAD_VALUES = [
     ({"eps_q": 1.0}, "eps_q", "[0, 1)"),
     ({"b_right": 0.0}, "b_right", "> 0"),
     ({"c_brg_wheel_left": -5e8}, "c_brg_wheel_left", "> 0"),
-    ({"z_pinion": 0}, "z_pinion", ">= 1"),
+    ({"z_pinion": 0}, "z_pinion", "a whole number [1, 1000]"),
     ({"zeta_mesh": float("nan")}, "zeta_mesh", ">= 0"),
     ({"solver_tolerance": 0.5}, "solver_tolerance", "[1e-12, 0.01]"),
     ({"max_step": -1.0}, "max_step", ">= 0"),
