@@ -591,3 +591,17 @@ def test_a_chatter_where_no_point_is_on_the_face_says_so(tmp_path, capsys):
     assert error.rstrip().endswith(
         "Here no point is on the face for 100 % of each mesh period (K_eps = 0): the teeth meet "
         "again by impact at every entry, and a wider face keeps a point on it")
+
+
+def test_a_command_whose_reader_has_gone_ends_quietly():
+    """`herringbone scenes | head -2`: the reader closes the pipe before the list is written;
+    the command ended with "herringbone scenes: [Errno 32] Broken pipe" and exit 2. It now
+    ends quietly, as a Unix tool does, with 141 (128 + SIGPIPE, as a shell reports it)."""
+    import subprocess
+    import sys
+
+    command = subprocess.Popen([sys.executable, "-m", "herringbone", "scenes"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    command.stdout.close()
+    error = command.stderr.read()
+    assert command.wait(timeout=60) == 141 and error == b""

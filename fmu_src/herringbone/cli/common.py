@@ -52,10 +52,29 @@ def execute(module, args, parser: argparse.ArgumentParser) -> int:
             print(f"{parser.prog}: interrupted; files not finished are left as they were",
                   file=sys.stderr)
             return INTERRUPTED
+        if isinstance(error, BrokenPipeError):
+            return reader_gone()
         if not isinstance(error, EXPECTED_ERRORS):
             raise
         print(f"{parser.prog}: {one_line(error)}", file=sys.stderr)
         return 2
+
+
+# the exit code where the reader of the output left before it was written (`| head`): a shell
+# reports 128 + SIGPIPE for a command the pipe's signal ended
+READER_GONE = 141
+
+
+def reader_gone() -> int:
+    """A command whose output's reader has gone (`herringbone scenes | head -2`) ends quietly,
+    as a Unix tool does, not with "[Errno 32] Broken pipe": its stdout is pointed at the null
+    device, so that the interpreter's flush at exit finds no pipe to fail on."""
+    import os
+
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, sys.stdout.fileno())
+    os.close(null)
+    return READER_GONE
 
 
 def interrupted(error: BaseException | None) -> bool:
