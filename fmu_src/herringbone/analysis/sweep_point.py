@@ -391,9 +391,10 @@ def window_figures(window: dict, static_force: float) -> dict[str, float]:
 
 
 # A window has settled where its mesh force repeats an even number of mesh periods on (a
-# period-2 orbit repeats too) to this share of the static force. Settled points of the shipped
-# scenes repeat to 2e-5 to 1e-3 of it; near a fold of jump_resonance, where the branch's
-# multiplier nears 1 and the start's transient dies slowly, points read 2e-2 to 1.2
+# period-2 orbit repeats too) to this share of the static force. Settled points of ten shipped
+# scenes at their own speeds repeat to 2e-6 to 2e-5 of it, jump_resonance's upper branch to
+# 1e-3; near its folds, where the branch's multiplier nears 1 and the start's transient dies
+# slowly, points read 2e-2 to 1.2
 SETTLED_DRIFT = 1e-2
 
 
