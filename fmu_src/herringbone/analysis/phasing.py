@@ -125,11 +125,11 @@ def scene_phasing(scene_or_parameters) -> ScenePhasing:
                         k_eps=min(count for _, _, count in count_intervals(pairs)))
 
 
-def without_contact_note(parameters: dict) -> str:
+def without_contact_note(mesh: Mesh) -> str:
     """A line on a face too narrow for its streams' phasing: how much of each mesh period no
     point is on it (Mesh.share_without_contact), when the pair transmits no torque and the
     teeth meet again by impact; '' where some point is always on the face."""
-    share = Mesh(parameters).share_without_contact()
+    share = mesh.share_without_contact()
     if share == 0.0:
         return ""
     return (f"no point is on the face for {100.0 * share:.3g} % of each mesh period: the pair "

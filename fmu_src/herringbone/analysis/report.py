@@ -63,7 +63,7 @@ def scene_report(scene) -> str:
     lines += [f"  alternation law        {phasing.law} (read from phase 0)",
               f"  K_eps                  {phasing.k_eps} points (K_eps/eps_beta per half "
               f"{phasing.k_eps_ratio:.3f})"]
-    gap = without_contact_note(p)
+    gap = without_contact_note(mesh)
     if gap:
         lines.append(f"  ({gap})")
     if p["edge_ramp"] > 0:

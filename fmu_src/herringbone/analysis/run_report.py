@@ -37,7 +37,6 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     it took (`integrator`: what ran it, in words; `start_time`: the part of `wall_time`, s,
     before the first step, None where it is not known)."""
     from ..model.assembly import GearTrainModel
-    from .steady_state import unbalance_lines
 
     model = GearTrainModel(scene)
     stop = results["time"][-1]
@@ -45,11 +44,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
              f"({', '.join(model.coordinates)})",
              f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time)}",
-             f"static mesh force M_motor/Rp = {model.static_mesh_force():.1f} N"
-             + _back_flanks(model.static_mesh_force())
-             + _tension_at_start(model.static_mesh_force(), results["F_mesh"][0]),
-             *_without_contact(scene.parameters), *unbalance_lines(scene),
-             *_large_deflection(scene.parameters["m_n"], results["dte"][0]),
+             *_start_lines(scene, model, results),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
              f"{'max of samples':>16}{'at the end':>14}"]
@@ -60,6 +55,19 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
             lines.append(f"{name:<20}{unit:<8}{shown[0]:>14.6g}{shown.min():>16.6g}"
                          f"{shown.max():>16.6g}{shown[-1]:>14.6g}")
     return "\n".join(lines)
+
+
+def _start_lines(scene, model, results: dict) -> list[str]:
+    """The static mesh force and what the run's start says of the scene: back flanks loaded,
+    points in tension, a face without contact, torques that do not balance, deflections that
+    are not small (each only where it holds)."""
+    from .steady_state import unbalance_lines
+
+    static = model.static_mesh_force()
+    return [f"static mesh force M_motor/Rp = {static:.1f} N" + _back_flanks(static)
+            + _tension_at_start(static, results["F_mesh"][0]),
+            *_without_contact(model.mesh), *unbalance_lines(scene),
+            *_large_deflection(scene.parameters["m_n"], results["dte"][0])]
 
 
 def _back_flanks(static_force: float) -> str:
@@ -99,12 +107,12 @@ def _large_deflection(module: float, start_dte: float) -> list[str]:
             "the model holds for deflections far under the tooth's size"]
 
 
-def _without_contact(parameters: dict) -> list[str]:
+def _without_contact(mesh) -> list[str]:
     """phasing.without_contact_note as the summary's line, where the face leaves the pair
     without contact for part of each mesh period."""
     from .phasing import without_contact_note
 
-    note = without_contact_note(parameters)
+    note = without_contact_note(mesh)
     return [note[0].upper() + note[1:]] if note else []
 
 

@@ -55,6 +55,7 @@ from ..model.geometry import GearGeometry
 from ..shipped import named_as_typed
 from .sweep_point import (
     WindowStatistics,
+    fastest_ringing,
     figure_refinement,
     sample_chunks,
     static_mesh_force,
@@ -227,6 +228,7 @@ class PeriodMap:
         self.scene = scene
         self.model = model = GearTrainModel(scene)
         self.stepper = CompiledStepper(model, tolerance, method)
+        self.fastest_ringing = fastest_ringing(model)  # Hz: the orbit figures' sampling
         self.mesh_periods = int(mesh_periods)
         self.size = n = model.size
         self.pinion = model.pinion
@@ -444,7 +446,8 @@ class PeriodMap:
         theta_start = self.rigid_angle(start.state, start.segment.contact_set)
         theta_section = self.rigid_angle(state, self.section_set)
         period = self.period(speed)
-        per_period = samples_per_period * figure_refinement(model, self.pitch / speed,
+        per_period = samples_per_period * figure_refinement(self.fastest_ringing,
+                                                            self.pitch / speed,
                                                             samples_per_period)
         count = self.mesh_periods * per_period
         offsets = theta_start + np.arange(count) * self.pitch / per_period - theta_section

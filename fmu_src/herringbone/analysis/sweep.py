@@ -243,9 +243,24 @@ def with_swept_units(table):
     """The table with attrs["units"]: the unit of each swept column (those before speed_rpm:
     w0_pinion in rad/s, a parameter or torque in its own), which the other columns name
     (F_mesh_max_N) and the CSV's header gives ("w0_pinion [rad/s]")."""
-    swept = list(table.columns[:list(table.columns).index("speed_rpm")])
-    table.attrs["units"] = {name: unit_of(name) for name in swept}
+    table.attrs["units"] = {name: unit_of(name) for name in swept_columns(table)}
     return table
+
+
+def swept_columns(table) -> list[str]:
+    """A sweep table's swept columns: those before speed_rpm."""
+    return list(table.columns[:list(table.columns).index("speed_rpm")])
+
+
+def point_label(row, names, rpm: bool = True) -> str:
+    """A table row's point as 'name = value unit, …' over the swept columns `names`, the speed
+    in rpm beside it (`rpm`; not after the other quantities): "w0_pinion = 485.714 rad/s
+    (4638 rpm)"."""
+    def value(name):
+        beside = f" ({row['speed_rpm']:.0f} rpm)" if rpm and name == SPEED else ""
+        return f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}{beside}"
+
+    return ", ".join(value(name) for name in names)
 
 
 def runs_by_time(scene, speeds, params, method, fmu) -> bool:
@@ -420,11 +435,4 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
 def resonation_summary(table) -> str:
     """Where the largest K_v of a table lies, as 'name = value unit, …'
     ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
-    row = table.loc[table["K_v"].idxmax()]
-    names = list(table.columns[:list(table.columns).index("speed_rpm")])
-
-    def value(name):  # the speed in rpm beside it, not after the other quantities
-        rpm = f" ({row['speed_rpm']:.0f} rpm)" if name == SPEED else ""
-        return f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}{rpm}"
-
-    return ", ".join(value(name) for name in names)
+    return point_label(table.loc[table["K_v"].idxmax()], swept_columns(table))

@@ -127,26 +127,31 @@ def least_damped_decay_rate(scene, model: GearTrainModel | None = None) -> float
     rotation's eigenvalue is a defective double zero, which rounding moves by about
     √ε·|λ|max (1.2e-9·|λ|max on the gear pair alone, models/jump_resonance.toml), not ε·|λ|max.
     `model`: the scene's GearTrainModel, if already at hand."""
-    modes = (GearTrainModel(scene) if model is None else model).eigenvalues()
+    return _least_damped((GearTrainModel(scene) if model is None else model).eigenvalues())
+
+
+def _least_damped(modes: np.ndarray) -> float:
+    """least_damped_decay_rate of the train's eigenvalues `modes` (1/s)."""
     elastic = modes[np.abs(modes) > RIGID_FRACTION * np.abs(modes).max()]
     return float(np.abs(elastic.real).min())
 
 
-def fastest_ringing(model: GearTrainModel) -> float:
+def fastest_ringing(model: GearTrainModel, modes: np.ndarray | None = None) -> float:
     """The highest natural frequency (Hz) the train rings at: of its modes at the mean mesh
-    stiffness and, where contact can be lost, of its free flight (shafts and bearings alone,
-    whose modes the mesh no longer holds: they may be faster)."""
-    modes = model.eigenvalues()
+    stiffness (`modes`, its eigenvalues, 1/s, if already at hand) and, where contact can be
+    lost, of its free flight (shafts and bearings alone, whose modes the mesh no longer holds:
+    they may be faster)."""
+    modes = model.eigenvalues() if modes is None else modes
     if model.contact_loss:
         modes = np.concatenate([modes, model.eigenvalues(*model.free_flight_matrices())])
     return float(np.abs(modes.imag).max() / (2.0 * math.pi))
 
 
-def figure_refinement(model: GearTrainModel, period: float, samples_per_period: int) -> int:
+def figure_refinement(fastest: float, period: float, samples_per_period: int) -> int:
     """How many figure samples to each of `samples_per_period` recorded samples a mesh period
-    (`period`, s), so that the fastest mode (`fastest_ringing`) has FASTEST_MODE_SAMPLES a
-    period of its own: a whole number >= 1."""
-    needed = FASTEST_MODE_SAMPLES * fastest_ringing(model) * period
+    (`period`, s), so that the fastest mode (`fastest`, Hz: fastest_ringing) has
+    FASTEST_MODE_SAMPLES a period of its own: a whole number >= 1."""
+    needed = FASTEST_MODE_SAMPLES * fastest * period
     return max(1, math.ceil(needed / samples_per_period - 1e-9))
 
 
@@ -159,19 +164,22 @@ def mesh_period(scene) -> float:
     return 2.0 * math.pi / (scene.parameters["z_pinion"] * speed)
 
 
-def timing(scene, protocol: Protocol) -> Timing:
-    """The settle and the window of a scene under a protocol (module docstring)."""
+def timing(scene, protocol: Protocol, model: GearTrainModel | None = None) -> Timing:
+    """The settle and the window of a scene under a protocol (module docstring); `model`: the
+    scene's GearTrainModel, if already at hand (its eigenvalues give both the settle and the
+    figures' refinement)."""
     period = mesh_period(scene)
-    model = GearTrainModel(scene)
+    model = GearTrainModel(scene) if model is None else model
+    modes = model.eigenvalues()
     settle = protocol.settle_time
     if settle is None:
-        settle = (math.log(1.0 / protocol.settle_residual)
-                  / least_damped_decay_rate(scene, model))
+        settle = math.log(1.0 / protocol.settle_residual) / _least_damped(modes)
     # 1e-9: a settle given as whole periods stays that many periods despite rounding
     periods = math.ceil(settle / period - 1e-9)
     return Timing(period, periods * period, period / protocol.samples_per_period,
                   protocol.window_periods * protocol.samples_per_period,
-                  figure_refinement(model, period, protocol.samples_per_period))
+                  figure_refinement(fastest_ringing(model, modes), period,
+                                    protocol.samples_per_period))
 
 
 def run_window(scene, protocol: Protocol) -> Window:
@@ -195,7 +203,7 @@ def run_window_from(scene, protocol: Protocol, start: Position | None = None):
     if start is None:
         start = start_position(model, torques[0])
     run = stepper.start(Position(0.0, start.state, start.segment, start.step_hint))
-    when = timing(scene, protocol)
+    when = timing(scene, protocol, model)
     stepper.run_to(run, when.settle, torques)
     recorded = np.empty((when.samples, model.output_layout_size))
     statistics = WindowStatistics(model.output_layout)

@@ -10,7 +10,7 @@ import numpy as np
 from ..files import replace_file
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
-from .sweep import SPEED, resonation_summary
+from .sweep import SPEED, point_label, resonation_summary, swept_columns
 from .sweep_plots import (
     is_branch,
     plot_parameter_sweep,
@@ -21,17 +21,12 @@ from .sweep_plots import (
 from .sweep_point import SETTLED_DRIFT
 
 
-def swept_names(table) -> list[str]:
-    """The swept columns: those before speed_rpm."""
-    return list(table.columns[:list(table.columns).index("speed_rpm")])
-
-
 def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[Path]:
     """CSV, then the plots that fit the sweep's axes; returns the paths written. `series`:
     each point's window (None for a branch: no waterfall); `time_sweeps`: {"up": table,
     "down": table} of chained time sweeps drawn over a branch's resonance curve."""
     folder.mkdir(parents=True, exist_ok=True)
-    names = swept_names(table)
+    names = swept_columns(table)
     stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
     csv = Path(f"{stem}.csv")
     # the swept columns with their units; the others name theirs (speed_rpm, F_mesh_max_N)
@@ -79,7 +74,7 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
         lines.append("through the FMU: the figures are those of the FMU's outputs at the "
                      "recorded samples, which read the ringing's peaks after each contact "
                      "switch low (without --through-fmu they resolve it)")
-    if SPEED in swept_names(table) and len(swept_names(table)) == 1:
+    if SPEED in swept_columns(table) and len(swept_columns(table)) == 1:
         low, high = table[SPEED].min(), table[SPEED].max()
         marks = resonances_between(elastic_frequencies(scene), scene.parameters["z_pinion"],
                                    low, high)
@@ -99,9 +94,8 @@ def _unsettled_lines(table, which: str) -> list[str]:
     unsettled = table[table["window_drift"] > SETTLED_DRIFT]
     if unsettled.empty:
         return []
-    names = list(table.columns[:list(table.columns).index("speed_rpm")])
-    where = "; ".join(", ".join(f"{name} = {with_unit(f'{row[name]:.6g}', unit_of(name))}"
-                                for name in names) for _, row in unsettled.iterrows())
+    names = swept_columns(table)
+    where = "; ".join(point_label(row, names, rpm=False) for _, row in unsettled.iterrows())
     return [f"not settled at {len(unsettled)} point{'s' if len(unsettled) > 1 else ''}{which} "
             f"({where}): the mesh force still changed by more than {SETTLED_DRIFT:.0%} of the "
             "static force over the window, so their figures are of a transient; give a longer "

@@ -162,6 +162,12 @@ def _resolution_problem(end, limit, fastest_rate) -> str | None:
             f"{limit:.3g} s of t = 0 (an experiment that starts nearer 0, shorter steps)")
 
 
+def _masters_rounding(step_size, time) -> float:
+    """How far (s) a doStep's times may be off the FMU's own for a master's rounding: masters
+    add up their times in their own way; forgive that, not a skipped step."""
+    return 1e-6 * step_size + 1e-12 * abs(time)
+
+
 def _step_size_problem(step_size) -> str | None:
     """Why a doStep's communicationStepSize (s) is not allowed, or None: it must be finite and
     > 0, as the FMI standard asks (the Reference FMUs answer Error to one that is not)."""
@@ -350,9 +356,8 @@ class GearCore:
         for name in INPUTS:
             if problem is None and not math.isfinite(self.values[name]):
                 problem = f"input {name} is {self.values[name]}; allowed: any finite number"
-        # masters add up their times in their own way: forgive rounding, not a skipped step
         drift = abs(current_time - self.run.time)
-        if problem is None and drift > 1e-6 * step_size + 1e-12 * abs(current_time):
+        if problem is None and drift > _masters_rounding(step_size, current_time):
             problem = (f"doStep from t = {current_time!r} s, but the FMU is at "
                        f"t = {self.run.time!r} s (roll back with {self.API['set_state']})")
         if problem is not None and problem != self.input_problem:
@@ -375,10 +380,10 @@ class GearCore:
     def _stop_time_problem(self, current_time, step_size):
         """Why a doStep may not end where it would, past the experiment's stop time (the
         Reference FMUs answer Error), or None; a master's rounding of its times is forgiven
-        as in _step_problem."""
+        (_masters_rounding)."""
         end = current_time + step_size
-        if self.stop_time is None or end - self.stop_time <= (1e-6 * step_size
-                                                              + 1e-12 * abs(self.stop_time)):
+        if self.stop_time is None or \
+                end - self.stop_time <= _masters_rounding(step_size, self.stop_time):
             return None
         return (f"doStep from t = {current_time:.16g} s by {step_size:.16g} s ends past the "
                 f"experiment's stop time {self.stop_time:.16g} s ({self.API['setup']}); "

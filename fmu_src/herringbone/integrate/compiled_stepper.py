@@ -37,7 +37,7 @@ from ..model.assembly import GearTrainModel
 from ..model.equations import PeriodTable
 from .compiled import buffers, dop853, exponential, walk
 from .contract import IntegrationError, Position
-from .segments import CHATTER_MESSAGE, Segment, chatter_message
+from .segments import Segment, chatter_message
 
 METHODS = COMPILED_METHODS  # their home: arguments.py, with the allowed tolerances
 DEFAULT_TOLERANCE = COMPILED_DEFAULT_TOLERANCE  # its home: arguments.py
@@ -167,11 +167,10 @@ def explicit_step_bound(modes, tolerance: float) -> float:
     return low
 
 
-# what each failing walk.Status means, for the error raised
+# what each failing walk.Status means, for the error raised (CHATTER: segments.chatter_message)
 FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing contact)",
             walk.Status.STEP_TOO_SMALL: "the step size fell below the time's resolution",
             walk.Status.NOT_FINITE: "the state is no longer finite",
-            walk.Status.CHATTER: CHATTER_MESSAGE,
             walk.Status.CONTACT_VIOLATED: "a point carried tension, or penetrated without load, "
                                           "inside a step (contact check of a debug run)",
             walk.Status.LEFT_INTERVAL: "the pinion left its contact interval unseen (the state "
