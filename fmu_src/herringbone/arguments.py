@@ -145,7 +145,8 @@ SETTLE_RESIDUAL = Argument("settle_residual", "--settle-residual", "fraction of 
                            "least-damped mode's start-up amplitude left when the window begins",
                            Range(0.0, 1.0, low_open=True, high_open=True))
 SETTLE_TIME = Argument("settle_time", "--settle-time", "seconds settled before the window, "
-                       "instead of the time derived from --settle-residual", NON_NEGATIVE)
+                       "instead of the time derived from --settle-residual (and of the "
+                       "windows recorded again where the first had not settled)", NON_NEGATIVE)
 WINDOW_PERIODS = Argument("window_periods", "--window-periods", "mesh periods recorded per "
                           "point", Range(1.0, None), whole=True)
 # the recorded window's sampling; the figures (K_v, peaks, rms) are taken from a whole multiple

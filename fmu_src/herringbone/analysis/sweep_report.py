@@ -124,7 +124,8 @@ def _time_lines(table) -> list[str]:
         return []  # a table of other figures: nothing to say about settling
     settle, window = table["settle_time_s"], table["window_time_s"]
     return [f"settle {settle.min():.4g}-{settle.max():.4g} s per point (start-up transient of "
-            "the least-damped mode decayed), then a window of "
+            "the least-damped mode decayed, and longer where the window had not yet repeated), "
+            "then a window of "
             f"{int(table['samples'].iloc[0])} samples, {window.min():.4g}-{window.max():.4g} s"]
 
 
