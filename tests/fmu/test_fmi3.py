@@ -223,3 +223,68 @@ def test_every_unit_declares_its_si_base_units(fmus):
             declared = {dimension: int(power) for dimension, power in base.attrib.items()}
             name = unit.get("name")
             assert declared == ({} if name == "1" else _si_exponents(name)), (version, name)
+
+
+# A C host that gives no log callback (FMI 3.0 allows logMessage = NULL), in a process of its
+# own: pythonfmu3 0.3.4 called the NULL pointer with the first message (a segmentation fault)
+NO_LOGGER_HOST = r'''
+import sys
+from ctypes import POINTER, byref, c_bool, c_char_p, c_double, c_int, c_size_t, c_uint32, \
+    c_void_p
+from fmpy import extract, read_model_description
+from fmpy.fmi3 import FMU3Slave
+unzipped = extract(sys.argv[1])
+description = read_model_description(unzipped)
+refs = {v.name: v.valueReference for v in description.modelVariables}
+dll = FMU3Slave(guid=description.guid, unzipDirectory=unzipped,
+                modelIdentifier="HerringboneGear", instanceName="g").dll
+def call(name, argtypes, *args):
+    function = getattr(dll, name)
+    function.argtypes, function.restype = argtypes, c_int
+    return function(*args)
+instantiate = dll.fmi3InstantiateCoSimulation
+instantiate.restype = c_void_p
+instantiate.argtypes = [c_char_p, c_char_p, c_char_p] + [c_bool] * 4 + [c_void_p, c_size_t] \
+    + [c_void_p] * 3
+resources = f"file://{unzipped}/resources/".encode()
+def run(problem):
+    instance = instantiate(b"g", description.guid.encode(), resources, False, False, False,
+                           False, None, 0, None, None, None)
+    one = lambda name, value: call("fmi3SetFloat64", [c_void_p, POINTER(c_uint32), c_size_t,
+                                   POINTER(c_double), c_size_t], instance,
+                                   (c_uint32 * 1)(refs[name]), 1, (c_double * 1)(value), 1)
+    statuses = [call("fmi3EnterInitializationMode", [c_void_p, c_bool, c_double, c_double,
+                     c_bool, c_double], instance, False, 0.0, 0.0, False, 0.0)]
+    if problem == "parameter":
+        one("m_pinion", -1.0)
+    statuses.append(call("fmi3ExitInitializationMode", [c_void_p], instance))
+    step = lambda at: call("fmi3DoStep", [c_void_p, c_double, c_double, c_bool] + [c_void_p] * 4,
+                           instance, at, 1e-4, True, byref(c_bool()), byref(c_bool()),
+                           byref(c_bool()), byref(c_double()))
+    if problem != "parameter":
+        statuses.append(step(0.0))
+        if problem == "input":
+            one("M_motor", float("nan"))
+        statuses.append(step(0.5 if problem == "time" else 1e-4))
+    print(problem, *statuses, flush=True)
+for problem in sys.argv[2:]:
+    run(problem)
+'''
+
+
+def test_fmi3_host_without_a_log_callback_gets_statuses_and_stderr(fmus, tmp_path):
+    """A host that passes no log callback gets each problem's status (fmi3Fatal from
+    exitInitializationMode for a bad parameter, fmi3Error from doStep for a NaN input and a
+    doStep from the wrong time) and the message on stderr, and its process ends normally."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "host.py"
+    script.write_text(NO_LOGGER_HOST)
+    run = subprocess.run([sys.executable, str(script), str(fmus["reference", 3]), "parameter",
+                          "input", "time"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split("\n")[:3] == ["parameter 0 4", "input 0 0 0 3", "time 0 0 0 3"]
+    assert "g: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg" in run.stderr
+    assert "g: error: input M_motor is nan; allowed: any finite number" in run.stderr
+    assert "g: error: doStep from t = 0.5 s, but the FMU is at t = 0.0001 s" in run.stderr

@@ -20,6 +20,7 @@ What pythonfmu3 (0.3) lets a slave do, and what differs from the FMI 2.0 slave b
   time), and the experiment's tolerance is not used: set solver_tolerance instead.
 """
 import ctypes
+import sys
 
 import pythonfmu3
 from pythonfmu3 import (
@@ -38,6 +39,24 @@ from pythonfmu3.fmi3slave import Fmi3StepResult
 # first: the core checks the dependencies before anything imports numpy
 from herringbone.fmu.core import DESCRIPTION, Declaration, GearCore
 from herringbone.fmu.pythonfmu_references import tear_down_state_first
+
+
+# The callback pythonfmu3 0.3.4 logs through (cppfmu's Logger, `host_logs`) where the host gave
+# none: FMI 3.0 lets a host pass logMessage = NULL, and pythonfmu3 calls it unchecked with every
+# message and with the message of every exception (fmi_functions.cpp), a segmentation fault.
+# The slave writes its own messages to stderr where the host hears none (core._report); this
+# one writes the rest, which are pythonfmu3's account of an exception (answered fmi3Fatal).
+@ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p)
+def _log_unheard(environment, status, category, message):
+    if status == Fmi3Status.fatal:
+        text = (message or b"").decode("utf-8", "replace").replace("\n", "; ")
+        print(f"HerringboneGear: fatal: {text}", file=sys.stderr, flush=True)
+
+
+def _logger_callback(logger_address) -> ctypes.c_void_p:
+    """The log callback field of cppfmu's Logger at `logger_address` (pythonfmu3 0.3.4: the
+    instance environment, then the callback; cppfmu_common.hpp)."""
+    return ctypes.c_void_p.from_address(logger_address + ctypes.sizeof(ctypes.c_void_p))
 
 
 def _with_range(node, low, high, start=None):
@@ -88,8 +107,14 @@ class HerringboneGear(GearCore, Fmi3Slave):
         super().__init__(**kwargs)
         self.description = DESCRIPTION  # Fmi3SlaveBase.__init__ sets it (to None)
         self.logger_address = kwargs.get("logger")  # cppfmu's Logger (see host_logs)
+        self.host_gave_no_logger = False
         if self.logger_address:  # in an FMU: pythonfmu3's library shares pythonfmu's teardown
             tear_down_state_first(kwargs.get("resources"))
+            if pythonfmu3.__version__ == "0.3.4" \
+                    and _logger_callback(self.logger_address).value is None:
+                _logger_callback(self.logger_address).value = \
+                    ctypes.cast(_log_unheard, ctypes.c_void_p).value
+                self.host_gave_no_logger = True
         # pythonfmu3's logger is not pythonfmu's: no direct line to it while compiling
         self._setup(None)
         # FMI 3.0 wants the independent variable declared: last, so that every other variable
@@ -197,9 +222,8 @@ class HerringboneGear(GearCore, Fmi3Slave):
         (not only when loggingOn): read from cppfmu's Logger, whose address pythonfmu3 hands to
         the slave (the instance environment, then the callback: cppfmu_common.hpp). None (not
         known) for another pythonfmu3 version or without a logger (outside an FMU); the
-        same for every `status`."""
+        same for every `status`. Where the host gave none, the slave put _log_unheard in its
+        place when it was instantiated."""
         if not self.logger_address or pythonfmu3.__version__ != "0.3.4":
             return None
-        callback = ctypes.c_void_p.from_address(self.logger_address
-                                                + ctypes.sizeof(ctypes.c_void_p))
-        return callback.value is not None
+        return not self.host_gave_no_logger
