@@ -150,6 +150,20 @@ def test_fmi3_state_round_trip_and_serialization(instance):
     assert instance.messages == []
 
 
+def test_fmi3_start_time_stays_once_the_first_step_set_it(instance):
+    """The first doStep sets the start time pythonfmu3 does not pass on; a state taken before
+    that step and set again does not let a later doStep start the run anew elsewhere."""
+    before = instance.getFMUState()
+    first = steps(instance, 0.0, 3)
+    instance.setFMUState(before)
+    with pytest.raises(FMICallException, match="status 3"):
+        instance.doStep(currentCommunicationPoint=0.5, communicationStepSize=1e-4)
+    ((status, text),) = instance.messages
+    assert status == ERROR and "doStep from t = 0.5 s, but the FMU is at t = 0" in text
+    assert np.array_equal(steps(instance, 0.0, 3), first)
+    instance.freeFMUState(before)
+
+
 def test_fmi3_errors_are_fmi3error_and_the_instance_lives(instance):
     steps(instance, 0.0, 2)
     with pytest.raises(FMICallException, match="status 3"):  # a skipped step

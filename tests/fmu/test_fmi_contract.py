@@ -162,6 +162,21 @@ def test_a_step_size_that_is_not_finite_and_positive_is_refused_and_the_run_goes
     assert np.array_equal(run_steps(instance, 2), clean[2:])
 
 
+@pytest.mark.parametrize("point", [math.nan, math.inf])
+def test_a_communication_point_that_is_not_finite_is_refused_naming_it(gear, point):
+    """A doStep from a currentCommunicationPoint that is not finite is refused with one
+    message naming it (not the clock's resolution); the instance is unharmed."""
+    clean = run_steps(gear(), 4)
+    instance = gear()
+    run_steps(instance, 2)
+    with pytest.raises(FMICallException) as error:
+        instance.slave.doStep(point, STEP)
+    assert error.value.status == DISCARD
+    (message,) = [text for _, text in instance.messages]
+    assert f"currentCommunicationPoint is {point!r} s; allowed: finite" in message
+    assert np.array_equal(run_steps(instance, 2), clean[2:])
+
+
 def test_a_step_past_what_the_clock_resolves_is_refused_and_the_run_goes_on(gear):
     """A doStep of 1e300 s (it ran for ever) and an experiment started at 1e9 s (its times
     resolve 1.2e-7 s, a hundredth of the fastest mode's time scale) are refused with one

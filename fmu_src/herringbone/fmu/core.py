@@ -168,9 +168,12 @@ def _masters_rounding(step_size, time) -> float:
     return 1e-6 * step_size + 1e-12 * abs(time)
 
 
-def _step_size_problem(step_size) -> str | None:
-    """Why a doStep's communicationStepSize (s) is not allowed, or None: it must be finite and
-    > 0, as the FMI standard asks (the Reference FMUs answer Error to one that is not)."""
+def _step_size_problem(current_time, step_size) -> str | None:
+    """Why a doStep's currentCommunicationPoint or communicationStepSize (s) is not allowed,
+    or None: the point must be finite, the step finite and > 0, as the FMI standard asks (the
+    Reference FMUs answer Error to one that is not)."""
+    if not math.isfinite(current_time):
+        return f"currentCommunicationPoint is {current_time!r} s; allowed: finite"
     if math.isfinite(step_size) and step_size > 0.0:
         return None
     return f"communicationStepSize is {step_size!r} s; allowed: finite and > 0 s"
@@ -349,7 +352,7 @@ class GearCore:
         """What is wrong with this doStep (reported once while it lasts): a call before
         initialization, its step size, an input, its start time. None of them harms the
         instance: the next doStep without the problem goes on."""
-        problem = (self._order_problem("DoStep") or _step_size_problem(step_size)
+        problem = (self._order_problem("DoStep") or _step_size_problem(current_time, step_size)
                    or _resolution_problem(current_time + step_size, self.latest_end,
                                           self.stepper.fastest_rate)
                    or self._stop_time_problem(current_time, step_size))

@@ -107,6 +107,9 @@ class HerringboneGear(GearCore, Fmi3Slave):
         super().__init__(**kwargs)
         self.description = DESCRIPTION  # Fmi3SlaveBase.__init__ sets it (to None)
         self.logger_address = kwargs.get("logger")  # cppfmu's Logger (see host_logs)
+        # pythonfmu3 does not pass fmi3EnterInitializationMode's startTime on: the first doStep
+        # of the instance sets it (fmi3Reset makes a new instance)
+        self.start_open = True
         self.host_gave_no_logger = False
         if self.logger_address:  # in an FMU: pythonfmu3's library shares pythonfmu's teardown
             tear_down_state_first(kwargs.get("resources"))
@@ -163,11 +166,13 @@ class HerringboneGear(GearCore, Fmi3Slave):
     def do_step(self, current_time, step_size):
         """Advance from `current_time` by `step_size` seconds with the inputs held
         (fmi3DoStep); a failed step answers Error with the reason in the log."""
-        if self.run is not None and self.run.time == self.start_time \
+        if self.start_open and self.run is not None and self.run.time == self.start_time \
                 and self.stepper.accepted_steps == 0:
             # no step taken yet: the start time pythonfmu3 did not pass on is this one
             self.start_time = float(current_time)
             self.run.clock[0] = self.start_time
+        # once set, it stays, also where a state taken before the first step is set again
+        self.start_open = self.start_open and self.run is None
         if self._step(current_time, step_size) is not None:
             return Fmi3StepResult(status=Fmi3Status.error)
         return Fmi3StepResult()
