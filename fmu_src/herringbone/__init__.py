@@ -24,6 +24,12 @@ runs before numpy is imported, to name a missing dependency) imports nothing hea
 from __future__ import annotations
 
 import importlib
+import os as _os
+
+from .fmu.installed import find_the_rest as _find_the_rest
+
+# in an FMU's copy of the package, what the copy leaves out is found where it is installed
+_find_the_rest(__name__, _os.path.dirname(__file__))
 
 # name -> the module that holds it
 _API = {

@@ -1,10 +1,11 @@
 """What a gear FMU carries of the package: the modules its run imports (herringbone.fmu.carried)."""
+import shutil
 import subprocess
 import sys
 import zipfile
 
 from herringbone.compiling import sources
-from herringbone.fmu import carried
+from herringbone.fmu import carried, installed
 
 # A host process that has never imported herringbone runs the FMU (a state round trip, then a
 # bad parameter, whose message is an error path), and prints the herringbone modules it
@@ -51,7 +52,8 @@ def test_what_a_host_imports_of_the_fmu_is_among_the_modules_it_carries(built_fm
 def test_an_fmu_carries_the_modules_its_run_imports_and_not_the_analysis(built_fmus):
     for fmu in (built_fmus["reference"], built_fmus["staggered"]):
         names = {name.removeprefix("resources/") for name in zipfile.ZipFile(fmu).namelist()
-                 if name.startswith("resources/herringbone/")}
+                 if name.startswith("resources/herringbone/")
+                 and not name.endswith(f"/{installed.MARKER}")}
         expected = {carried._file_of(module).relative_to(carried.PACKAGE.parent).as_posix()
                     for module in carried.runtime_modules()}
         assert names == expected
@@ -75,3 +77,46 @@ def test_an_import_names_its_module_and_the_packages_above_it_inside_functions_t
             "herringbone", "herringbone.model"} <= imported
     assert not any(name.endswith(("load_scene", "GearTrainModel")) for name in imported)
     assert "herringbone.analysis" not in carried.runtime_modules()
+
+
+# A host process with the package installed (not editable: its finder, which would find the
+# rest of the package on its own, is left out), which had not imported herringbone before the
+# FMU: after a run of the FMU, the process imports the package's other modules
+INSTALLED_AFTER_AN_FMU = """
+import sys
+sys.meta_path = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "").lower()]
+sys.path.append(sys.argv[2])
+import fmpy
+fmpy.simulate_fmu(sys.argv[1], stop_time=0.001)
+import herringbone.fmu.core
+try:
+    from herringbone.fmu.ssp import build_ssp
+    import herringbone.analysis.sweep
+    print(herringbone.fmu.core.__file__, herringbone.analysis.sweep.__file__)
+except ModuleNotFoundError as error:
+    print(error)
+"""
+
+
+def test_a_host_that_ran_an_fmu_imports_the_rest_of_the_installed_package(built_fmus,
+                                                                           tmp_path):
+    """The FMU's copy of the package carries only what its run imports; the modules it
+    leaves out come from the installed package where that is the one the FMU was built from,
+    and are refused with a message naming both and what to do where it is not."""
+    site = tmp_path / "site"
+    shutil.copytree(carried.PACKAGE, site / "herringbone",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    command = [sys.executable, "-c", INSTALLED_AFTER_AN_FMU, str(built_fmus["reference"]),
+               str(site)]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    core, sweep = run.stdout.split()
+    assert "/resources/herringbone/fmu/core.py" in core
+    assert sweep == str(site / "herringbone" / "analysis" / "sweep.py")
+    with open(site / "herringbone" / "fmu" / "core.py", "a") as changed:
+        changed.write("# another version\n")
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert run.stdout.startswith("No module named 'herringbone.fmu.ssp': this process "
+                                 "imported herringbone from an FMU's resources")
+    assert "import herringbone before the FMU is loaded" in run.stdout

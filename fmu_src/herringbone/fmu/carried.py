@@ -14,6 +14,7 @@ import shutil
 from pathlib import Path
 
 from ..compiling import sources
+from . import installed
 
 PACKAGE = sources.ROOT  # herringbone
 # the slaves' modules: what pythonfmu's script (a copy of slave.py or slave3.py) imports
@@ -36,13 +37,14 @@ def runtime_modules() -> set[str]:
 
 def stage_package(folder: Path) -> Path:
     """A copy of the package holding the runtime_modules alone, in `folder`/herringbone (for
-    the FMU's resources). Returns that folder."""
+    the FMU's resources), marked as such (installed.MARKER). Returns that folder."""
     target = Path(folder) / PACKAGE.name
     for name in sorted(runtime_modules()):
         source = _file_of(name)
         copy = target / source.relative_to(PACKAGE)
         copy.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(source, copy)
+    (target / installed.MARKER).write_text("the modules an FMU's run imports (fmu/installed.py)\n")
     return target
 
 
