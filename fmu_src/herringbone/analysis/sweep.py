@@ -179,8 +179,7 @@ def shooting_applies(scene, speeds, params, fmu) -> str | None:
 
 def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), method=None,
           **options):
-    """Run a scene over speeds and/or parameters: its periodic steady state directly, or past
-    its start-up transient by time integration.
+    """Run a scene over speeds and/or parameters: its steady state by shooting or by time.
 
     Parameters
     ----------
@@ -206,15 +205,16 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     Returns
     -------
     pandas.DataFrame
-        "time": a row per point in grid order: the swept values, speed_rpm, K_v, forces (N), dte
-        (µm), contact_lost_share, window_drift, floquet_max (columns name their units), method and
-        stability "time". "shooting": a row per branch point in branch order (at each value the
-        branch passes, several where it folds back, and those between, on_grid False): the
-        continued quantity, speed_rpm, the torque following a swept one (M_load_Nm, M_motor_Nm),
-        the same figures, floquet_max and floquet_exponent_per_s (1/s) of the orbit, stability
-        ("stable", "unstable", "time": no orbit converged), method, on_grid, event, mesh_periods,
-        branch; attrs: continued, folds, period_doublings, folds_2T, and units, {swept column: its
-        unit} (w0_pinion: "rad/s"; the others name theirs).
+        "time": a row per point in grid order: the swept values, speed_rpm, K_v, K_v_half (the more
+        loaded helix half's), forces (N; each half's peak too), load_share_left, dte (µm),
+        contact_lost_share (window_figures), window_drift, floquet_max (columns name their units),
+        method, stability "time". "shooting": a row per branch point in branch order (at each value
+        it passes, several where it folds back, and those between, on_grid False): the continued
+        quantity, speed_rpm, the torque following a swept one (M_load_Nm, M_motor_Nm), the same
+        figures, floquet_max and floquet_exponent_per_s (1/s) of the orbit, stability ("stable",
+        "unstable", "time": no orbit converged), method, on_grid, event, mesh_periods, branch;
+        attrs: continued, folds, period_doublings, folds_2T, and units, {swept column: its unit}
+        (w0_pinion: "rad/s"; the others name theirs).
 
     Raises
     ------

@@ -59,13 +59,14 @@ FIGURE_CHUNK_SAMPLES = 2**15
 # reference scene) and the mesh force with it, while the deflection stays: its peak is the
 # force just after the jump, which then falls with the ringing (at about 0.9 % of the static
 # force a µs on the reference scene at 100 rad/s). Samples of the fastest mode (2.4 µs apart
-# there) miss it by up to 2 %, so every interval of them over which the stiffness changed is
-# sampled again this many times finer, from a run of its own (`switch_samples`): 37 ns apart,
-# 3e-4 of the static force at most
+# there) miss it by up to 2 %, so every interval of them over which the count of loaded
+# points changed is sampled again this many times finer, from a run of its own
+# (`switch_samples`): 37 ns apart, 3e-4 of the static force at most
 SWITCH_SAMPLES = 64
 SWITCH_CHUNK_INTERVALS = FIGURE_CHUNK_SAMPLES // SWITCH_SAMPLES  # switch intervals a call
 BEARINGS = tuple(f"F_brg_{gear}_{side}" for gear in ("pinion", "wheel")
                  for side in ("left", "right"))
+HALF_FORCES = ("F_mesh_left", "F_mesh_right")
 
 
 @dataclass(frozen=True)
@@ -243,7 +244,8 @@ def sample_chunks(stepper: CompiledStepper, run, torques, count: int, time_of,
     (the last on its own last time). Yields (index of the chunk's first sample, its rows of
     outputs (model.output_layout), the rows of its switch samples (`switch_samples`)); the
     arrays are reused by the next chunk. time_of(indices): their times, s; max_steps: the step
-    budget of each call (None: none)."""
+    budget of each call for the span it integrates (None: none), to which the call adds one
+    step for each sample it asks (`sample_budget`)."""
     rows = np.empty((min(count, FIGURE_CHUNK_SAMPLES), len(run.outputs)))
     for first in range(0, count, FIGURE_CHUNK_SAMPLES):
         indices = np.arange(first, min(first + FIGURE_CHUNK_SAMPLES, count))
@@ -251,20 +253,33 @@ def sample_chunks(stepper: CompiledStepper, run, torques, count: int, time_of,
         end = float(time_of(indices[-1:] + 1)[0]) if indices[-1] + 1 < count else times[-1]
         chunk = rows[:len(indices)]
         before = stepper.position(run)
-        stepper.sample(run, times, chunk, end, torques, max_steps)
+        stepper.sample(run, times, chunk, end, torques, sample_budget(max_steps, len(times)))
         yield first, chunk, switch_samples(stepper, before, times, chunk, end, torques,
                                            max_steps)
+
+
+def sample_budget(max_steps: int | None, samples: int) -> int | None:
+    """The step budget of a compiled call that asks for `samples` samples over a span whose
+    own budget is `max_steps` (None: none): a sample ends the step that reaches it (but for
+    the exponential method's exact segments), so each may cost one step more."""
+    return None if max_steps is None else max_steps + samples
 
 
 def switch_samples(stepper: CompiledStepper, before: Position, times: np.ndarray,
                    rows: np.ndarray, end: float, torques, max_steps: int | None = None):
     """The outputs at SWITCH_SAMPLES − 1 evenly spaced times inside every interval of `times`
-    over which the mesh stiffness changed (a contact switch, lift-off or landing: the mesh
-    force jumps there, and its extremes lie just after the jump), from a run of its own from
-    `before` (where the chunk's run started) to `end`, their rows in the order of their
-    times. SWITCH_CHUNK_INTERVALS intervals at a time, so that memory stays bounded."""
-    stiffness = rows[:, dict(stepper.model.output_layout)["k_mesh"]]
-    switched = np.flatnonzero(stiffness[1:] != stiffness[:-1])
+    over which n_contacts (the loaded points of nonzero stiffness) changed, from a run of its
+    own from `before` (where the chunk's run started) to `end`, their rows in the order of
+    their times. With sharp face edges every point weighs the same, so n_contacts changes
+    exactly where the mesh stiffness jumps (a contact switch, lift-off or landing), and the
+    mesh force with it: its extremes lie just after the jump. With an edge ramp the stiffness
+    changes smoothly while a point crosses the ramp, a good share of all intervals (225 of
+    896 a period on the reference scene with a 1 mm ramp), and the samples of the fastest
+    mode resolve its ringing there; n_contacts changes only where a point enters or leaves
+    (4 of them). SWITCH_CHUNK_INTERVALS intervals at a time, so that memory stays bounded;
+    max_steps: as sample_chunks'."""
+    contacts = rows[:, dict(stepper.model.output_layout)["n_contacts"]]
+    switched = np.flatnonzero(contacts[1:] != contacts[:-1])
     fractions = np.arange(1, SWITCH_SAMPLES) / SWITCH_SAMPLES
     burst = np.empty((0, rows.shape[1]))
     if not len(switched):
@@ -277,7 +292,8 @@ def switch_samples(stepper: CompiledStepper, before: Position, times: np.ndarray
         following = group + SWITCH_CHUNK_INTERVALS
         until = times[switched[following]] if following < len(switched) else end
         burst = np.empty((len(inside), rows.shape[1]))
-        stepper.sample(run, inside, burst, float(until), torques, max_steps)
+        stepper.sample(run, inside, burst, float(until), torques,
+                       sample_budget(max_steps, len(inside)))
         kept.append(burst)
     return kept[0] if len(kept) == 1 else np.concatenate(kept)
 
@@ -307,14 +323,16 @@ def static_mesh_force(scene) -> float:
 
 class WindowStatistics:
     """What window_figures takes from a window, summed up chunk by chunk of samples (`add`)
-    so that the samples need not be kept: extremes, counts, and sums for the rms values (dte
-    about its first chunk's mean, so that the sums do not cancel)."""
+    so that the samples need not be kept: extremes, counts, sums for the means and the rms
+    values (dte about its first chunk's mean, so that the sums do not cancel)."""
 
     def __init__(self, layout):
         """layout: (output name, column) pairs of the rows `add` takes (model.output_layout)."""
         self.columns = dict(layout)
         self.count = 0
         self.force_max, self.force_min = -math.inf, math.inf
+        self.half_max = dict.fromkeys(HALF_FORCES, -math.inf)  # N
+        self.force_sum = self.left_sum = 0.0  # of F_mesh and F_mesh_left, N
         self.bearings = [name for name in BEARINGS if name in self.columns]
         self.bearing_peak = dict.fromkeys(self.bearings, 0.0)
         self.bearing_squares = dict.fromkeys(self.bearings, 0.0)
@@ -326,7 +344,7 @@ class WindowStatistics:
     def _columns(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         """The columns the figures need, each contiguous (a column of the rows is strided,
         which makes numpy's reductions over it several times slower)."""
-        names = ["F_mesh", "F_mesh_left", "F_mesh_right", "dte", *self.bearings]
+        names = ["F_mesh", *HALF_FORCES, "dte", *self.bearings]
         taken = np.ascontiguousarray(rows[:, [self.columns[name] for name in names]].T)
         return dict(zip(names, taken))
 
@@ -337,6 +355,8 @@ class WindowStatistics:
         column = self._columns(rows)
         self._extremes(column)
         self.count += len(rows)
+        self.force_sum += float(column["F_mesh"].sum())
+        self.left_sum += float(column["F_mesh_left"].sum())
         for name in self.bearings:
             # a sum, not `x @ x`: BLAS threads took 7 ms a chunk on a shared machine
             self.bearing_squares[name] += float(np.sum(column[name] ** 2))
@@ -360,6 +380,8 @@ class WindowStatistics:
         force = column["F_mesh"]
         self.force_max = max(self.force_max, float(force.max()))
         self.force_min = min(self.force_min, float(force.min()))
+        for name in HALF_FORCES:
+            self.half_max[name] = max(self.half_max[name], float(column[name].max()))
         for name in self.bearings:
             self.bearing_peak[name] = max(self.bearing_peak[name],
                                           float(np.abs(column[name]).max()))
@@ -370,8 +392,13 @@ class WindowStatistics:
     def figures(self, static_force: float) -> dict[str, float]:
         """window_figures' figures of the samples taken (static_force: M_motor/Rp, N)."""
         n = self.count
+        left, right = (self.half_max[name] for name in HALF_FORCES)
         figures = {"K_v": self.force_max / static_force,
-                   "F_mesh_min_N": self.force_min, "F_mesh_max_N": self.force_max}
+                   "K_v_half": max(left, right) / (0.5 * static_force),
+                   "F_mesh_min_N": self.force_min, "F_mesh_max_N": self.force_max,
+                   "F_mesh_left_max_N": left, "F_mesh_right_max_N": right,
+                   "load_share_left": (self.left_sum / self.force_sum if self.force_sum
+                                       else math.nan)}
         for name in self.bearings:
             figures[f"{name}_peak_N"] = self.bearing_peak[name]
             figures[f"{name}_rms_N"] = math.sqrt(self.bearing_squares[name] / n)
@@ -401,11 +428,16 @@ def figure_samples(window: dict) -> int:
 
 def window_figures(window: dict, static_force: float) -> dict[str, float]:
     """The figures of a recorded window (samples over whole mesh periods):
-    K_v = max F_mesh / static mesh force; F_mesh min and max; peak |F| and rms of each bearing
-    reaction; dte mean, rms about that mean and peak-to-peak (µm); contact_lost_share, the
-    share of samples at which a helix half carries no load (F_mesh_left or F_mesh_right <= 0:
-    its teeth have separated). A `Window` (run_window's) gives them from the finer sampling
-    it carries; any other dict {output name: samples}, from its own samples."""
+    K_v = max F_mesh / static mesh force; K_v_half = the larger of max F_mesh_left and max
+    F_mesh_right over half the static force (the dynamic factor of the more loaded helix half:
+    K_v where the halves share the load evenly, above it where a lead error loads one more);
+    F_mesh min and max and each half's max (N); load_share_left = mean F_mesh_left / mean
+    F_mesh (0.5: even); peak |F| and rms of each bearing reaction (N); dte mean, rms about that
+    mean and peak-to-peak (µm); contact_lost_share, the share of samples at which a helix half
+    carries no load (F_mesh_left or F_mesh_right <= 0: its teeth have separated). A `Window`
+    (run_window's) gives them from the finer sampling it carries (its switch samples into the
+    extremes alone, the means of the even samples); any other dict {output name: samples},
+    from its own samples."""
     statistics = getattr(window, "statistics", None)
     if statistics is None:
         names = [name for name in window if name != "time"]

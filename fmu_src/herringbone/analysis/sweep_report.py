@@ -20,6 +20,10 @@ from .sweep_plots import (
 )
 from .sweep_point import SETTLED_DRIFT
 
+# the summary gives K_v_half where it exceeds K_v by more than this share at some point: there
+# K_v, of the whole mesh, reads the more loaded half's dynamic load short by that much
+HALF_FACTOR_SPREAD = 0.01
+
 
 def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[Path]:
     """CSV, then the plots that fit the sweep's axes; returns the paths written. `series`:
@@ -104,12 +108,27 @@ def _unsettled_lines(table, which: str) -> list[str]:
 
 def _k_v_lines(table) -> list[str]:
     """K_v's range and where it is largest, over what a run settles on: on a branch its stable
-    orbits (and the points by time integration), not the unstable ones."""
+    orbits (and the points by time integration), not the unstable ones; and the more loaded
+    helix half's factor (`_half_lines`)."""
     where = ""
     if is_branch(table) and (table["stability"] != "unstable").any():
         table, where = table[table["stability"] != "unstable"], " (stable orbits)"
     return [f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}{where}; "
-            f"largest at {resonation_summary(table)}"]
+            f"largest at {resonation_summary(table)}", *_half_lines(table, where)]
+
+
+def _half_lines(table, where: str) -> list[str]:
+    """K_v_half's range and the left half's share of the load, where at some point K_v_half
+    exceeds K_v by more than HALF_FACTOR_SPREAD: the halves share the load unevenly (a lead
+    error), and K_v, of the two halves' sum, understates the more loaded half's peak. `where`:
+    which rows, in words, as _k_v_lines took them."""
+    if "K_v_half" not in table or not (
+            table["K_v_half"] > (1.0 + HALF_FACTOR_SPREAD) * table["K_v"]).any():
+        return []
+    half, share = table["K_v_half"], 100.0 * table["load_share_left"]
+    return [f"K_v_half from {half.min():.4f} to {half.max():.4f}{where}: the more loaded helix "
+            f"half, its peak over half the static force; the left half carries "
+            f"{share.min():.1f}-{share.max():.1f} % of the load (load_share_left)"]
 
 
 def by_shooting(table) -> bool:
