@@ -228,6 +228,18 @@ def test_scene_report_on_the_real_model():
         "rigid", "torsional", "torsional", "lateral", "tilt", "lateral", "torsional", "tilt"]
 
 
+def test_scene_report_says_what_its_contact_count_assumes(monkeypatch):
+    """The contact-point law is that of every point loaded and sharp edges; the report says
+    so, and says where a scene's ramp or contact loss makes a run count otherwise."""
+    use_stand_in_modes(monkeypatch)
+    plain = scene_report(REFERENCE.with_parameters(contact_loss=False))
+    assert "(the phasing law: every point loaded, sharp edges)" in plain
+    assert "widens each point's span" not in plain and "(contact_loss:" not in plain
+    both = scene_report(REFERENCE.with_parameters(edge_ramp=1e-3, contact_loss=True))
+    assert "(edge_ramp 1 mm widens each point's span" in both
+    assert "(contact_loss: a point whose teeth part carries no load" in both
+
+
 def test_info_prints_the_report(tmp_path, capsys, monkeypatch):
     use_stand_in_modes(monkeypatch)
     path = tmp_path / "staggered.toml"

@@ -56,7 +56,7 @@ def scene_report(scene) -> str:
              f"  axial pitch p_x        {1e3 * g.axial_pitch:.3f} mm",
              f"  eps_beta left, right   {phasing.eps_beta_left:.4f}, {phasing.eps_beta_right:.4f}",
              f"  q21 = eps_q*p_x        {1e3 * phasing.q21:.3f} mm (eps_q {p['eps_q']:g})", "",
-             "Contact points (no contact lost; sharp face edges)",
+             "Contact points on the face (the phasing law: every point loaded, sharp edges)",
              "  stream (eps, delay in mesh periods):"]
     lines += [f"    {name:<16} {eps:.4f}, {delay:.4f}"
               for name, (eps, delay) in zip(STREAM_NAMES, phasing.streams)]
@@ -69,6 +69,9 @@ def scene_report(scene) -> str:
     if p["edge_ramp"] > 0:
         lines.append(f"  (edge_ramp {1e3 * p['edge_ramp']:g} mm widens each point's span: the "
                      "model counts more points than this law)")
+    if p["contact_loss"]:
+        lines.append("  (contact_loss: a point whose teeth part carries no load, so a run may "
+                     "load fewer points than this law)")
     # the speed as the scene gives it (w0_pinion < 0 turns backwards); a frequency has no sign
     speed = p["w0_pinion"]
     f_mesh = abs(speed) * g.z_pinion / (2.0 * math.pi)
