@@ -47,20 +47,34 @@ NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
 
 def read_ssp(path):
     """The SSD's experiment (stop time, base step) and each component's parameters: the FMU's
-    numeric start values, overridden by the SSD's inline parameter set."""
+    numeric start values, overridden by the SSD's inline parameter set (parameter_value)."""
     with zipfile.ZipFile(path) as archive:
         root = ET.fromstring(archive.read("SystemStructure.ssd"))
         parameters = {}
         for component in root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS):
             values = start_values(archive.read(component.get("source")))
             for parameter in component.iterfind(".//ssv:Parameter", NS):
-                values[parameter.get("name")] = float(parameter.find("ssv:Real", NS).get("value"))
+                values[parameter.get("name")] = parameter_value(parameter)
             parameters[component.get("name")] = values
     experiment = root.find("ssd:DefaultExperiment", NS)
     step = experiment.find(".//osp:FixedStepAlgorithm", NS)
     return {"stop_time": float(experiment.get("stopTime")),
             "step": float(step.get("baseStepSize")) if step is not None else None,
             "parameters": parameters}
+
+
+def parameter_value(parameter):
+    """An ssv:Parameter's value: a Real's or an Integer's as a float (z_wheel is one), a
+    Boolean's as a bool, a String's as it is.  KeyError for a parameter of none of these
+    types, ValueError for a number that is none."""
+    for kind, convert in (("Real", float), ("Integer", float),
+                          ("Boolean", lambda text: text.strip() in ("true", "1")),
+                          ("String", str)):
+        node = parameter.find(f"ssv:{kind}", NS)
+        if node is not None:
+            return convert(node.get("value"))
+    raise KeyError(f"parameter {parameter.get('name')} has no ssv:Real, ssv:Integer, "
+                   "ssv:Boolean or ssv:String")
 
 
 def start_values(fmu_bytes):
@@ -186,7 +200,7 @@ def main(argv=None):
                         str(args.scene)], check=True)
     try:
         experiment = read_ssp(ssp)
-    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as error:
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile, ET.ParseError) as error:
         parser.exit(2, f"{parser.prog}: {ssp} is no readable drive-train SSP: {error}\n")
     step = args.step or experiment["step"]
     stop_time = args.stop_time or experiment["stop_time"]
@@ -194,9 +208,12 @@ def main(argv=None):
         parser.error(f"step {step} s, stop time {stop_time} s: allowed: 0 < step <= stop time "
                      "(give --step where the SSD has no fixed-step annotation)")
     p = experiment["parameters"]
-    expected = operating_point(p["motor"]["M_breakdown"], p["motor"]["s_breakdown"],
-                               p["motor"]["w_sync"], p["fan"]["k_fan"], p["gear"]["z_pinion"],
-                               p["gear"]["z_wheel"])
+    try:
+        expected = operating_point(p["motor"]["M_breakdown"], p["motor"]["s_breakdown"],
+                                   p["motor"]["w_sync"], p["fan"]["k_fan"],
+                                   p["gear"]["z_pinion"], p["gear"]["z_wheel"])
+    except (ValueError, ZeroDivisionError) as error:  # an SSP not made by herringbone's builder
+        parser.error(f"{ssp}: its parameters give no operating point: {error}")
     problem = argument_problem(stop_time, step, WINDOW_MESH_PERIODS * expected["mesh_period"])
     if problem is not None:
         parser.error(problem)

@@ -42,6 +42,10 @@ def operating_point(M_breakdown, s_breakdown, w_sync, k_fan, z_pinion, z_wheel):
         raise ValueError(f"the fan (k_fan = {k_fan}) needs more than the motor's breakdown "
                          f"torque {M_breakdown} N·m at {w_breakdown} rad/s: no stable "
                          "operating point; allowed: a smaller k_fan or a larger M_breakdown")
+    if not surplus(w_sync) <= 0:  # a fan that drives the train (k_fan < 0)
+        raise ValueError(f"the motor's and the fan's curves (k_fan = {k_fan}) do not cross "
+                         f"below the synchronous speed {w_sync} rad/s: no operating point; "
+                         "allowed: k_fan >= 0")
     w_motor = brentq(surplus, w_breakdown, w_sync, xtol=1e-12, rtol=1e-14)
     return {"w_motor": w_motor, "w_load": w_motor / ratio,
             "M_motor": kloss_torque(w_motor, M_breakdown, s_breakdown, w_sync),

@@ -7,7 +7,7 @@ wheel speed of the reference gear train.
 """
 import math
 
-from fmi_units import RealWithUnit
+from fmi_units import RealWithUnit, bounds_problem
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
 from pythonfmu_references import BalancedSlave
@@ -23,7 +23,7 @@ class FanLoad(BalancedSlave, Fmi2Slave):
         self.k_fan = 0.9454
         self.w_load = 0.0
         self.register_variable(RealWithUnit(
-            "k_fan", unit="N.m.s2/rad2", description="fan torque coefficient (>= 0)",
+            "k_fan", unit="N.m.s2/rad2", description="fan torque coefficient (>= 0)", min=0.0,
             causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable))
         self.register_variable(RealWithUnit(
             "w_load", unit="rad/s", description="fan shaft speed",
@@ -40,10 +40,9 @@ class FanLoad(BalancedSlave, Fmi2Slave):
         return self.k_fan * self.w_load * abs(self.w_load)
 
     def problem(self) -> str | None:
-        """Why the parameters are unusable, or None."""
-        if self.k_fan >= 0:
-            return None
-        return f"{self.instance_name}: need k_fan >= 0; got {self.k_fan}"
+        """Why the parameters are unusable, or None: k_fan outside the range it declares
+        (fmi_units.bounds_problem; herringbone's SSP builder reads the same declaration)."""
+        return bounds_problem(self)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         # Reported here rather than raised: see InductionMotor.do_step.

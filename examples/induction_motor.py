@@ -8,7 +8,7 @@ Defaults pair with the reference gear train: 500 N.m at about 155.9 rad/s (slip 
 """
 import math
 
-from fmi_units import RealWithUnit
+from fmi_units import RealWithUnit, bounds_problem
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
 from pythonfmu_references import BalancedSlave
@@ -25,12 +25,16 @@ class InductionMotor(BalancedSlave, Fmi2Slave):
         self.s_breakdown = 0.15
         self.w_sync = 160.0
         self.w_motor = 0.0
-        for name, unit, description in (
-                ("M_breakdown", "N.m", "breakdown (pull-out) torque M_k"),
-                ("s_breakdown", "1", "slip at breakdown torque s_k, in (0, 1]"),
-                ("w_sync", "rad/s", "synchronous speed of the stator field")):
+        # each parameter's range, declared once: the model description carries it (an
+        # excluded bound as fmi_units marks it), problem() checks it, and herringbone's SSP
+        # builder refuses a value outside it
+        for name, unit, description, low, high in (
+                ("M_breakdown", "N.m", "breakdown (pull-out) torque M_k, > 0", 0.0, None),
+                ("s_breakdown", "1", "slip at breakdown torque s_k, in (0, 1]", 0.0, 1.0),
+                ("w_sync", "rad/s", "synchronous speed of the stator field, > 0", 0.0, None)):
             self.register_variable(RealWithUnit(
-                name, unit=unit, description=description, causality=Fmi2Causality.parameter,
+                name, unit=unit, description=description, min=low, max=high,
+                min_exclusive=True, causality=Fmi2Causality.parameter,
                 variability=Fmi2Variability.tunable))
         self.register_variable(RealWithUnit(
             "w_motor", unit="rad/s", description="rotor shaft speed seen by the motor",
@@ -51,12 +55,10 @@ class InductionMotor(BalancedSlave, Fmi2Slave):
         return 2.0 * self.M_breakdown * s * self.s_breakdown / (s * s + self.s_breakdown ** 2)
 
     def problem(self) -> str | None:
-        """Why the parameters are unusable, or None."""
-        if self.M_breakdown > 0 and 0 < self.s_breakdown <= 1 and self.w_sync > 0:
-            return None
-        return (f"{self.instance_name}: need M_breakdown > 0, 0 < s_breakdown <= 1, "
-                f"w_sync > 0; "
-                f"got {self.M_breakdown}, {self.s_breakdown}, {self.w_sync}")
+        """Why the parameters are unusable, or None: one outside the range it declares
+        (fmi_units.bounds_problem: "need M_breakdown > 0, 0 < s_breakdown <= 1, w_sync > 0;
+        got …")."""
+        return bounds_problem(self)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         # Bad parameters are reported here, not by raising in a setter or in

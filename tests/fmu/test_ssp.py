@@ -8,6 +8,7 @@ tests/fmu/test_cosimulation.py (same step, stop time, windows and tolerances).  
 is run as a user runs it, and its printed numbers are checked.
 """
 import json
+import math
 import os
 import re
 import subprocess
@@ -110,10 +111,147 @@ def test_same_fmus_and_values_give_the_same_bytes(drivetrain, tmp_path):
 
 
 def test_unknown_parameter_is_refused_by_name(drivetrain, tmp_path):
-    with pytest.raises(ValueError, match=r"fan\.k_fun is not a Real parameter of FanLoad\.fmu; "
-                                         r"allowed: k_fan"):
+    with pytest.raises(ValueError, match=r"^fan\.k_fun is not a parameter of FanLoad\.fmu; "
+                                         r"allowed: k_fan$"):
         ssp.write_ssp(drivetrain["fmus"], tmp_path / "bad.ssp", parameters={"fan": {"k_fun": 1}})
     assert not (tmp_path / "bad.ssp").exists()
+
+
+@pytest.mark.parametrize("parameters, message", [
+    pytest.param({"fan": {"k_fan": -1.0}},
+                 "fan.k_fan is -1.0 N.m.s2/rad2; allowed: >= 0 N.m.s2/rad2 and finite",
+                 id="fan-negative"),
+    pytest.param({"fan": {"k_fan": math.nan}},
+                 "fan.k_fan is nan; allowed: >= 0 N.m.s2/rad2 and finite", id="fan-nan"),
+    pytest.param({"fan": {"k_fan": math.inf}},
+                 "fan.k_fan is inf; allowed: >= 0 N.m.s2/rad2 and finite", id="fan-inf"),
+    pytest.param({"motor": {"s_breakdown": 0.0}}, "motor.s_breakdown is 0.0; allowed: (0, 1]",
+                 id="motor-exclusive-bound"),
+    pytest.param({"motor": {"w_sync": "abc"}},
+                 "motor.w_sync must be a number, got str 'abc'; allowed: > 0 rad/s and finite",
+                 id="motor-not-a-number"),
+    pytest.param({"gear": {"solver_tolerance": 5.0}},
+                 "gear.solver_tolerance is 5.0; allowed: [1e-12, 0.01] (error per step relative "
+                 "to the static mesh force)", id="gear-declared-max"),
+    pytest.param({"gear": {"m_pinion": 0.0}}, "gear.m_pinion is 0.0 kg; allowed: > 0 kg and "
+                 "finite", id="gear-exclusive-bound"),
+    pytest.param({"gear": {"max_step": math.inf}},
+                 "gear.max_step is inf; allowed: >= 0 s and finite", id="gear-inf"),
+    pytest.param({"gear": {"z_pinion": 12.5}},
+                 "gear.z_pinion is 12.5; allowed: a whole number [1, 1000]", id="gear-integer"),
+    pytest.param({"gear": {"contact_loss": 1}},
+                 "gear.contact_loss must be true or false, got int 1", id="gear-boolean"),
+    pytest.param({"gear": {"solver_method": "rk4"}},
+                 "gear.solver_method is 'rk4'; allowed: 'auto', 'dop853', 'radau', "
+                 "'exponential' (the compiled integrator's methods)", id="gear-string"),
+])
+def test_a_value_its_fmu_does_not_allow_is_refused_by_name(drivetrain, tmp_path, parameters,
+                                                           message):
+    """A value the component's FMU would refuse (the range its model description declares,
+    an exclusive bound as fmi_units marks it, the gear's own ranges) or that is no value of
+    its type: one ValueError naming component.parameter and what is allowed, nothing written."""
+    with pytest.raises(ValueError) as raised:
+        ssp.write_ssp(drivetrain["fmus"], tmp_path / "bad.ssp", parameters=parameters)
+    assert str(raised.value) == message
+    assert not (tmp_path / "bad.ssp").exists()
+
+
+def settable_start_values(fmu):
+    """Every parameter of `fmu` at its start value, as the Python value of its FMI type."""
+    convert = {"Real": float, "Integer": int, "Boolean": lambda text: text == "true",
+               "String": str}
+    return {v.name: convert[v.type](v.start) for v in read_model_description(str(fmu))
+            .modelVariables if v.causality == "parameter"}
+
+
+def test_every_parameter_of_the_gear_can_be_set_in_its_unit(drivetrain, tmp_path):
+    """Any parameter of the gear FMU goes into the parameter set (Integer, Boolean and String
+    ones as ssv:Integer, ssv:Boolean, ssv:String), each Real in its unit, whose SI exponents
+    are those of the FMU's <UnitDefinitions>; the SSD still passes the SSP 1.0 schema, and
+    the parameters the message of an unknown one lists are exactly these."""
+    from fmpy.ssp.ssd import read_ssd
+
+    gear = drivetrain["fmus"]["gear"]
+    values = settable_start_values(gear)
+    path = ssp.write_ssp(drivetrain["fmus"], tmp_path / "all.ssp", parameters={"gear": values})
+    read_ssd(str(path), validate=True)
+    with zipfile.ZipFile(path) as archive:
+        root = ET.fromstring(archive.read("SystemStructure.ssd"))
+    description = read_model_description(str(gear))
+    variables = {v.name: v for v in description.modelVariables}
+    written = {}
+    for parameter in root.iterfind(".//ssd:Component[@name='gear']//ssv:Parameter", SSD_NS):
+        (node,) = list(parameter)
+        kind = node.tag.rpartition("}")[2]
+        name = parameter.get("name")
+        assert kind == variables[name].type, name
+        assert node.get("unit") == variables[name].unit, name
+        written[name] = node.get("value")
+    assert written == {n: str(v).lower() if isinstance(v, bool) else repr(v)
+                       if isinstance(v, float) else str(v) for n, v in values.items()}
+    declared = {u.name: {k: str(getattr(u.baseUnit, k)) for k in ("kg", "m", "s", "rad")
+                         if getattr(u.baseUnit, k)} for u in description.unitDefinitions}
+    for unit in root.iterfind("ssd:Units/ssc:Unit", SSD_NS):
+        if unit.get("name") in declared:
+            assert unit.find("ssc:BaseUnit", SSD_NS).attrib == declared[unit.get("name")]
+    with pytest.raises(ValueError) as raised:
+        ssp.write_ssp(drivetrain["fmus"], tmp_path / "bad.ssp", parameters={"gear": {"x": 1}})
+    assert str(raised.value).partition("allowed: ")[2].split(", ") == sorted(values)
+
+
+def test_gear_parameters_of_every_type_reach_the_fmu_in_libcosim(drivetrain, tmp_path):
+    """libcosim applies the gear's parameter set, whatever the type: after a few steps the FMU
+    holds the Real, Integer, Boolean and String values the SSP set (none its start value)."""
+    given = {"m_pinion": 2.0, "J_wheel": 0.03, "z_wheel": 30, "contact_loss": False,
+             "solver_method": "dop853"}
+    path = ssp.write_ssp(drivetrain["fmus"], tmp_path / "gear.ssp", parameters={"gear": given})
+    code = ("import json\nfrom libcosimpy.CosimExecution import CosimExecution\n"
+            "from libcosimpy.CosimObserver import CosimObserver\n"
+            f"execution = CosimExecution.from_ssp_file({str(path)!r}, step_size=100_000)\n"
+            "observer = CosimObserver.create_last_value()\n"
+            "execution.add_observer(observer=observer)\n"
+            "gear = {i.name.decode(): i.index for i in execution.slave_infos()}['gear']\n"
+            "refs = {v.name.decode(): v.reference for v in execution.slave_variables(gear)}\n"
+            "assert execution.simulate_until(target_time=1_000_000)\n"
+            "read = {'Real': observer.last_real_values, 'Integer': observer.last_integer_values,"
+            " 'Boolean': observer.last_boolean_values, 'String': observer.last_string_values}\n"
+            f"kinds = {{'m_pinion': 'Real', 'J_wheel': 'Real', 'z_wheel': 'Integer', "
+            "'contact_loss': 'Boolean', 'solver_method': 'String'}\n"
+            "values = {n: read[k](gear, [refs[n]])[0] for n, k in kinds.items()}\n"
+            "values['solver_method'] = values['solver_method'].decode()\n"
+            "print('RESULT ' + json.dumps(values))\n")
+    starts = settable_start_values(drivetrain["fmus"]["gear"])
+    assert all(starts[name] != value for name, value in given.items())
+    assert run_child(code, tmp_path) == given
+
+
+def test_the_example_reads_an_integer_parameter_of_the_ssp(drivetrain, tmp_path):
+    """z_wheel set in the SSP (ssv:Integer) is the ratio the example's analytic point uses."""
+    import cosimulate_drivetrain as example
+
+    path = ssp.write_ssp(drivetrain["fmus"], tmp_path / "ratio.ssp",
+                         parameters={"gear": {"z_wheel": 30}})
+    assert example.read_ssp(path)["parameters"]["gear"]["z_wheel"] == 30
+
+
+def test_example_refuses_an_ssp_whose_parameters_have_no_operating_point(drivetrain, tmp_path):
+    """An SSP made elsewhere with a fan that drives (k_fan = -1, which build_ssp refuses):
+    exit 2 and one error line naming what is wrong, before libcosim runs, no traceback."""
+    bad = tmp_path / "negative.ssp"
+    with zipfile.ZipFile(drivetrain["ssp"]) as source, zipfile.ZipFile(bad, "w") as target:
+        for info in source.infolist():
+            data = source.read(info)
+            if info.filename == "SystemStructure.ssd":
+                root = ET.fromstring(data)
+                node = root.find(".//ssv:Parameter[@name='k_fan']/ssv:Real", SSD_NS)
+                node.set("value", "-1.0")
+                data = ET.tostring(root)
+            target.writestr(info, data)
+    run = run_example_process(bad, tmp_path)
+    assert run.returncode == 2, f"exit {run.returncode}:\n{run.stdout}\n{run.stderr[-3000:]}"
+    errors = [line for line in run.stderr.splitlines() if ": error: " in line]
+    assert len(errors) == 1 and "Traceback" not in run.stderr, run.stderr[-3000:]
+    assert "k_fan = -1.0" in errors[0] and "allowed: k_fan >= 0" in errors[0], errors[0]
 
 
 def test_libcosim_runs_the_ssp_to_the_operating_point(drivetrain, tmp_path):
@@ -235,6 +373,22 @@ def test_scene_without_motor_and_load_is_refused_before_any_build(tmp_path, monk
                                          r"jump_resonance has neither \(its \[components\]\); "
                                          r"allowed: a scene with motor and load$"):
         ssp.build_ssp("jump_resonance", tmp_path / "x.ssp")
+    assert not (tmp_path / "x.ssp").exists()
+
+
+def test_parameters_of_an_unknown_component_are_refused_before_any_build(tmp_path,
+                                                                        monkeypatch):
+    """What needs no FMU is checked before the builds: a component the SSP does not have."""
+    from herringbone.fmu import builder
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("an FMU was built before the parameters were checked")
+
+    monkeypatch.setattr(builder, "build_gear_fmu", no_build)
+    monkeypatch.setattr(builder, "build_example_fmus", no_build)
+    with pytest.raises(ValueError, match=r"^parameters for 'pump': allowed components: gear, "
+                                         r"motor, fan$"):
+        ssp.build_ssp("reference", tmp_path / "x.ssp", parameters={"pump": {"k_fan": 1.0}})
     assert not (tmp_path / "x.ssp").exists()
 
 

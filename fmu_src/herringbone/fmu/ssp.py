@@ -12,6 +12,12 @@ Written for what libcosim's SSP parser reads: it matches the literal prefixes `s
 `ssv:` and `osp:` (boost property_tree, not a namespace-aware parser), so those are the
 prefixes used.  The SSD also passes the SSP 1.0 schema as fmpy checks it.
 
+A parameter set may give any parameter of a component's FMU (ssv:Real, ssv:Integer,
+ssv:Boolean or ssv:String, as the FMU declares its type), each value checked before anything
+is written: of that type, finite, and within what the FMU declares (`min`, `max`, a bound made
+exclusive as herringbone.fmu.units marks it; for the gear, herringbone's own ranges, which its
+FMU applies).  The units' SI exponents are those of the FMUs' <UnitDefinitions>.
+
 `write_ssp(fmus, output, …)` packs FMUs that exist; `build_ssp(scene, output, …)` builds them
 first (herringbone.fmu.builder) and packs them.  The connections need the gear's motor and load
 (w_motor and w_load are theirs): `scene_problem` says why a scene has no SSP, before any build.
@@ -22,10 +28,15 @@ import math
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
+from ..arguments import FMU_MAX_STEP, FMU_SOLVER_METHOD, FMU_SOLVER_TOLERANCE
 from ..files import replace_file
+from ..model.parameters import PARAMETERS, Range, check_value, is_flag, number_problem
 from ..model.scene import Scene, load_scene
+from .units import exclusive_bounds, xs_double
 
 NAMESPACES = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -48,15 +59,15 @@ CONNECTED_COMPONENTS = ("motor", "load")
 # operating point (the motor's Kloss curve, the fan's coefficient).
 DEFAULT_PARAMETERS = {"motor": ("M_breakdown", "s_breakdown", "w_sync"), "fan": ("k_fan",)}
 PARAMETER_SET = "drivetrain"
-# SI exponents of every unit a connector may carry (ssc:BaseUnit's attributes).
-BASE_UNITS = {
-    "rad/s": {"rad": 1, "s": -1},
-    "N.m": {"kg": 1, "m": 2, "s": -2},
-    "N.m.s2/rad2": {"kg": 1, "m": 2, "rad": -2},
-    "1": {},
-    "rad": {"rad": 1},
-    "s": {"s": 1},
-}
+# The FMI types a parameter set gives values of: each is also the name of its element in
+# SSP 1.0 (ssv:Real, … in a parameter set; ssc:Real, … on a connector).
+SETTABLE_TYPES = ("Real", "Integer", "Boolean", "String")
+PYTHON_TYPES: dict[str, type] = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+INT32 = (-2.0**31, 2.0**31 - 1)  # fmi2Integer's values, where the FMU declares no range
+# ssc:BaseUnit's attributes, as fmpy reads them from <UnitDefinitions>: the SI exponents, then
+# the factor and offset to SI, each written where it is not its default
+BASE_UNIT_EXPONENTS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+BASE_UNIT_DEFAULTS = {"factor": 1.0, "offset": 0.0}
 STOP_TIME = 0.1  # s: the train has settled after about 0.05 s (tests/fmu/test_cosimulation.py)
 # s: the explicit coupling of the Kloss curve's slope to the motor inertia is stable for
 # h < 2·I/|dM/dw| ≈ 8e-4 s; 1e-4 s keeps the hold of the inputs far inside that.
@@ -66,13 +77,26 @@ for _prefix, _uri in NAMESPACES.items():
     ET.register_namespace(_prefix, _uri)
 
 
+@dataclass(frozen=True)
+class ComponentFmu:
+    """What the SSD takes from a component's FMU: its file name in resources/, its model
+    variables by name (fmpy's), its units by name as ssc:BaseUnit attributes (from its
+    <UnitDefinitions>), and which bounds of its variables are exclusive
+    (fmi_units.exclusive_bounds: {name: (min, max)})."""
+
+    file: str
+    variables: dict
+    units: dict[str, dict[str, str]]
+    exclusive: dict[str, tuple[bool, bool]]
+
+
 def _tag(qualified: str) -> str:
     prefix, name = qualified.split(":")
     return f"{{{NAMESPACES[prefix]}}}{name}"
 
 
 def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: float = STEP,
-              parameters: dict[str, dict[str, float]] | None = None) -> Path:
+              parameters: dict[str, dict[str, object]] | None = None) -> Path:
     """The drive train as an SSP archive: the gear FMU of `scene` and the example motor and
     fan FMUs, connected by their SSD (write_ssp).
 
@@ -85,7 +109,9 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
     stop_time, step : float
         The default experiment the SSD carries: its stop time and communication step, s.
     parameters : dict or None
-        {component: {name: value}}, replacing or adding to the default parameter set.
+        {component: {name: value}}, replacing or adding to the default parameter set: any
+        parameter of the component's FMU (Real, Integer, Boolean or String), in the unit the
+        FMU declares, within the range it declares (write_ssp).
 
     Returns
     -------
@@ -97,8 +123,9 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
     SceneError
         A bad scene.
     ValueError
-        A scene without a motor or a load (scene_problem), before any build; a bad experiment
-        or parameter (write_ssp).
+        A scene without a motor or a load (scene_problem), an unknown component or a bad
+        experiment, before any build; an unknown parameter or a value its FMU does not allow
+        (write_ssp), before `output` is written.
     RuntimeError
         An FMU's build failed, or `output` cannot be written.
 
@@ -113,6 +140,7 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
      'resources/InductionMotor.fmu']
     """
     check_experiment(stop_time, step)
+    check_components(parameters or {})
     problem = scene_problem(load_scene(scene))
     if problem is not None:
         raise ValueError(problem)
@@ -144,23 +172,38 @@ def check_experiment(stop_time: float, step: float) -> None:
                          "0 < step <= stop time")
 
 
+def check_components(parameters: Mapping) -> None:
+    """Raise ValueError unless `parameters` maps components of the SSP to {name: value}
+    mappings: what can be checked before the FMUs exist."""
+    if not isinstance(parameters, Mapping):
+        raise ValueError(f"parameters {parameters!r}: allowed: {{component: {{name: value}}}}")
+    for component, given in parameters.items():
+        if component not in FMU_FILES:
+            raise ValueError(f"parameters for {component!r}: allowed components: "
+                             f"{', '.join(FMU_FILES)}")
+        if not isinstance(given, Mapping):
+            raise ValueError(f"parameters for {component}: {given!r}; allowed: {{name: value}}")
+
+
 def write_ssp(fmus: dict[str, Path], output: Path, stop_time: float = STOP_TIME,
-              step: float = STEP, parameters: dict[str, dict[str, float]] | None = None) -> Path:
+              step: float = STEP, parameters: dict[str, dict[str, object]] | None = None) -> Path:
     """Write the SSP archive `output` from existing FMUs: `fmus` maps each of `gear`, `motor`,
     `fan` to its file.  `parameters` ({component: {name: value}}) replaces values of, or adds
     to, the default parameter set (DEFAULT_PARAMETERS at the FMUs' start values); every name
-    must be a Real parameter of that component's FMU.  The archive's entries are in name order
-    with fixed timestamps: the same FMUs and values give the same bytes.  Returns `output`.
-    Raises ValueError naming a missing component, an unknown parameter or a bad experiment;
-    RuntimeError if `output` cannot be written."""
+    must be a parameter of that component's FMU, every value one it allows (value_problem).
+    The archive's entries are in name order with fixed timestamps: the same FMUs and values
+    give the same bytes.  Returns `output`.  Raises ValueError naming a missing component, an
+    unknown parameter, a value that is not allowed or a bad experiment, before anything is
+    written; RuntimeError if `output` cannot be written."""
     check_experiment(stop_time, step)
+    check_components(parameters or {})
     missing = sorted(set(FMU_FILES) - set(fmus))
     if missing:
         raise ValueError(f"no FMU for {', '.join(missing)}: give one for each of "
                          f"{', '.join(FMU_FILES)}")
-    variables = {name: _variables(Path(fmus[name])) for name in FMU_FILES}
-    values = parameter_values(variables, parameters or {})
-    ssd = system_structure(variables, values, stop_time, step)
+    described = {name: read_component(Path(fmus[name]), FMU_FILES[name]) for name in FMU_FILES}
+    values = parameter_values(described, parameters or {})
+    ssd = system_structure(described, values, stop_time, step)
     entries = {"SystemStructure.ssd": ssd}
     entries.update({f"resources/{FMU_FILES[name]}": Path(fmus[name]).read_bytes()
                     for name in FMU_FILES})
@@ -188,72 +231,158 @@ def _write_zip(entries: dict[str, bytes], output: Path) -> None:
     replace_file(output, write)
 
 
-def _variables(fmu: Path) -> dict:
-    """The FMU's model variables by name (fmpy's ScalarVariable objects)."""
+def read_component(fmu: Path, file: str) -> ComponentFmu:
+    """The ComponentFmu of the FMU `fmu`, to be packed as resources/`file`: its model
+    description as fmpy reads it, and the bounds' annotations fmpy leaves out."""
     from fmpy import read_model_description
 
-    return {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+    description = read_model_description(str(fmu))
+    with zipfile.ZipFile(fmu) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+    units = {}
+    for unit in description.unitDefinitions:
+        base = unit.baseUnit
+        attributes = {} if base is None else {
+            **{key: str(getattr(base, key)) for key in BASE_UNIT_EXPONENTS if getattr(base, key)},
+            **{key: xs_double(getattr(base, key)) for key, default in BASE_UNIT_DEFAULTS.items()
+               if getattr(base, key) != default}}
+        units[unit.name] = attributes
+    return ComponentFmu(file, {v.name: v for v in description.modelVariables}, units,
+                        exclusive_bounds(root))
 
 
-def parameter_values(variables: dict, overrides: dict) -> dict[str, dict[str, float]]:
+def parameter_values(described: dict[str, ComponentFmu], overrides: Mapping) -> dict[str, dict]:
     """Each component's parameter set: DEFAULT_PARAMETERS at their start values, then
-    `overrides`.  Raises ValueError for a name that is not a Real parameter of the FMU."""
-    values = {name: {p: float(variables[name][p].start) for p in DEFAULT_PARAMETERS.get(name, ())}
-              for name in FMU_FILES}
+    `overrides` ({component: {name: value}}), each value as its FMI type's Python type.
+    Raises ValueError for a name that is not a settable parameter of the FMU (the message
+    lists those that are) or a value it does not allow (value_problem)."""
+    values: dict[str, dict] = {
+        name: {p: float(described[name].variables[p].start)
+               for p in DEFAULT_PARAMETERS.get(name, ())} for name in FMU_FILES}
     for component, given in overrides.items():
-        if component not in FMU_FILES:
-            raise ValueError(f"parameters for {component!r}: allowed components: "
-                             f"{', '.join(FMU_FILES)}")
-        allowed = sorted(n for n, v in variables[component].items()
-                         if v.causality == "parameter" and v.type == "Real")
+        fmu = described[component]
+        parameters = {n: v for n, v in fmu.variables.items() if v.causality == "parameter"}
+        allowed = sorted(n for n, v in parameters.items() if v.type in SETTABLE_TYPES)
         for name, value in given.items():
             if name not in allowed:
-                raise ValueError(f"{component}.{name} is not a Real parameter of "
-                                 f"{FMU_FILES[component]}; allowed: {', '.join(allowed)}")
-            values[component][name] = float(value)
+                kind = f"an {parameters[name].type} parameter, which an SSP parameter set " \
+                       "does not set" if name in parameters else "not a parameter"
+                raise ValueError(f"{component}.{name} is {kind} of {fmu.file}; allowed: "
+                                 f"{', '.join(allowed)}")
+            problem = value_problem(component, fmu, name, value)
+            if problem is not None:
+                raise ValueError(f"{component}.{name} {problem}")
+            values[component][name] = PYTHON_TYPES[parameters[name].type](value)
     return values
 
 
-def system_structure(variables: dict, values: dict, stop_time: float, step: float) -> bytes:
+def value_problem(component: str, fmu: ComponentFmu, name: str, value) -> str | None:
+    """Why `value` cannot be the parameter `name` of `component` ("is -1.0 N.m.s2/rad2;
+    allowed: >= 0 N.m.s2/rad2 and finite"), or None: it must be of the parameter's FMI type,
+    a number finite and within the range its FMU declares (`min`, `max`, and their
+    exclusiveness as fmi_units marks it).  The gear's parameters and solver settings are
+    checked first against herringbone's own ranges, which the gear FMU applies and which
+    exclude some bounds its model description can only include (a mass of 0 kg)."""
+    if component == "gear":
+        problem = _gear_problem(name, value)
+        if problem is not None:
+            return problem
+    variable = fmu.variables[name]
+    if variable.type == "Boolean":
+        return None if is_flag(value) \
+            else f"must be true or false, got {type(value).__name__} {value!r}"
+    if variable.type == "String":
+        return None if isinstance(value, str) \
+            else f"must be a string, got {type(value).__name__} {value!r}"
+    whole = variable.type == "Integer"
+    return number_problem(value, declared_range(variable, fmu.exclusive.get(name)),
+                          "" if whole else variable.unit or "1", whole=whole)
+
+
+def declared_range(variable, exclusive: tuple[bool, bool] | None = None) -> Range:
+    """The values a numeric variable (fmpy's) allows: its `min` and `max` (or its declared
+    type's), each `exclusive` as (min, max) say; an Integer's within fmi2Integer's 32 bits."""
+    bounds = [getattr(variable, key) if getattr(variable, key) is not None
+              else getattr(variable.declaredType, key, None) for key in ("min", "max")]
+    low, high = (None if bound is None else float(bound) for bound in bounds)
+    if variable.type == "Integer":  # also where the FMU declares no range
+        low = INT32[0] if low is None else max(low, INT32[0])
+        high = INT32[1] if high is None else min(high, INT32[1])
+    low_open, high_open = exclusive or (False, False)
+    return Range(low, high, low_open=low_open and low is not None,
+                 high_open=high_open and high is not None)
+
+
+def _gear_problem(name: str, value) -> str | None:
+    """Why `value` is not allowed for the gear's parameter or solver setting `name` by
+    herringbone's ranges (model.parameters, arguments), or None (also for another name)."""
+    settings = {a.name: a for a in (FMU_SOLVER_TOLERANCE, FMU_MAX_STEP, FMU_SOLVER_METHOD)}
+    if name in settings:
+        return settings[name].problem(value)
+    if name in PARAMETERS:
+        return check_value(PARAMETERS[name], value)
+    return None
+
+
+def system_structure(described: dict[str, ComponentFmu], values: dict, stop_time: float,
+                     step: float) -> bytes:
     """The SystemStructure.ssd document (UTF-8 bytes)."""
     root = ET.Element(_tag("ssd:SystemStructureDescription"), version="1.0", name="drivetrain")
     system = ET.SubElement(root, _tag("ssd:System"), name="drivetrain",
                            description="motor (Kloss curve) - herringbone gear train - fan")
     elements = ET.SubElement(system, _tag("ssd:Elements"))
-    units = set()
+    used: set[str] = set()
     for name in FMU_FILES:
-        units |= _component(elements, name, variables[name], values[name])
+        used |= _component(elements, name, described[name], values[name])
     connections = ET.SubElement(system, _tag("ssd:Connections"))
     for (start, output), (end, input_) in CONNECTIONS:
         ET.SubElement(connections, _tag("ssd:Connection"), startElement=start,
                       startConnector=output, endElement=end, endConnector=input_)
     unit_list = ET.SubElement(root, _tag("ssd:Units"))
-    for unit in sorted(units):
+    for unit in sorted(used):
         node = ET.SubElement(unit_list, _tag("ssc:Unit"), name=unit)
-        ET.SubElement(node, _tag("ssc:BaseUnit"),
-                      {k: str(v) for k, v in BASE_UNITS[unit].items()})
+        ET.SubElement(node, _tag("ssc:BaseUnit"), base_unit(unit, described))
     _default_experiment(root, stop_time, step)
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def _component(elements: ET.Element, name: str, variables: dict, values: dict) -> set[str]:
-    """Add the Component `name` (connectors, parameter set); returns the units it uses."""
+def base_unit(unit: str, described: dict[str, ComponentFmu]) -> dict[str, str]:
+    """ssc:BaseUnit's attributes of `unit`, as the FMUs' <UnitDefinitions> declare it (the
+    unit "1", a pure number, also where none does).  Raises ValueError where two FMUs declare
+    it differently."""
+    declared = {c.file: c.units[unit] for c in described.values() if unit in c.units}
+    if not declared and unit == "1":
+        return {}
+    first, *others = declared.items()  # _component made sure that one declares it
+    for file, attributes in others:
+        if attributes != first[1]:
+            raise ValueError(f"unit {unit!r} is {first[1]} in {first[0]} and {attributes} in "
+                             f"{file}; allowed: FMUs that define a unit alike")
+    return first[1]
+
+
+def _component(elements: ET.Element, name: str, fmu: ComponentFmu, values: dict) -> set[str]:
+    """Add the Component `name` (connectors, parameter set); returns the units it uses.
+    Raises ValueError for a unit the FMU's <UnitDefinitions> lacks."""
     component = ET.SubElement(elements, _tag("ssd:Component"), name=name,
-                              source=f"resources/{FMU_FILES[name]}",
+                              source=f"resources/{fmu.file}",
                               type="application/x-fmu-sharedlibrary")
     connectors = ET.SubElement(component, _tag("ssd:Connectors"))
     wanted = [v for (a, out), (b, in_) in CONNECTIONS for c, v in ((a, out), (b, in_)) if c == name]
     units = set()
     for variable_name in dict.fromkeys(wanted + list(values)):
-        variable = variables[variable_name]
-        unit = variable.unit or "1"
-        if unit not in BASE_UNITS:
-            raise ValueError(f"{name}.{variable_name} has unit {unit!r}; known units: "
-                             f"{', '.join(BASE_UNITS)}")
-        units.add(unit)
+        variable = fmu.variables[variable_name]
         connector = ET.SubElement(connectors, _tag("ssd:Connector"), name=variable_name,
                                   kind=variable.causality)
+        if variable.type != "Real":
+            ET.SubElement(connector, _tag(f"ssc:{variable.type}"))
+            continue
+        unit = variable.unit or "1"
+        if unit not in fmu.units and unit != "1":
+            raise ValueError(f"{name}.{variable_name} has unit {unit!r}, which {fmu.file} does "
+                             "not define; allowed: units of its <UnitDefinitions>")
+        units.add(unit)
         ET.SubElement(connector, _tag("ssc:Real"), unit=unit)
     if values:
         binding = ET.SubElement(ET.SubElement(component, _tag("ssd:ParameterBindings")),
@@ -262,10 +391,20 @@ def _component(elements: ET.Element, name: str, variables: dict, values: dict) -
                                       _tag("ssv:ParameterSet"), version="1.0", name=PARAMETER_SET)
         parameters = ET.SubElement(parameter_set, _tag("ssv:Parameters"))
         for parameter_name, value in values.items():
-            parameter = ET.SubElement(parameters, _tag("ssv:Parameter"), name=parameter_name)
-            ET.SubElement(parameter, _tag("ssv:Real"), value=repr(value),
-                          unit=variables[parameter_name].unit or "1")
+            _parameter(parameters, parameter_name, fmu.variables[parameter_name], value)
     return units
+
+
+def _parameter(parameters: ET.Element, name: str, variable, value) -> None:
+    """Add the ssv:Parameter `name` of the FMU's `variable` at `value` (checked): a Real with
+    every bit and its unit, an Integer, a Boolean or a String."""
+    parameter = ET.SubElement(parameters, _tag("ssv:Parameter"), name=name)
+    if variable.type == "Real":
+        ET.SubElement(parameter, _tag("ssv:Real"), value=xs_double(value),
+                      unit=variable.unit or "1")
+    else:
+        text = str(value).lower() if variable.type == "Boolean" else str(value)
+        ET.SubElement(parameter, _tag(f"ssv:{variable.type}"), value=text)
 
 
 def _default_experiment(root: ET.Element, stop_time: float, step: float) -> None:
