@@ -605,3 +605,30 @@ def test_a_command_whose_reader_has_gone_ends_quietly():
     command.stdout.close()
     error = command.stderr.read()
     assert command.wait(timeout=60) == 141 and error == b""
+
+
+def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys):
+    """--set NAME=VALUE runs the scene with a parameter or input torque changed, says so, and
+    is checked as a scene file's value is (one line, exit 2, the setting named)."""
+    csv = tmp_path / "at450.csv"
+    assert main(["run", REFERENCE, "--set", "w0_pinion=450", "--set", "M_motor=250",
+                 "--set", "M_load=900.0", "--stop-time", "0.002", "-o", str(csv),
+                 "--no-progress"]) == 0
+    said = capsys.readouterr().out
+    assert said.startswith("scene reference with w0_pinion = 450 rad/s, M_motor = 250 N.m, "
+                           "M_load = 900.0 N.m (--set)\n")
+    import pandas as pd
+
+    first = pd.read_csv(csv).iloc[0]
+    assert first["w_pinion [rad/s]"] == pytest.approx(450.0, rel=1e-9)
+    # the static mesh force follows the torque set: M_motor / Rp
+    assert first["F_mesh [N]"] == pytest.approx(250.0 / 0.021705, rel=1e-3)
+    for setting, expected in (
+            ("zeta=1", "--set zeta=1: unknown parameter 'zeta'; did you mean 'zeta_mesh'?"),
+            ("beta=5", "--set beta=5: beta is 5 rad; allowed: (0, 1.5708) rad"),
+            ("beta=abc", "--set 'beta=abc': the value 'abc' is not a number, true or false"),
+            ("beta", "--set 'beta': allowed: NAME=VALUE")):
+        assert main(["info", REFERENCE, "--set", setting]) == 2
+        assert expected in one_error_line(capsys, "info")
+    assert main(["run", str(MODELS / "torque_step.toml"), "--set", "M_motor=100"]) == 2
+    assert "the scene's torques are a table of 2 rows" in one_error_line(capsys, "run")

@@ -185,7 +185,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     ----------
     scene : Scene
     speeds : array_like or None
-        Pinion speeds w0_pinion, rad/s, each once (a repeated value is refused).
+        Pinion speeds w0_pinion, rad/s, each once; `[450.0]` with `params`: at that speed.
     params : dict or None
         {parameter name (or "M_motor", "M_load"): values, in its unit, each once}; with
         `speeds`, at most two quantities (a grid). One torque swept: the other follows.

@@ -5,9 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..model.parameters import RPM_PER_RAD_S
-from ..model.scene import load_scene
 from ..optional import require
-from .common import add_output, add_scene, add_speeds, default_output, speeds_of
+from .common import (
+    add_output,
+    add_scene,
+    add_settings,
+    add_speeds,
+    default_output,
+    scene_of,
+    speeds_of,
+)
 
 NAME = "campbell"
 HELP = "Campbell diagram: natural frequencies against speed with the mesh orders, crossings listed"
@@ -17,6 +24,7 @@ PICTURES = (".png", ".pdf", ".svg")
 def declare(parser) -> None:
     """The options of `campbell`."""
     add_scene(parser)
+    add_settings(parser)
     add_speeds(parser, (50.0, 3000.0, 2), "the diagram's span (its lines and crossings are "
                "exact: FROM and TO matter, COUNT only takes the common form)")
     add_output(parser, "the diagram; an existing file is replaced",
@@ -31,7 +39,7 @@ def execute(args, parser) -> int:
     assert sweep is not None  # the command has default speeds
     speeds = sweep.speeds()
     low, high = float(speeds[0]), float(speeds[-1])
-    scene = load_scene(args.scene)
+    scene = scene_of(args, parser)
     output = default_output(parser, args.output, Path("results") / f"{scene.name}_campbell.png",
                             PICTURES)
     require("matplotlib", "the Campbell diagram")

@@ -1,6 +1,6 @@
 """What the commands of `herringbone` share: their parser (one-line errors, "did you mean"),
-the options every command declares the same way (SCENE, --speeds with --rpm, -o/--output,
---no-progress), and the error a command raises to stop with one line.
+the options every command declares the same way (SCENE with --set, --speeds with --rpm,
+-o/--output, --no-progress), and the error a command raises to stop with one line.
 
 A command is a module of this package with `NAME`, `HELP`, `declare(parser)` (its options:
 one declaration each, checked by their `type=` or action through herringbone.arguments before
@@ -121,6 +121,57 @@ def add_scene(parser: argparse.ArgumentParser, optional_default: str | None = No
     else:
         parser.add_argument("scene", type=Path, nargs="?", default=Path(optional_default),
                             metavar="SCENE", help=f"{SCENE_HELP}; default: {optional_default}")
+
+
+def add_settings(parser: argparse.ArgumentParser) -> None:
+    """--set NAME=VALUE (repeatable): a parameter or an input torque of the scene changed for
+    this command (`scene_of`)."""
+    parser.add_argument("--set", dest="settings", action="append", default=[],
+                        type=_setting, metavar="NAME=VALUE",
+                        help="change a parameter or input torque of the scene for this "
+                             "command, its value written as in a scene file (a number, true "
+                             "or false); repeatable: --set w0_pinion=450 --set M_motor=800")
+
+
+def _setting(text: str) -> tuple[str, object]:
+    """NAME=VALUE as (name, value), the value read as a TOML value (tomllib: 450, 4.5e2,
+    true); argparse's one-line error where it is not one."""
+    import tomllib
+
+    name, equals, value = text.partition("=")
+    if not equals or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: allowed: NAME=VALUE, e.g. w0_pinion=450")
+    try:
+        return name.strip(), tomllib.loads(f"value = {value.strip()}")["value"]
+    except tomllib.TOMLDecodeError:
+        raise argparse.ArgumentTypeError(f"{text!r}: the value {value.strip()!r} is not a "
+                                         "number, true or false") from None
+
+
+def scene_of(args, parser: argparse.ArgumentParser):
+    """The command's scene: SCENE (a file or a shipped scene's name) with --set's changes, an
+    input torque by Scene.with_inputs, a parameter by Scene.with_parameters; one line naming
+    the setting where one is refused. The changes are said in a line on stdout first."""
+    from ..model.parameters import INPUTS, unit_of, with_unit
+    from ..model.scene import load_scene
+
+    scene = load_scene(args.scene)
+    for name, value in getattr(args, "settings", []):
+        if name in INPUTS and len(scene.inputs.times) > 1:
+            fail(parser, f"--set {name}={value}: the scene's torques are a table of "
+                         f"{len(scene.inputs.times)} rows; allowed: --set of a torque on a "
+                         "scene with constant torques")
+        try:
+            scene = (scene.with_inputs(**{name: value}) if name in INPUTS
+                     else scene.with_parameters(**{name: value}))
+        except (SceneError, TypeError) as error:
+            reason = str(error).split(": ", 1)[-1]
+            fail(parser, f"--set {name}={value}: {reason}")
+    if getattr(args, "settings", []):
+        changes = ", ".join(f"{name} = {with_unit(str(value), unit_of(name))}"
+                            for name, value in args.settings)
+        print(f"scene {scene.name} with {changes} (--set)")
+    return scene
 
 
 class _SpeedsAction(argparse.Action):

@@ -15,9 +15,16 @@ from ..arguments import (
     number,
     samples_problem,
 )
-from ..model.scene import load_scene
 from ..optional import require
-from .common import add_output, add_progress, add_scene, default_output, fail
+from .common import (
+    add_output,
+    add_progress,
+    add_scene,
+    add_settings,
+    default_output,
+    fail,
+    scene_of,
+)
 
 NAME = "run"
 HELP = ("simulate a scene on the compiled integrator (what the FMU runs; --reference: the scipy "
@@ -28,6 +35,7 @@ SUFFIXES = (".csv",)
 def declare(parser) -> None:
     """The options of `run`."""
     add_scene(parser)
+    add_settings(parser)
     parser.add_argument("--stop-time", type=STOP_TIME.option_type,
                         help="simulated seconds (default: the scene's)")
     parser.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
@@ -69,7 +77,7 @@ def execute(args, parser) -> int:
     from ..analysis.run_report import summary, write_csv
 
     tolerance = tolerance_of(args, parser)
-    scene = load_scene(args.scene)
+    scene = scene_of(args, parser)
     stop_time = args.stop_time or scene.experiment.stop_time
     interval = args.output_interval or scene.experiment.output_interval
     if interval > stop_time:

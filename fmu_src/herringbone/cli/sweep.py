@@ -25,15 +25,16 @@ from ..arguments import (
     output_folder,
 )
 from ..model.parameters import INPUTS, PARAMETERS, RPM_PER_RAD_S, values_problem
-from ..model.scene import load_scene
 from ..optional import require
 from ..suggest import did_you_mean
 from .common import (
     add_progress,
     add_scene,
+    add_settings,
     add_speeds,
     default_output,
     fail,
+    scene_of,
     speeds_of,
 )
 
@@ -70,6 +71,7 @@ class _ParamAction(argparse.Action):
 def declare(parser) -> None:
     """The options of `sweep`: one declaration each."""
     add_scene(parser)
+    add_settings(parser)
     add_speeds(parser, None, "sweep the pinion speed w0_pinion")
     parser.add_argument("--speed", type=number, metavar="W",
                         help="with one --param: the pinion speed it is swept at, rad/s (rpm "
@@ -144,7 +146,7 @@ def execute(args, parser) -> int:
                         window_periods=args.window_periods,
                         samples_per_period=args.samples_per_period, tolerance=args.tolerance,
                         floquet=not args.no_floquet)
-    scene = load_scene(args.scene)
+    scene = scene_of(args, parser)
     folder = default_output(parser, args.output, Path("results"), folder=True)
     require("pandas", "sweep")
     require("matplotlib", "the sweep's pictures")
