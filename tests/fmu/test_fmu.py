@@ -283,3 +283,23 @@ def test_scene_inputs_refuses_a_stop_time_that_is_not_finite_and_positive(stop_t
     the stop time's one message, as simulate refuses it."""
     with pytest.raises(ValueError, match=r"stop_time is .*; allowed: > 0 and finite"):
         herringbone.scene_inputs(herringbone.load_scene("torque_step"), stop_time)
+
+
+def test_a_transverse_inertia_left_to_the_scene_follows_the_mass_the_host_sets(built_fmus):
+    """J_pinion and J_wheel, which a scene works out from mass and geometry where it does not
+    give them, follow the masses a host sets, as Scene.with_parameters's do: with a lead error
+    the tilt is driven and J acts (a J left at the build's values put the bearing reactions
+    21 N and 43 N off within 0.01 s). One the host sets itself is kept."""
+    changed = {"m_pinion": 2.0, "m_wheel": 30.0}
+    scene = herringbone.load_scene(MODELS / "lead_error.toml").with_parameters(**changed)
+    for given in ({}, {"J_pinion": 1e-3}):
+        result = fmpy.simulate_fmu(str(built_fmus["lead_error"]), stop_time=0.01,
+                                   output_interval=STEP, start_values={**changed, **given})
+        expected = herringbone.simulate(scene.with_parameters(**given), stop_time=0.01,
+                                        output_interval=STEP)
+        assert force_error(result, expected, scene) < 1e-9
+    instance = Instance(built_fmus["lead_error"], start_values=changed)
+    taken = instance.get(["J_pinion", "J_wheel"])
+    instance.free()
+    assert taken == {name: pytest.approx(scene.parameters[name], rel=1e-15)
+                     for name in ("J_pinion", "J_wheel")}

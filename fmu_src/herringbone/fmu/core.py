@@ -57,9 +57,11 @@ from herringbone.integrate.compiled_stepper import (  # noqa: E402
 from herringbone.integrate.contract import Position, start_position  # noqa: E402
 from herringbone.integrate.segments import Segment  # noqa: E402
 from herringbone.model.assembly import GearTrainModel, output_names  # noqa: E402
+from herringbone.model.geometry import solid_cylinder_transverse_inertia  # noqa: E402
 from herringbone.model.parameters import (  # noqa: E402
     INPUTS,
     OUTPUTS,
+    PARAMETERS,
     Parameter,
     check_value,
     parameters_of,
@@ -270,7 +272,7 @@ class GearCore:
             name, kind, causality, variability,
             parameter.description if kind == "real"
             else f"{parameter.description} [{parameter.unit}]",
-            getter=lambda: self.values[name], setter=lambda value: self._set(name, value))
+            getter=lambda: self._value_taken(name), setter=lambda value: self._set(name, value))
         if kind == "real":
             declaration.unit = parameter.unit
         if kind in ("real", "integer"):
@@ -473,6 +475,26 @@ class GearCore:
             return None
         return declaration
 
+    def _worked_out(self, name) -> bool:
+        """Whether parameter `name` is one a scene works out from others where it is not given
+        (a transverse inertia, J = m·(3R² + L²)/12: its default is None) and neither the
+        scene file nor the host gave it: it then follows the mass and geometry the host set,
+        as a scene's does."""
+        parameter = PARAMETERS.get(name)
+        return (parameter is not None and parameter.default is None
+                and name not in self.scene.given
+                and self.values[name] == self.start_values[name])
+
+    def _value_taken(self, name):
+        """A parameter's or input's value as the run takes it (`_worked_out`'s from the values
+        set now; where they make no geometry, the start value)."""
+        if not self._worked_out(name):
+            return self.values[name]
+        try:
+            return solid_cylinder_transverse_inertia(self.values, name.removeprefix("J_"))
+        except (ValueError, ZeroDivisionError, KeyError):
+            return self.values[name]
+
     def _set(self, name, value):
         """A parameter's or input's new value; a fixed parameter only before initialization
         (it keeps the value it was initialized with, which a get then reads)."""
@@ -618,7 +640,8 @@ class GearCore:
         forms are taken in; returns what is wrong with them, or None."""
         built_from = {**self.values, **(inputs or {})}
         try:
-            given = {k: v for k, v in built_from.items() if k in self.scene.parameters}
+            given = {k: v for k, v in built_from.items()
+                     if k in self.scene.parameters and not self._worked_out(k)}
             scene = self.scene.with_parameters(**given).with_inputs(
                 M_motor=built_from["M_motor"], M_load=built_from["M_load"])
             self.stepper = CompiledStepper(GearTrainModel(scene), built_from["solver_tolerance"],
