@@ -68,7 +68,7 @@ def test_sweep_points_agree_with_single_simulate_runs(reference_scene):
                 assert 0.0 <= value - row[name] <= 2e-2 * scale, name
             else:
                 assert abs(row[name] - value) <= SHORT.tolerance * scale, name
-        assert row["floquet_max"] == pytest.approx(
+        assert row["linear_floquet_max"] == pytest.approx(
             float(largest_multiplier(scene, row["w0_pinion"])), rel=1e-12)
 
 

@@ -473,7 +473,8 @@ def window_drift(window: dict, protocol: Protocol, static_force: float) -> float
 
 
 def floquet_largest(scene) -> float:
-    """|λ|max of the linear mesh at w0_pinion (herringbone.analysis.stability)."""
+    """|λ|max of the linear mesh at w0_pinion, every point loaded
+    (herringbone.analysis.stability)."""
     from .stability import largest_multiplier
 
     return float(largest_multiplier(scene, abs(scene.parameters["w0_pinion"])))
@@ -481,7 +482,10 @@ def floquet_largest(scene) -> float:
 
 def point_row(scene, window: dict, protocol: Protocol) -> dict[str, float]:
     """A table row: the point's timing, static force, window figures, how far its window is
-    from repeating (window_drift) and Floquet |λ|max."""
+    from repeating (window_drift) and linear_floquet_max, |λ|max of the linear mesh at the
+    point's speed with every point loaded (the parametric stability `herringbone stability`
+    charts; not the multiplier of the motion the window settled on, which a sweep by shooting
+    gives as floquet_max)."""
     when = timing(scene, protocol)
     settle = getattr(window, "settle", when.settle)
     speed = scene.parameters["w0_pinion"]
@@ -493,5 +497,5 @@ def point_row(scene, window: dict, protocol: Protocol) -> dict[str, float]:
            "static_mesh_force_N": static_force,
            **window_figures(window, static_force),
            "window_drift": window_drift(window, protocol, static_force)}
-    row["floquet_max"] = floquet_largest(scene) if protocol.floquet else math.nan
+    row["linear_floquet_max"] = floquet_largest(scene) if protocol.floquet else math.nan
     return row

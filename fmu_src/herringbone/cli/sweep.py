@@ -103,7 +103,9 @@ def declare(parser) -> None:
                         help="with shooting: flag period doublings on the branch but do not "
                              "switch to and follow the period-2 branch from each (followed by "
                              "default)")
-    parser.add_argument("--no-floquet", action="store_true", help="skip the Floquet multiplier")
+    parser.add_argument("--no-floquet", action="store_true",
+                        help="skip a time point's linear_floquet_max (the linear mesh's "
+                             "Floquet multiplier at its speed)")
     parser.add_argument("--workers", type=number, help="where the points run: N Dask "
                         "LocalCluster worker processes, with --method time (default: one per "
                         "core); 0: no Dask, run here one after the other, with either method "
