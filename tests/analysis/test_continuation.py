@@ -212,3 +212,34 @@ def test_a_branch_lost_is_begun_again_at_the_next_value_and_flagged_restart(monk
     events = {point.value: point.events for point in branch.points if point.on_grid}
     assert events == {500.0: (), 600.0: ("restart",), 700.0: ()}, events
     assert [point.method for point in branch.points] == ["shooting"] * len(branch.points)
+
+
+def test_a_sharp_fall_of_K_v_gets_points_and_its_jump_is_pinned(reference_scene):
+    """`herringbone sweep reference --param beta 0.35 0.6 6 --speed 450`: the branch went
+    from 0.3531 (K_v 2.17) to 0.3765 (1.65) in one step, Newton converging easily, over K_v's
+    fall to 1.00 at the axial overlap ε_β = 1 (β = asin(π·m_n/b) = 0.36724) and its jump back
+    to 1.50; the picture read 1.8 at 0.365 where the orbit has 1.21. Now a step over which K_v
+    changes by more than FIGURE_CHANGE (0.05) is taken again shorter: between 0.36 and 0.37
+    the points fall below 1.3 (to 1.0008 at 0.36725), the one nearest 0.365 (0.36487, K_v
+    1.2142) is where a settled time run lies (within 1e-6 relative; measured 1.3e-9), and
+    every step changes K_v by at most 0.05 but the jump, which one step of at most
+    FINEST_FIGURE_STEP (1/128 of the 0.05 rad spacing, 3.9e-4 rad) spans, just past ε_β = 1
+    (0.36731 → 0.36738)."""
+    branch = continue_in_parameter(reference_scene, "beta", [0.35, 0.40], pinion_speed=450.0,
+                                   doubling=False)
+    values = np.array([p.value for p in branch.points])
+    factors = np.array([p.figures["K_v"] for p in branch.points])
+    inside = (values > 0.36) & (values < 0.37)
+    assert inside.any() and factors[inside].min() < 1.3
+    near = int(np.abs(np.where(inside, values, np.inf) - 0.365).argmin())
+    assert abs(values[near] - 0.365) < 1e-3 and factors[near] < 1.3
+    at = reference_scene.with_parameters(w0_pinion=450.0, beta=values[near])
+    assert settled_figures(at)["K_v"] == pytest.approx(factors[near], rel=1e-6)
+    from herringbone.analysis.continuation import FIGURE_CHANGE, FINEST_FIGURE_STEP
+
+    steep = np.flatnonzero(np.abs(np.diff(factors)) > FIGURE_CHANGE)
+    assert len(steep) == 1 and factors[steep[0]] < 1.01 < 1.5 < factors[steep[0] + 1]
+    overlap = np.arcsin(np.pi * reference_scene.parameters["m_n"]
+                        / reference_scene.parameters["b_left"])
+    assert 0.0 < values[steep[0] + 1] - values[steep[0]] <= FINEST_FIGURE_STEP * 0.05
+    assert values[steep[0]] - 1e-4 < overlap < values[steep[0] + 1]

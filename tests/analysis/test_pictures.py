@@ -152,3 +152,118 @@ def test_a_runs_spectrum_takes_whole_mesh_periods_at_its_end(monkeypatch, tmp_pa
     assert any("record length: 2 mesh periods" in text.get_text() for text in axes[1].texts)
     keep, periods = plots.whole_mesh_periods(np.arange(0.0, 0.0025, 1e-5), 250.0)
     assert periods == 1 and keep.all()  # under a period in all: the whole run
+
+
+def waterfall_drawn(monkeypatch, tmp_path, rpm, peaks, natural):
+    """plot_waterfall's figure over synthetic points at `rpm`, each a window of 50 mesh
+    periods at 64 samples a period (a sweep's) whose dte is 1 µm at the first mesh order plus
+    the tones (Hz, µm) `peaks` gives at that speed; the reference scene's 10 pinion teeth."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+    import pandas as pd
+
+    from herringbone.analysis import sweep_plots
+
+    drawn = {}
+    monkeypatch.setattr(sweep_plots, "_save", lambda figure, path, **kw: drawn.update(
+        figure=figure, **kw))
+    series = []
+    for n in rpm:
+        time = np.arange(50 * 64) * 60.0 / (10 * n) / 64
+        dte = np.sin(2 * np.pi * 10 * n / 60 * time)
+        for frequency, amplitude in peaks.get(n, ()):
+            dte = dte + amplitude * np.sin(2 * np.pi * frequency * time)
+        series.append({"time": time, "dte": 1e-6 * dte})
+    table = pd.DataFrame({"speed_rpm": rpm, "w0_pinion": np.array(rpm) * np.pi / 30.0})
+    sweep_plots.plot_waterfall(table, series, tmp_path / "w.png", natural, 10, "waterfall")
+    return drawn
+
+
+def test_a_waterfalls_near_peak_hides_the_rows_behind_it(monkeypatch, tmp_path):
+    """`herringbone sweep reference --speeds 2000 9000 8 --rpm --method time`: the 4000 rpm
+    row's 5.7 µm peak at 667 Hz rose through the 5000 rpm row's line up to the 6000 one, an
+    unfilled line that read as ringing at 5000 rpm. Each trace is now filled beneath with the
+    background and the lower rows drawn over the higher ones: at (667 Hz, 5000 rpm) the
+    4000 rpm row's fill lies over the 5000 rpm row's line."""
+    rpm = [4000.0, 5000.0, 6000.0]
+    drawn = waterfall_drawn(monkeypatch, tmp_path, rpm, {4000.0: [(667.0, 5.7)]},
+                            [684.0, 1497.0])
+    axes = drawn["figure"].axes[0]
+    fills = axes.collections[:3]
+    traces = [line for line in axes.get_lines() if line.get_color() == "k"][:3]
+    assert [fill.get_facecolor()[0][:3].tolist() for fill in fills] == [[1.0, 1.0, 1.0]] * 3
+    assert fills[0].get_zorder() > traces[1].get_zorder() > fills[1].get_zorder() \
+        > traces[2].get_zorder() > fills[2].get_zorder() > 1.0
+    # the 4000 rpm peak, two rows tall, covers the 5000 rpm baseline beneath 667 Hz
+    assert fills[0].get_paths()[0].contains_point((667.0, 5000.0))
+    assert not fills[0].get_paths()[0].contains_point((2000.0, 5000.0))
+    assert drawn["dpi"] == 200
+
+
+def test_a_waterfalls_frequencies_reach_the_fastest_mode_the_samples_resolve(monkeypatch,
+                                                                              tmp_path):
+    """The frequency axis stopped at 1.15 × the third mesh order at the top speed, 5.2 kHz
+    at 9000 rpm, and the reference scene's 10.4 and 13.4 kHz modes, where the mesh force
+    rings most, never showed. It now runs to 1.1 × the fastest mode, 14.7 kHz, under the
+    fastest trace's Nyquist frequency (48 kHz at 64 samples a mesh period); the 2000 rpm
+    trace ends at its own, 10.7 kHz, and the axis label says why (bins 30 Hz apart at
+    9000 rpm). Between 1000 and 2000 rpm the fastest trace ends at 10.7 kHz: the axis stops
+    there and names the mode above it."""
+    natural = [113.0, 684.0, 1497.0, 2059.0, 4397.0, 10418.6, 13354.5]
+    drawn = waterfall_drawn(monkeypatch, tmp_path, [2000.0, 9000.0],
+                            {9000.0: [(10500.0, 2.0)]}, natural)
+    axes = drawn["figure"].axes[0]
+    assert axes.get_xlim()[1] == pytest.approx(1.1 * 13354.5)
+    ends = [line.get_xdata().max() for line in axes.get_lines() if line.get_color() == "k"]
+    assert ends[:2] == [pytest.approx(10666.7, abs=0.1), pytest.approx(14690.0, abs=30.0)]
+    dotted = [line.get_xdata()[0] for line in axes.get_lines() if line.get_linestyle() == ":"]
+    assert dotted == natural
+    assert "Nyquist frequency: 64 samples a mesh period, 32 mesh orders" in axes.get_xlabel()
+    slow = waterfall_drawn(monkeypatch, tmp_path, [1000.0, 2000.0], {}, natural)
+    axes = slow["figure"].axes[0]
+    assert axes.get_xlim()[1] == pytest.approx(10666.7, abs=0.1)
+    assert "modes at 13354 Hz above every trace's" in axes.get_xlabel()
+
+
+def test_a_branchs_pictures_dot_every_orbit_computed(monkeypatch, tmp_path):
+    """The beta sweep's curve (`herringbone sweep reference --param beta 0.35 0.6 6 --speed
+    450`) drew a straight line from 0.3531 to 0.3765 that read as data; the time method's
+    curves mark their points, the branch's did not. Each orbit now has a dot (markersize
+    2.5) on its stretch, on the parameter curve and on both panels of the resonance curve,
+    and the legend's entry shows the dot."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+    import pandas as pd
+
+    from herringbone.analysis import sweep_plots
+
+    drawn = []
+    monkeypatch.setattr(sweep_plots, "_save", lambda figure, path, **kw: drawn.append(figure))
+    beta = np.array([0.35, 0.3516, 0.3531, 0.3765, 0.40])
+    table = pd.DataFrame({"beta": beta, "w0_pinion": 100.0 + 1000.0 * beta,
+                          "speed_rpm": (100.0 + 1000.0 * beta) * 30 / np.pi,
+                          "K_v": [2.27, 2.23, 2.17, 1.65, 1.77], "dte_p2p_um": 10.0,
+                          "stability": ["stable"] * 3 + ["unstable"] * 2, "event": "",
+                          "contact_lost_share": 0.0})
+    sweep_plots.plot_parameter_sweep(table, ["beta"], tmp_path / "p.png", "beta")
+    sweep_plots.plot_resonance_curve(table, tmp_path / "r.png", [], 10, "speed")
+    panels = [drawn[0].axes[0], *drawn[1].axes[:2]]
+    for panel in panels:
+        dotted = [line for line in panel.get_lines()
+                  if str(line.get_label()).endswith("orbits") or line.get_marker() == "o"]
+        assert dotted, [line.get_label() for line in panel.get_lines()]
+        shown = np.concatenate([line.get_xdata()[np.isfinite(line.get_ydata())]
+                                for line in dotted])
+        assert {line.get_marker() for line in dotted} == {"o"}
+        assert {line.get_markersize() for line in dotted} == {2.5}
+        # every orbit dotted: the stable stretch's three, the unstable one's from the third
+        along = beta if panel is panels[0] else table["speed_rpm"].to_numpy()
+        assert np.allclose(np.unique(shown), along)
+    legend = panels[0].get_legend()
+    (entry,) = [handle for handle, text in zip(legend.legend_handles, legend.get_texts())
+                if text.get_text() == "K_v, stable orbits"]
+    assert entry.get_marker() == "o"

@@ -320,6 +320,38 @@ def test_command_line_lists_the_bands_of_the_example(tmp_path, capsys):
     assert low < 2080.0 < high and chart.stat().st_size > 10_000
 
 
+def test_band_edges_are_bisected_to_their_tolerance_whatever_the_grid(resonance_scene):
+    """The k = 5 band of the example charted on 100 speeds over 1000-12000 rad/s (111 rad/s
+    apart) and on 81 over 1900-2300 (5 rad/s apart): its edges, bisected between the grid
+    points, agree within the tolerance (0.01 rad/s; 2034.18-2128.96 rad/s on both, where the
+    lines between the grid points gave 2000.0-2222.2 and 2030.0-2130.0, each on the stable
+    neighbour), |λ|max is inside the circle a tolerance outside each edge and outside it a
+    tolerance inside, the command's line prints them to the hundredth, and the chart's curve
+    passes 0 at them."""
+    from herringbone.cli.stability import summary
+
+    coarse = stability.stability_chart(resonance_scene, np.linspace(1000.0, 12000.0, 100))
+    fine = stability.stability_chart(resonance_scene, np.linspace(1900.0, 2300.0, 81))
+    tolerance = 0.01
+    (band,) = [b for b in coarse.unstable_bands if b[0] < 2080.0 < b[1]]
+    (fine_band,) = fine.unstable_bands
+    assert band == pytest.approx(fine_band, abs=tolerance)
+    assert band == pytest.approx((2034.18, 2128.96), abs=tolerance)
+    assert fine.edge_tolerance == coarse.edge_tolerance == tolerance
+    low, high = band
+    excess = stability.largest_multiplier(
+        resonance_scene, np.array([low - tolerance, low + tolerance, high - tolerance,
+                                   high + tolerance])) - 1.0
+    assert list(excess > 0) == [False, True, True, False], excess
+    printed = [line for line in summary(fine) if line.startswith("unstable:")]
+    assert printed[0].startswith(f"unstable: {fine_band[0]:.2f}-{fine_band[1]:.2f} rad/s")
+    assert "edges to ±0.005 rad/s" in printed[0]
+    # the chart's curve crosses 0 at the edges it shades, between its charted speeds
+    speeds, exponent = stability.chart_curve(coarse)
+    assert len(speeds) == len(coarse.speeds) + 2 * len(coarse.unstable_bands)
+    assert list(exponent[np.isin(speeds, band)]) == [0.0, 0.0]
+
+
 @pytest.fixture(scope="module")
 def undamped_chart():
     """models/undamped.toml charted over 100-2000 rad/s in 20 speeds: parametric resonance at

@@ -96,13 +96,16 @@ def test_multipliers_agree_with_the_linear_mesh(reference_scene, speed):
 def test_continuation_multipliers_are_those_of_a_fresh_jacobian(reference_scene):
     """The branch reuses the corrector's Jacobian where it was taken near the solution
     (continuation.REUSE_DISTANCE): its multipliers agree with periodic_orbit's at the same
-    speed, started from the branch's state. Measured: 2e-7."""
+    speed, started from the branch's state, at every point. Measured over 400-1000 rad/s (30
+    points, 15 of them on a Jacobian taken 2e-3 to 3e-2 away): the largest within
+    3.4e-7, every modulus within 5.1e-5 (the ones that far off are under 1e-3: a Jacobian off
+    by the pinion angle's say in the stiffness moves each multiplier by about as much)."""
     branch = continue_in_speed(reference_scene, np.linspace(400.0, 1000.0, 13))
     assert all(p.method == "shooting" for p in branch.points) and not branch.folds
-    for point in branch.points[::4]:
+    for point in branch.points:
         fresh = periodic_orbit(reference_scene, point.speed, initial_state=point.orbit.state)
-        assert np.abs(np.abs(fresh.multipliers) - np.abs(point.orbit.multipliers)).max() \
-            <= 1e-5
+        error = np.abs(np.abs(fresh.multipliers) - np.abs(point.orbit.multipliers))
+        assert error.max() <= 1e-4 and error[0] <= 1e-6
         assert fresh.figures["K_v"] == pytest.approx(point.figures["K_v"], rel=1e-7)
 
 

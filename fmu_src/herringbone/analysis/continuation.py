@@ -23,10 +23,15 @@ forward difference of the map at p and p + h):
   most `CORRECTOR_ITERATIONS` iterations; then the Jacobian afresh at the solution (the Floquet
   multipliers and the next tangent need it);
 - step control: the step grows by 1.5 after a corrector of at most 2 iterations, shrinks by 0.6
-  after one of 5 or more, halves on failure; below `SMALLEST_STEP` the continuation gives up
-  on this stretch: the next requested value is run by time integration (steady_state's section
-  is not needed for that: sweep_point's protocol) and marked so, and shooting starts again at
-  the following one from the last orbit.
+  after one of 5 or more, halves on failure; a solved step over which K_v changes by more than
+  `FIGURE_CHANGE` (or dte peak-to-peak over |dte_mean| by as much) is refused and taken again
+  shorter in proportion, until it moves p by at most `FINEST_FIGURE_STEP`, and the next step
+  (natural ones too: `Continuation.reach`) is kept to what that change allows, so that a
+  sharp feature of the figures gets points where Newton alone would step over it; below
+  `SMALLEST_STEP` the continuation gives up on this stretch: the next requested value is run
+  by time integration (steady_state's section is not needed for that: sweep_point's
+  protocol) and marked so, and shooting starts again at the following one from the last
+  orbit.
 
 What is flagged on the point past it: a fold where t_p changes sign (a multiplier through +1),
 a period doubling where a real multiplier passes −1, a torus (Neimark–Sacker) where a complex
@@ -68,6 +73,19 @@ CORRECTION_FRACTION = 0.5  # most correction, as a fraction of the predictor's s
 NATURAL_HALVINGS = 5  # see Continuation.advance
 REFRESHES = 1  # fresh Jacobians a corrector may take where the chord contracts slowly
 SMALLEST_STEP = 1e-3
+# a step over which K_v changes by more than FIGURE_CHANGE (a share of the static mesh force),
+# or dte peak-to-peak over |dte_mean| (a share of the static deflection) by as much, is
+# taken again shorter, down to FINEST_FIGURE_STEP: the line the pictures draw between two
+# points then misreads a curve that is monotone between them by at most that much. At beta
+# 0.3531 → 0.3765 (450 rad/s, reference) K_v went 2.17 → 1.65 in one step over a fall to
+# 1.00 at ε_β = 1 (β 0.36724) and a jump back to 1.50 by 0.36738: the picture read 1.8 where
+# the orbit has 1.21. 0.05 is a twentieth of the fall, and of the axis of a resonance curve
+# (K_v 1.45-1.79 on the reference over 100-1000 rad/s, 12 speeds: 58 points where 35 were,
+# 815 period integrations for 760)
+FIGURE_CHANGE = 0.05
+# 1/128 of a requested spacing: K_v's jump at ε_β = 1 (dte peak-to-peak goes on smoothly)
+# is pinned to within 4e-4 rad of beta
+FINEST_FIGURE_STEP = 1.0 / 128
 # a fold is where t_p changes sign; a tangent with |t_p| below this goes straight across p
 # and says nothing of the branch's way in p (the period-2 branch leaves its doubling so while
 # no contact is lost, the map affine there: t_p is the differences' noise, 1e-3, and would
@@ -329,6 +347,9 @@ class Continuation:
         self.v = self.jacobian = self.tangent = None
         self.previous_v = None  # the point before the last, where that was a shooting point
         self.step = 1.0
+        # the longest next natural step, |Δp| in W, the last step's change of the figures
+        # allows (advance, take)
+        self.reach = math.inf
 
     # --- v <-> (z, p) ---------------------------------------------------------------------
 
@@ -402,14 +423,33 @@ class Continuation:
             return None
         return None
 
-    def accept(self, v, base, iterations, fresh, on_grid, previous_tangent):
-        """Take a solved point: its tangent, multipliers, events, figures. The Jacobian the
-        corrector took serves where it was taken within REUSE_DISTANCE of the solution and no
-        point of the orbit lost contact (the map is then affine in z to rounding, bar the
-        pinion angle's weak say in the stiffness); else it is taken afresh here."""
+    def figures_at(self, v) -> dict:
+        """The sweep figures of the orbit at the scaled unknowns v (PeriodMap.figures)."""
         z, value = self.split(v)
         period_map, speed = self.axis.map_at(value), self.axis.speed_at(value)
-        figures = period_map.figures(period_map.state(z, speed), speed)
+        return period_map.figures(period_map.state(z, speed), speed)
+
+    def figure_change(self, figures: dict) -> float:
+        """How far `figures` moved from the last point's, in units of FIGURE_CHANGE: the
+        larger of |ΔK_v| (K_v a share of each point's static mesh force) and the change of
+        dte_p2p/|dte_mean| (a share of each point's static deflection: a torque scales both
+        alike); over 1, the step is too long for the pictures."""
+        last = self.points[-1].figures
+        change = abs(figures["K_v"] - last["K_v"])
+        if figures["dte_mean_um"] != 0.0 and last["dte_mean_um"] != 0.0:
+            change = max(change, abs(figures["dte_p2p_um"] / abs(figures["dte_mean_um"])
+                                     - last["dte_p2p_um"] / abs(last["dte_mean_um"])))
+        return change / FIGURE_CHANGE
+
+    def accept(self, v, base, iterations, fresh, on_grid, previous_tangent, figures=None):
+        """Take a solved point: its tangent, multipliers, events, figures (`figures`, where
+        already taken at v). The Jacobian the corrector took serves where it was taken within
+        REUSE_DISTANCE of the solution and no point of the orbit lost contact (the map is then
+        affine in z to rounding, bar the pinion angle's weak say in the stiffness); else it is
+        taken afresh here."""
+        z, value = self.split(v)
+        period_map, speed = self.axis.map_at(value), self.axis.speed_at(value)
+        figures = self.figures_at(v) if figures is None else figures
         where, jacobian, images, phase_row = fresh
         self.distances.append(float(np.abs(v - where).max() * AMPLITUDE_UNIT))
         if (np.abs(v - where).max() * AMPLITUDE_UNIT > REUSE_DISTANCE
@@ -454,6 +494,7 @@ class Continuation:
             return False
         upward = np.zeros(self.size + 1)
         upward[-1] = 1.0
+        self.reach = math.inf  # no step before it to say how fast the figures change
         self.accept(v, base, taken, fresh, True, upward)
         if len(self.points) > 1:
             # no continuity with the points before: where an orbit came before, the branch
@@ -523,56 +564,102 @@ class Continuation:
                 z = z + curvature * change ** 2
         return np.append(z, value)
 
+    def predictor(self, natural: bool, goal):
+        """(predicted v, constraint row) of a step: at the fixed scaled value `goal` where
+        natural, else along the tangent by self.step, stopping short of `goal` (the next
+        requested value), not past it."""
+        if natural:
+            constraint = np.zeros(self.size + 1)
+            constraint[-1] = 1.0
+            return self.along_axis(goal), constraint
+        step = self.step
+        if goal is not None:
+            landing = (goal - self.v[-1]) / self.tangent[-1]
+            if 0.0 < landing:
+                step = min(step, 0.9 * landing)
+        return self.v + step * self.tangent, self.tangent
+
+    def solve_step(self, natural: bool, goal):
+        """A step's corrector from its predictor: (solved tuple or None, figures or None,
+        `moved`: their change in units of FIGURE_CHANGE, the step's |Δp| in W and its
+        length ‖Δv‖). None where it failed or went far (more than CORRECTION_FRACTION of
+        the step: it may have landed on another branch)."""
+        predicted, constraint = self.predictor(natural, goal)
+        distance = float(np.linalg.norm(predicted - self.v))
+        solved = self.correct(predicted, constraint)
+        if solved is None or (np.linalg.norm(solved[0] - predicted)
+                              > CORRECTION_FRACTION * distance):
+            return None, None, (0.0, 0.0, distance)
+        figures = self.figures_at(solved[0])
+        return solved, figures, (self.figure_change(figures),
+                                 abs(float(solved[0][-1] - self.v[-1])), distance)
+
     def advance(self) -> bool:
         """One step along the branch. Away from folds, at a fixed value: to the next requested
-        value, or where that fails to halfway there (an intermediate point), down to
-        1/2^NATURAL_HALVINGS of the way; near a fold or past that, a pseudo-arclength step
-        (halved until the corrector converges). False where it cannot go on with steps down
-        to SMALLEST_STEP."""
+        value (no further than `reach`), or where that fails to halfway there (an
+        intermediate point), down to 1/2^NATURAL_HALVINGS of the way; near a fold or past
+        that, a pseudo-arclength step (halved until the corrector converges). A step over
+        which the figures change by more than FIGURE_CHANGE is taken again shorter, in
+        proportion, until it moves p by at most FINEST_FIGURE_STEP: a step that hardly moves
+        p is drawn as the nearly upright line it is (the period-2 branch leaving its
+        doubling at one speed, where the map is affine). False where it cannot go on with
+        steps down to SMALLEST_STEP."""
         target = self.target()
         natural = target is not None and not self.near_fold()
         goal = None if target is None else target / self.unit
+        on_target = goal is not None and abs(goal - self.v[-1]) <= self.reach
+        if natural and not on_target:
+            goal = self.v[-1] + math.copysign(self.reach, goal - self.v[-1])
         halvings = 0
         while self.step >= SMALLEST_STEP:
-            if natural:
-                constraint = np.zeros(self.size + 1)
-                constraint[-1] = 1.0
-                predicted = self.along_axis(goal)
-            else:
-                step, constraint = self.step, self.tangent
-                if goal is not None:  # stop short of the next requested value, not past it
-                    landing = (goal - self.v[-1]) / self.tangent[-1]
-                    if 0.0 < landing:
-                        step = min(step, 0.9 * landing)
-                predicted = self.v + step * self.tangent
-            solved = self.correct(predicted, constraint)
-            if solved is not None and (np.linalg.norm(solved[0] - predicted)
-                                       > CORRECTION_FRACTION * np.linalg.norm(predicted - self.v)):
-                solved = None  # the corrector went far: it may have landed on another branch
+            solved, figures, moved = self.solve_step(natural, goal)
+            change, across, distance = moved
+            if solved is not None and change > 1.0 and across > FINEST_FIGURE_STEP:
+                shorter = max(0.1, 0.8 / change)  # to within the bound, were it linear
+                if natural:
+                    goal, on_target = self.v[-1] + shorter * (goal - self.v[-1]), False
+                else:
+                    self.step = shorter * min(self.step, distance)
+                continue
             if solved is None:
                 if natural and halvings < NATURAL_HALVINGS:
                     halvings += 1
-                    goal = 0.5 * (goal + self.v[-1])
+                    goal, on_target = 0.5 * (goal + self.v[-1]), False
                 elif natural:
                     natural = False
                     self.step = min(self.step, abs(goal - self.v[-1]))
                 else:
                     self.step *= 0.5
                 continue
-            # a step at a fixed value keeps the direction in p (no fold near): its two ends'
-            # tangents may be far from parallel in z over a long step
-            heading = self.tangent
-            if natural:
-                heading = np.zeros(self.size + 1)
-                heading[-1] = np.sign(self.tangent[-1])
-            v, base, iterations, fresh = solved
-            self.accept(v, base, iterations, fresh, natural and halvings == 0, heading)
-            # never below SMALLEST_STEP after a success: the next advance would not try
-            self.step = min(max(self.step * (1.5 if iterations <= 2 else
-                                             0.6 if iterations >= 5 else 1.0), SMALLEST_STEP),
-                            LARGEST_STEP)
+            self.take(solved, figures, natural and on_target, natural, moved)
             return True
         return False
+
+    def take(self, solved, figures, on_grid: bool, natural: bool, moved) -> None:
+        """Accept an advance's step and set the next one (`moved`: solve_step's). The step
+        grows by 1.5 after a corrector of at most 2 iterations, shrinks by 0.6 after one of
+        5 or more, within [SMALLEST_STEP, LARGEST_STEP]; where the figures changed, the next
+        step is kept to what that change allows at the rate of this one (0.9/change of it):
+        `reach` in p, for a natural step, and, where this step moved p by more than
+        FINEST_FIGURE_STEP, the step in v."""
+        v, base, iterations, fresh = solved
+        change, across, distance = moved
+        # a step at a fixed value keeps the direction in p (no fold near): its two ends'
+        # tangents may be far from parallel in z over a long step
+        heading = self.tangent
+        if natural:
+            heading = np.zeros(self.size + 1)
+            heading[-1] = np.sign(self.tangent[-1])
+        self.accept(v, base, iterations, fresh, on_grid, heading, figures)
+        # never below SMALLEST_STEP after a success: the next advance would not try
+        self.step = min(max(self.step * (1.5 if iterations <= 2 else
+                                         0.6 if iterations >= 5 else 1.0), SMALLEST_STEP),
+                        LARGEST_STEP)
+        self.reach = math.inf
+        if change > 0.0:
+            self.reach = max(across * 0.9 / change, FINEST_FIGURE_STEP)
+            if across > FINEST_FIGURE_STEP:
+                self.step = max(min(self.step, distance * 0.9 / change), SMALLEST_STEP)
 
 
 def branch_status(run: Continuation) -> str:

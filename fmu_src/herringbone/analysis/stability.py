@@ -47,6 +47,9 @@ SUBSTEPS = 4  # least Magnus steps per stretch (convergence: tests/analysis/test
 STEP_PHASE = 1.0  # most radians of the fastest frozen mode per Magnus step
 _GAUSS_POINTS = np.array([0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0])
 _MATRICES_AT_ONCE = 8192  # exponentials evaluated in one batch (memory)
+# rad/s: the bracket a band edge between two charted speeds is bisected to (bisected_edges);
+# the edge printed is its midpoint, within half of it
+EDGE_TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -225,10 +228,12 @@ class StabilityChart:
     reads like an approach to instability that is not there."""
     speeds: np.ndarray  # pinion speeds, rad/s, ascending
     largest_modulus: np.ndarray  # |λ|max at each speed, per mesh period
-    # (from, to) rad/s where |λ|max > 1 + resolution
+    # (from, to) rad/s where |λ|max > 1 + resolution; an edge between two speeds bisected
+    # to within edge_tolerance/2 of where it passes, one at the first or last speed there
     unstable_bands: tuple[tuple[float, float], ...]
     mesh_teeth: int  # z_pinion: mesh frequency = speed·z_pinion/(2π)
     resolution: np.ndarray  # |λ|max's rounding at each speed, per mesh period (pure number)
+    edge_tolerance: float = EDGE_TOLERANCE  # rad/s, the bisected brackets' width
 
     @property
     def largest_exponent(self) -> np.ndarray:
@@ -251,26 +256,81 @@ class StabilityChart:
         return 2.0 * math.pi / (self.speeds * self.mesh_teeth)
 
 
+def band_runs(largest_modulus, resolution=0.0) -> list[tuple[int, int]]:
+    """(first, last) sample index of each run of samples where |λ|max > 1 + `resolution`
+    (a pure number or one per sample)."""
+    excess = np.asarray(largest_modulus) - 1.0 - np.asarray(resolution, dtype=float)
+    change = np.diff(np.concatenate([[0], (excess > 0.0).astype(int), [0]]))
+    return list(zip(np.flatnonzero(change == 1).tolist(),
+                    (np.flatnonzero(change == -1) - 1).tolist()))
+
+
 def unstable_bands(parameter, largest_modulus, resolution=0.0) -> tuple[tuple[float, float], ...]:
     """The intervals of a sampled parameter where |λ|max > 1 + `resolution` (what the
     computation resolves, a pure number or one per sample, modulus_resolution; 0: any excess),
     their edges interpolated linearly in |λ|max − 1 − resolution between samples (a band open
-    at an end of the samples ends there)."""
+    at an end of the samples ends there). Where |λ|max can be evaluated between the samples,
+    bisected_edges places the edges to a tolerance instead: |λ|max rises like a square root
+    from a band's edge, so the line from the stable sample's −σ·T to the unstable one's excess
+    lands next to the stable sample (a tenth of the spacing off, and more)."""
     x = np.asarray(parameter, dtype=float)
     excess = np.asarray(largest_modulus) - 1.0 - np.asarray(resolution, dtype=float)
-    change = np.diff(np.concatenate([[0], (excess > 0.0).astype(int), [0]]))
-    firsts, lasts = np.flatnonzero(change == 1), np.flatnonzero(change == -1) - 1
 
     def crossing(i):  # where |λ|max − 1 passes zero between samples i and i + 1
         return float(x[i] + (x[i + 1] - x[i]) * excess[i] / (excess[i] - excess[i + 1]))
 
     return tuple((float(x[0]) if first == 0 else crossing(first - 1),
                   float(x[-1]) if last == len(x) - 1 else crossing(last))
-                 for first, last in zip(firsts, lasts))
+                 for first, last in band_runs(largest_modulus, resolution))
+
+
+def bisected_edges(excess_at, stable, unstable, tolerance) -> np.ndarray:
+    """Band edges by bisection on the sign of excess_at(speeds) (|λ|max − 1 − resolution at
+    an array of speeds, rad/s, all at once): each edge bracketed by a speed where the excess
+    is ≤ 0 (`stable`) and one where it is > 0 (`unstable`), halved until the bracket is at
+    most `tolerance` (rad/s) wide; returns the brackets' midpoints, within tolerance/2 of a
+    speed where the excess changes sign. All edges go together: one batch of monodromies a
+    halving, log2(spacing/tolerance) of them (14 for 111 rad/s to 0.01 rad/s)."""
+    if not tolerance > 0.0:  # a bracket of adjacent floats halves no further
+        raise ValueError(f"edge tolerance {tolerance} rad/s; allowed: > 0")
+    stable, unstable = (np.array(a, dtype=float) for a in (stable, unstable))
+    while stable.size and np.abs(unstable - stable).max() > tolerance:
+        middle = 0.5 * (stable + unstable)
+        growing = excess_at(middle) > 0.0
+        unstable = np.where(growing, middle, unstable)
+        stable = np.where(growing, stable, middle)
+    return 0.5 * (stable + unstable)
+
+
+def speed_bands(stretches, lengths, speeds, largest, resolution, substeps=SUBSTEPS,
+                step_phase=STEP_PHASE, tolerance=EDGE_TOLERANCE):
+    """The unstable bands over charted speeds (rad/s, ascending) of the rigid-free system
+    (mass I) made of `stretches` of angular `lengths` (rad): the runs of speeds where the
+    charted |λ|max (`largest`) exceeds 1 + `resolution`, each edge between two speeds
+    bisected (bisected_edges) on |λ|max − 1 − modulus_resolution to `tolerance` (rad/s); an
+    edge at the first or last speed stays there. Returns ((from, to), ...) rad/s."""
+    size = stretches[0].stiffness.shape[-1]
+
+    def excess_at(at):
+        durations = lengths / at[:, None]
+        phi = periodic_monodromy(np.eye(size), stretches, durations, substeps, step_phase)
+        return (np.abs(np.linalg.eigvals(phi)).max(axis=-1) - 1.0
+                - modulus_resolution(stretches, durations, substeps, step_phase))
+
+    runs = band_runs(largest, resolution)
+    # each edge: (stable neighbour, unstable speed), or a charted end where the band is open
+    brackets = [pair for first, last in runs
+                for pair in (((first - 1, first) if first > 0 else (first, first)),
+                             ((last + 1, last) if last < len(speeds) - 1 else (last, last)))]
+    inner = [n for n, (out, inside) in enumerate(brackets) if out != inside]
+    edges = speeds[[inside for _, inside in brackets]].astype(float)
+    edges[inner] = bisected_edges(excess_at, speeds[[brackets[n][0] for n in inner]],
+                                  speeds[[brackets[n][1] for n in inner]], tolerance)
+    return tuple((float(low), float(high)) for low, high in edges.reshape(-1, 2))
 
 
 def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
-                    on_progress=None) -> StabilityChart:
+                    on_progress=None, edge_tolerance=EDGE_TOLERANCE) -> StabilityChart:
     """The parametric stability of the linear mesh over pinion speeds: the largest Floquet
     multiplier |λ|max at each speed and the unstable bands between them.
 
@@ -285,6 +345,9 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
     on_progress : callable or None
         on_progress(count) is called as each of about ten batches of speeds is done, with
         the batch's size (for a progress bar).
+    edge_tolerance : float
+        rad/s: each band edge between two speeds is bisected to a bracket this wide
+        (speed_bands), at a monodromy per edge per halving: 14 halvings from 111 rad/s.
 
     Returns
     -------
@@ -320,21 +383,37 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
             on_progress(len(batch))
     largest = np.concatenate(parts)
     resolution = modulus_resolution(stretches, durations, substeps, step_phase)
-    return StabilityChart(speeds, largest, unstable_bands(speeds, largest, resolution),
-                          scene.parameters["z_pinion"], resolution)
+    bands = speed_bands(stretches, lengths, speeds, largest, resolution, substeps, step_phase,
+                        edge_tolerance)
+    return StabilityChart(speeds, largest, bands, scene.parameters["z_pinion"], resolution,
+                          edge_tolerance)
+
+
+def chart_curve(chart: StabilityChart) -> tuple[np.ndarray, np.ndarray]:
+    """(speeds rad/s, largest exponent 1/s) as the chart draws them: the charted speeds and
+    each band edge bisected between two of them, where the exponent is 0 (within its rounding
+    and the bisection's tolerance), so that the curve crosses 0 where the shading begins and
+    ends, not where the line between two charted speeds would."""
+    edges = np.array([edge for band in chart.unstable_bands for edge in band
+                      if not np.any(chart.speeds == edge)])
+    speeds = np.concatenate([chart.speeds, edges])
+    exponent = np.concatenate([chart.largest_exponent, np.zeros(len(edges))])
+    order = np.argsort(speeds, kind="stable")
+    return speeds[order], exponent[order]
 
 
 def plot_stability_chart(chart: StabilityChart, path, title=None):
     """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
-    frequency in Hz on the top axis), with the line 0 (growth above, decay below) and the
-    unstable bands shaded."""
+    frequency in Hz on the top axis; chart_curve), with the line 0 (growth above, decay
+    below) and the unstable bands shaded."""
     from .plots import _legend_beside, _pyplot, _save
 
     plt = _pyplot()
     rpm = RPM_PER_RAD_S
     hertz_per_rpm = chart.mesh_teeth / 60.0
     figure, axes = plt.subplots(figsize=(11, 4.5))
-    axes.plot(chart.speeds * rpm, chart.largest_exponent, color="C0", lw=1.2,
+    speeds, exponent = chart_curve(chart)
+    axes.plot(speeds * rpm, exponent, color="C0", lw=1.2,
               label="largest Floquet exponent ln|λ|max / T")
     axes.axhline(0.0, color="k", lw=0.8, ls="--", label="0: neither growth nor decay")
     for number, (low, high) in enumerate(chart.unstable_bands):

@@ -205,16 +205,16 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     Returns
     -------
     pandas.DataFrame
-        "time": a row per point in grid order: the swept values, speed_rpm, K_v, K_v_half (the more
-        loaded helix half's), forces (N; each half's peak too), load_share_left, dte (µm),
+        "time": a row per point in grid order: the swept values, speed_rpm, K_v, K_v_half (the
+        more loaded helix half's), forces (N; each half's peak too), load_share_left, dte (µm),
         contact_lost_share (window_figures), window_drift, linear_floquet_max (the linear
-        mesh's |λ|max; columns name their units), method, stability "time". "shooting": a row per branch point in branch order (at each value
-        it passes, several where it folds back, and those between, on_grid False): the continued
-        quantity, speed_rpm, the torque following a swept one (M_load_Nm, M_motor_Nm), the same
-        figures, floquet_max and floquet_exponent_per_s (1/s) of the orbit, stability ("stable",
-        "unstable", "time": no orbit converged), method, on_grid, event, mesh_periods, branch;
-        attrs: continued, folds, period_doublings, folds_2T, and units, {swept column: its unit}
-        (w0_pinion: "rad/s"; the others name theirs).
+        mesh's |λ|max; columns name their units), method, stability "time". "shooting": a row
+        per branch point in branch order (at each value it passes, several where it folds
+        back, and those between, on_grid False): the continued quantity, speed_rpm, the torque
+        following a swept one (M_load_Nm, M_motor_Nm), the same figures, floquet_max and
+        floquet_exponent_per_s (1/s) of the orbit, stability ("stable", "unstable", "time": no
+        orbit converged), method, on_grid, event, mesh_periods, branch; attrs: continued,
+        folds, period_doublings, folds_2T, and units ({swept column: its unit}).
 
     Raises
     ------

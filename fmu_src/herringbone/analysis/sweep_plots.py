@@ -29,12 +29,18 @@ DOUBLED_COLOUR = "C0"  # a period-2 branch's lines on every panel
 SHOWN_AS = {"dte_p2p_um": "dte peak-to-peak"}
 
 
+# the dots at a branch's orbits (points), small against the time sweeps' triangles (5)
+ORBIT_MARKER_SIZE = 2.5
+
+
 def draw_branch(axes, table, columns, along: str = "speed_rpm") -> None:
     """The branch in its order on each panel (one a column of `columns`) against the column
-    `along`: stable stretches solid, unstable dashed, points found by time integration as open
-    circles, folds as crosses; rows in branch order (a fold makes the speed turn back). A
-    table with period-2 branches (its `branch` column) draws each of them so too, in
-    DOUBLED_COLOUR, with the period doublings they start from as diamonds."""
+    `along`: stable stretches solid, unstable dashed, each with a small dot at every orbit
+    computed (a straight stretch between two dots is no data), points found by time
+    integration as open circles, folds as crosses; rows in branch order (a fold makes the
+    speed turn back). A table with period-2 branches (its `branch` column) draws each of
+    them so too, in DOUBLED_COLOUR, with the period doublings they start from as
+    diamonds."""
     numbers = table["branch"].to_numpy() if "branch" in table else np.zeros(len(table), int)
     for number in np.unique(numbers):
         part = table[numbers == number]
@@ -67,7 +73,8 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
             masked = np.where(shown, values, np.nan)
             panel.plot(np.insert(abscissa.astype(float), gaps, np.nan),
                        np.insert(masked.astype(float), gaps, np.nan), style, color=colour,
-                       lw=1.3, label=_once(panel, f"{name}, {kind_label}{kind} orbits"))
+                       lw=1.3, marker="o", ms=ORBIT_MARKER_SIZE,
+                       label=_once(panel, f"{name}, {kind_label}{kind} orbits"))
         timed = stability == "time"
         if timed.any():
             panel.plot(abscissa[timed], values[timed], "o", mfc="none", color=colour, ms=5,
@@ -211,12 +218,91 @@ def _axis_label(name: str) -> str:
     return f"{name}, {unit}" if unit else name
 
 
-def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
-    """Each point's dte amplitude spectrum as a trace at its speed (rpm, upward), scaled so
-    the largest peak spans two rows, with a scale bar of amplitude beside the plot; mesh orders
-    k·z·n/60 and natural frequencies drawn. The speed axis spans the sweep's speeds."""
+# the frequency axis of a waterfall runs this far past its highest mode or mesh order drawn
+WATERFALL_MARGIN = 1.1
+# a waterfall's peaks are a few bins of its widest trace's (the Hann window's main lobe,
+# 4/50 of a mesh order over a window of 50 mesh periods: 53 Hz at 4000 rpm), on an axis
+# to the fastest mode (15 kHz on the reference scene): at 110 dpi that is 3 pixels, too
+# few for a peak's fill to hide the rows behind it; at 200 dpi 6
+WATERFALL_DPI = 200
+
+
+def waterfall_top(rpm, nyquists, natural, z_pinion) -> tuple[float, list[float]]:
+    """(the waterfall's top frequency, Hz; the natural frequencies above it): past the
+    highest mesh order drawn at the top speed and the fastest mode, where the mesh force
+    rings most (10.4 and 13.4 kHz on the reference scene, whose third order ends at 4.5 kHz
+    at 9000 rpm), unless the fastest-sampled trace ends below: its Nyquist frequency (half
+    its sampling rate; `nyquists`, Hz, one a trace) is then the top, and the modes above it
+    are the ones no trace can show."""
+    wanted = WATERFALL_MARGIN * max([HARMONICS[-1] * z_pinion * max(rpm) / 60.0,
+                                     *(f for f in natural if f > 0)])
+    top = min(wanted, max(nyquists))
+    return top, [f for f in natural if f > top]
+
+
+def waterfall_traces(axes, rpm, spectra, per_um, top) -> None:
+    """Each spectrum (frequency, amplitude µm) as a trace at its speed (rpm), height per_um
+    rpm a µm, up to `top` Hz or its own Nyquist frequency. The area under each trace is
+    filled with the background, and the lower (nearer) rows drawn over the higher: a peak
+    that rises past the rows above hides them where it stands (a hidden-line waterfall),
+    instead of showing through as if they rang there. The reference lines lie behind."""
+    for number, (n, (frequency, amplitude)) in enumerate(zip(rpm, spectra)):
+        keep = frequency <= top
+        depth = 2.0 * (len(rpm) - number)  # the lowest speed is the nearest row
+        axes.fill_between(frequency[keep], n, n + per_um * amplitude[keep], color="white",
+                          lw=0.0, zorder=depth)
+        axes.plot(frequency[keep], n + per_um * amplitude[keep], color="k", lw=0.7,
+                  zorder=depth + 1.0)
+
+
+def waterfall_reference_lines(axes, rpm, natural, z_pinion, top) -> None:
+    """The mesh orders k·z·n/60 (k in HARMONICS) and the natural frequencies up to `top` Hz,
+    behind every trace (zorder 1)."""
+    speeds = np.linspace(0.0, max(rpm), 50)
+    for k in HARMONICS:
+        axes.plot(k * z_pinion * speeds / 60.0, speeds, color=f"C{3 + k}", lw=0.9, ls="--",
+                  label=f"mesh order k = {k} (k·z·n/60)", zorder=1)
+    for number, f in enumerate(f for f in natural if 0 < f <= top):
+        axes.axvline(f, color="C2", lw=0.8, ls=":", zorder=1,
+                     label="natural frequencies" if number == 0 else None)
+
+
+def waterfall_scale_bar(axes, low: float, per_um: float, largest: float) -> None:
+    """A bar of 1, 2 or 5 × 10^n µm of amplitude beside the plot, from the row at `low` rpm
+    (per_um rpm of trace height a µm), no longer than the largest peak (µm)."""
     from matplotlib.transforms import blended_transform_factory
 
+    bar = 10.0 ** np.floor(np.log10(largest))
+    bar *= max(m for m in (1, 2, 5) if m * bar <= largest)
+    beside = blended_transform_factory(axes.transAxes, axes.transData)
+    axes.plot([1.02, 1.02], [low, low + per_um * bar], color="k", lw=2.0,
+              transform=beside, clip_on=False)
+    axes.text(1.03, low + 0.5 * per_um * bar, f"{bar:g} µm\ndte amplitude",
+              transform=beside, va="center", ha="left", fontsize=8)
+
+
+def frequency_label(top, nyquists, beyond, rpm, z_pinion) -> str:
+    """The waterfall's frequency axis label: where traces end at their Nyquist frequency
+    before `top` (Hz), how many samples a mesh period that is, and the modes (`beyond`, Hz)
+    that lie above every trace's."""
+    label = "frequency, Hz"
+    if min(nyquists) < top:
+        samples = round(2.0 * nyquists[-1] / (z_pinion * rpm[-1] / 60.0))
+        label += (f"\neach trace ends at its Nyquist frequency: {samples} samples a mesh "
+                  f"period, {samples // 2} mesh orders")
+    if beyond:
+        label += (f"; modes at {', '.join(f'{f:.0f}' for f in beyond)} Hz above every "
+                  "trace's")
+    return label
+
+
+def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
+    """Each point's dte amplitude spectrum as a trace at its speed (rpm, upward), scaled so
+    the largest peak spans two rows, filled beneath and drawn front (low speed) to back so
+    that each hides what lies behind it (waterfall_traces), with a scale bar of amplitude
+    beside the plot; mesh orders k·z·n/60 and natural frequencies drawn. The frequency axis
+    reaches the fastest mode where the sampling resolves it (waterfall_top), and its label
+    says where traces stop short of it. The speed axis spans the sweep's speeds."""
     plt = _pyplot()
     order = np.argsort(table["w0_pinion"].to_numpy())
     rpm = table["speed_rpm"].to_numpy()[order]
@@ -227,32 +313,19 @@ def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
     largest = max(s[1:].max() for _, s in spectra)
     row = np.diff(rpm).mean() if len(rpm) > 1 else 1.0
     per_um = 2.0 * row / largest  # rpm of trace height per µm of amplitude
-    top_frequency = HARMONICS[-1] * z_pinion * rpm.max() / 60.0 * 1.15
+    nyquists = [float(frequency[-1]) for frequency, _ in spectra]
+    top, beyond = waterfall_top(rpm, nyquists, natural, z_pinion)
     figure, axes = plt.subplots(figsize=(11, 7))
-    for n, (frequency, amplitude) in zip(rpm, spectra):
-        keep = frequency <= top_frequency
-        axes.plot(frequency[keep], n + per_um * amplitude[keep], color="k", lw=0.7)
-    speeds = np.linspace(0.0, rpm.max(), 50)
-    for k in HARMONICS:
-        axes.plot(k * z_pinion * speeds / 60.0, speeds, color=f"C{3 + k}", lw=0.9, ls="--",
-                  label=f"mesh order k = {k} (k·z·n/60)")
-    for number, f in enumerate(f for f in natural if 0 < f <= top_frequency):
-        axes.axvline(f, color="C2", lw=0.8, ls=":",
-                     label="natural frequencies" if number == 0 else None)
-    axes.set_xlim(0, top_frequency)
+    waterfall_traces(axes, rpm, spectra, per_um, top)
+    waterfall_reference_lines(axes, rpm, natural, z_pinion, top)
+    axes.set_xlim(0, top)
     axes.set_ylim(rpm.min() - 0.5 * row, rpm.max() + 2.2 * row)  # room for the top trace
     axes.set_yticks([t for t in axes.get_yticks() if rpm.min() <= t <= rpm.max()])
     axes.spines["left"].set_bounds(rpm.min(), rpm.max())
-    bar = 10.0 ** np.floor(np.log10(largest))
-    bar *= max(m for m in (1, 2, 5) if m * bar <= largest)
-    beside = blended_transform_factory(axes.transAxes, axes.transData)
-    axes.plot([1.02, 1.02], [rpm.min(), rpm.min() + per_um * bar], color="k", lw=2.0,
-              transform=beside, clip_on=False)
-    axes.text(1.03, rpm.min() + 0.5 * per_um * bar, f"{bar:g} µm\ndte amplitude",
-              transform=beside, va="center", ha="left", fontsize=8)
-    axes.set_xlabel("frequency, Hz")
+    waterfall_scale_bar(axes, rpm.min(), per_um, largest)
+    axes.set_xlabel(frequency_label(top, nyquists, beyond, rpm, z_pinion))
     axes.set_ylabel("pinion speed, rpm (each trace: the dte amplitude spectrum at that speed)")
     axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     axes.grid(True, alpha=0.3)
     axes.set_title(title)
-    _save(figure, path)
+    _save(figure, path, dpi=WATERFALL_DPI)

@@ -2,6 +2,7 @@
 speed, with its unstable bands."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..model.parameters import RPM_PER_RAD_S
@@ -56,7 +57,8 @@ def execute(args, parser) -> int:
 
 def summary(chart) -> list[str]:
     """The chart in lines: the exponent's span, what it means at the speeds (decay, neither
-    growth nor decay within rounding, growth), the unstable bands."""
+    growth nor decay within rounding, growth), the unstable bands (to the digits their
+    bisection holds)."""
     exponent, speeds, neutral = chart.largest_exponent, chart.speeds, chart.neutral
     decaying = ~neutral & (chart.largest_modulus < 1.0)
     lines = [f"largest Floquet exponent from {exponent.min():.6g} to {exponent.max():.6g} 1/s "
@@ -73,9 +75,13 @@ def summary(chart) -> list[str]:
                          f"1/s) at {neutral.sum()} of {len(speeds)} speeds: there the slowest "
                          "disturbance neither grows nor decays, no damping reaches it (in a "
                          "train without damping nothing decays)")
-    for band_low, band_high in chart.unstable_bands:
-        lines.append(f"unstable: {band_low:.1f}-{band_high:.1f} rad/s "
-                     f"({band_low * RPM_PER_RAD_S:.0f}-{band_high * RPM_PER_RAD_S:.0f} rpm)")
+    # the digits the edges hold: an edge is bisected to within edge_tolerance/2
+    places = max(0, round(-math.log10(chart.edge_tolerance)))
+    rpm_places = max(0, round(-math.log10(chart.edge_tolerance * RPM_PER_RAD_S)))
+    for low, high in chart.unstable_bands:
+        lines.append(f"unstable: {low:.{places}f}-{high:.{places}f} rad/s "
+                     f"({low * RPM_PER_RAD_S:.{rpm_places}f}-{high * RPM_PER_RAD_S:.{rpm_places}f}"
+                     f" rpm; edges to ±{0.5 * chart.edge_tolerance:g} rad/s)")
     if not chart.unstable_bands:
         lines.append("no unstable band: every multiplier inside the unit circle"
                      + ("" if decaying.all() else " or on it within rounding"))
