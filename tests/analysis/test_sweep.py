@@ -748,5 +748,5 @@ def test_a_lead_error_loads_one_half_beyond_what_k_v_says(reference_scene):
     assert orbit["K_v_half"] == pytest.approx(1.737, abs=1e-3)
     assert orbit["K_v"] == pytest.approx(1.408, abs=1e-3)
     assert ("K_v_half from 1.7372 to 1.7372 (stable orbits): the more loaded helix half, its "
-            "peak over half the static force; the left half carries 67.3-67.3 % of the load "
+            "peak over half the static force; the left half carries 67.3 % of the load "
             "(load_share_left)") in describe(scene, branch, 1.0).splitlines()

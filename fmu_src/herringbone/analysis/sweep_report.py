@@ -126,9 +126,11 @@ def _half_lines(table, where: str) -> list[str]:
             table["K_v_half"] > (1.0 + HALF_FACTOR_SPREAD) * table["K_v"]).any():
         return []
     half, share = table["K_v_half"], 100.0 * table["load_share_left"]
+    shares = (f"{share.min():.1f}" if f"{share.min():.1f}" == f"{share.max():.1f}"
+              else f"{share.min():.1f}-{share.max():.1f}")
     return [f"K_v_half from {half.min():.4f} to {half.max():.4f}{where}: the more loaded helix "
             f"half, its peak over half the static force; the left half carries "
-            f"{share.min():.1f}-{share.max():.1f} % of the load (load_share_left)"]
+            f"{shares} % of the load (load_share_left)"]
 
 
 def by_shooting(table) -> bool:
