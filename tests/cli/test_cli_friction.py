@@ -562,6 +562,23 @@ def test_torques_that_do_not_balance_are_said_by_info_and_run(tmp_path, capsys):
     assert "does not balance" not in capsys.readouterr().out
 
 
+def test_an_input_table_that_stops_balancing_is_said(tmp_path, capsys):
+    """docs/scenes.md's example steps M_motor to 1000 N·m at 0.05 s and keeps M_load at 1800
+    N·m: the pinion runs from 157 to 425 rad/s, which info and the run's summary now say (they
+    said it of constant torques only); torque_step, whose rows all balance, says nothing."""
+    scene = tmp_path / "stepped.toml"
+    scene.write_text("[inputs]\ntable = [[0.0, 500.0, 1800.0], [0.05, 1000.0, 1800.0]]\n")
+    said = ("from t = 0.05 s M_load = 1800 N·m does not balance M_motor = 1000 N·m (u = 3.6): "
+            "the train accelerates while they hold (steady running needs M_load = u·M_motor)")
+    assert main(["info", str(scene)]) == 0
+    assert said in capsys.readouterr().out.splitlines()
+    assert main(["run", str(scene), "--stop-time", "1e-3", "--no-progress",
+                 "-o", str(tmp_path / "run.csv")]) == 0
+    assert said in capsys.readouterr().out.splitlines()
+    assert main(["info", "torque_step"]) == 0
+    assert "does not balance" not in capsys.readouterr().out
+
+
 def test_a_run_whose_static_deflection_is_not_small_says_so(tmp_path, capsys):
     """Bearings of 1e4 N/m deflect 1.15 m under the reference's mesh force: the run's dte
     starts at 2.3 m, 576 times the module, and the summary says the model does not hold

@@ -169,12 +169,30 @@ def unbalance(scene) -> str | None:
 def unbalance_lines(scene) -> list[str]:
     """What `info` and a run's summary say of torques that do not balance (unbalance): the
     train accelerates, as a scene that gives M_motor alone and keeps the reference's M_load
-    does; [] where they balance."""
+    does, or one whose input table steps one torque alone; [] where they balance."""
+    if len(scene.inputs.times) > 1:
+        return _table_unbalance_lines(scene)
     unbalanced = unbalance(scene)
     if unbalanced is None:
         return []
     return [f"{unbalanced}: the train accelerates (steady running needs M_load = u·M_motor = "
             f"{gear_ratio(scene) * scene.inputs.at(0.0)[0]:g} N·m)"]
+
+
+def _table_unbalance_lines(scene) -> list[str]:
+    """unbalance_lines of a scene with an input table: the first row whose torques do not
+    balance (to 1e-9), and how many more there are."""
+    ratio, inputs = gear_ratio(scene), scene.inputs
+    rows = [(float(t), float(m), float(load))
+            for t, m, load in zip(inputs.times, inputs.M_motor, inputs.M_load)
+            if abs(load - ratio * m) > 1e-9 * max(abs(load), abs(ratio * m), 1e-300)]
+    if not rows:
+        return []
+    time, motor, load = rows[0]
+    more = f", and in {len(rows) - 1} later rows" if len(rows) > 1 else ""
+    return [f"from t = {time:g} s M_load = {load:g} N·m does not balance M_motor = {motor:g} "
+            f"N·m (u = {ratio:g}{more}): the train accelerates while they hold (steady "
+            "running needs M_load = u·M_motor)"]
 
 
 def balanced_torques(scene, name: str, value: float) -> dict[str, float]:
