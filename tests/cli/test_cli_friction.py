@@ -644,8 +644,13 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys):
             ("zeta=1", "--set zeta=1: unknown parameter 'zeta'; did you mean 'zeta_mesh'?"),
             ("beta=5", "--set beta=5: beta is 5 rad; allowed: (0, 1.5708) rad"),
             ("beta=abc", "--set 'beta=abc': the value 'abc' is not a number, true or false"),
-            ("beta", "--set 'beta': allowed: NAME=VALUE")):
+            ("beta", "--set 'beta': allowed: NAME=VALUE"),
+            ("bearings=false", "--set bearings=false: bearings is a component, not a "
+                               "parameter; allowed: a scene file's [components] sets it")):
         assert main(["info", REFERENCE, "--set", setting]) == 2
         assert expected in one_error_line(capsys, "info")
+    assert main(["info", REFERENCE, "--set", "w0_pinion=450", "--set", "w0_pinion=300"]) == 2
+    assert "--set w0_pinion is given 2 times; allowed: each name once" in \
+        one_error_line(capsys, "info")
     assert main(["run", str(MODELS / "torque_step.toml"), "--set", "M_motor=100"]) == 2
     assert "the scene's torques are a table of 2 rows" in one_error_line(capsys, "run")

@@ -152,13 +152,21 @@ def scene_of(args, parser: argparse.ArgumentParser):
     """The command's scene: SCENE (a file or a shipped scene's name) with --set's changes, an
     input torque by Scene.with_inputs, a parameter by Scene.with_parameters; one line naming
     the setting where one is refused. The changes are said in a line on stdout first."""
-    from ..model.parameters import INPUTS, unit_of, with_unit
+    from ..model.parameters import COMPONENTS, INPUTS, unit_of, with_unit
     from ..model.scene import load_scene
 
     scene = load_scene(args.scene)
-    for name, value in getattr(args, "settings", []):
+    settings = getattr(args, "settings", [])
+    names = [name for name, _ in settings]
+    for name, value in settings:
+        if names.count(name) > 1:
+            fail(parser, f"--set {name} is given {names.count(name)} times; allowed: each name "
+                         "once")
+        if name in COMPONENTS:
+            fail(parser, f"--set {name}={_toml(value)}: {name} is a component, not a "
+                         "parameter; allowed: a scene file's [components] sets it")
         if name in INPUTS and len(scene.inputs.times) > 1:
-            fail(parser, f"--set {name}={value}: the scene's torques are a table of "
+            fail(parser, f"--set {name}={_toml(value)}: the scene's torques are a table of "
                          f"{len(scene.inputs.times)} rows; allowed: --set of a torque on a "
                          "scene with constant torques")
         try:
@@ -166,12 +174,17 @@ def scene_of(args, parser: argparse.ArgumentParser):
                      else scene.with_parameters(**{name: value}))
         except (SceneError, TypeError) as error:
             reason = str(error).split(": ", 1)[-1]
-            fail(parser, f"--set {name}={value}: {reason}")
+            fail(parser, f"--set {name}={_toml(value)}: {reason}")
     if getattr(args, "settings", []):
-        changes = ", ".join(f"{name} = {with_unit(str(value), unit_of(name))}"
-                            for name, value in args.settings)
+        changes = ", ".join(f"{name} = {with_unit(_toml(value), unit_of(name))}"
+                            for name, value in settings)
         print(f"scene {scene.name} with {changes} (--set)")
     return scene
+
+
+def _toml(value) -> str:
+    """A --set value as a scene file writes it (true, not Python's True)."""
+    return ("true" if value else "false") if isinstance(value, bool) else str(value)
 
 
 class _SpeedsAction(argparse.Action):
