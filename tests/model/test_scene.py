@@ -213,3 +213,18 @@ def test_a_flag_may_be_numpys_bool():
     assert scene.parameters["contact_loss"] is False
     table = herringbone.scene_from_dict({"components": {"bearings": np.bool_(False)}})
     assert table.components["bearings"] is False
+
+
+def test_an_edge_ramp_over_half_the_narrower_face_is_refused(tmp_path):
+    """edge_ramp is the contact ellipse's half-length in metres: one over half the narrower
+    face (1 given for 1 mm: 30 face widths) leaves no point ever fully loaded, and is refused
+    naming it, from a file and from with_parameters, even where a face is narrowed."""
+    path = tmp_path / "ramp.toml"
+    path.write_text("[parameters]\nedge_ramp = 1\n")
+    with pytest.raises(SceneError, match=r"\[parameters\] edge_ramp is 1.0 m, over half the "
+                                         r"narrower face width \(0.035 m\); allowed: <= 0.0175"):
+        herringbone.load_scene(path)
+    ramped = herringbone.scene_from_dict({"parameters": {"edge_ramp": 0.005}})
+    with pytest.raises(SceneError, match="with_parameters: edge_ramp is 0.005 m"):
+        ramped.with_parameters(b_right=0.008)
+    assert ramped.with_parameters(b_right=0.01).parameters["edge_ramp"] == 0.005

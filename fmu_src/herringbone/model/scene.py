@@ -130,7 +130,11 @@ class Scene:
         """
         # checked here first, so that a bad value is named by this call, not the scene's file
         _check_parameters(changes, self.components, self.source, call="with_parameters")
-        return replace(self, given={**self.given, **changes})
+        try:
+            return replace(self, given={**self.given, **changes})
+        except SceneError as error:  # parameters that do not go together (_check_edge_ramp)
+            raise SceneError(error.problem, self.source, error.table, error.key,
+                             "with_parameters") from None
 
     def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
         """A copy with other input torques: constants (N·m; one left out keeps the scene's
@@ -352,11 +356,23 @@ def _complete_parameters(given, components, source):
             values[name] = float(values[name])
         elif p.kind is bool:  # numpy's np.bool_ too
             values[name] = bool(values[name])
+    _check_edge_ramp(values, source)
     if components["bearings"]:
         for gear in ("pinion", "wheel"):
             if values[f"J_{gear}"] is None:
                 values[f"J_{gear}"] = solid_cylinder_transverse_inertia(values, gear)
     return values
+
+
+def _check_edge_ramp(values, source):
+    """SceneError where the contact ellipse's half-length passes half the narrower face: no
+    point would ever carry its full stiffness (a ramp of 1 given for 1 mm is 30 face widths)."""
+    ramp, narrower = values["edge_ramp"], min(values["b_left"], values["b_right"])
+    if ramp > 0.5 * narrower:
+        raise SceneError(f"edge_ramp is {ramp!r} m, over half the narrower face width "
+                         f"({narrower:g} m); allowed: <= {0.5 * narrower:g} m, the contact "
+                         "ellipse's half-length in metres (1 mm is 0.001)",
+                         source, "parameters", "edge_ramp")
 
 
 def _experiment(table, source):
