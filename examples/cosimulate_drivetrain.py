@@ -17,7 +17,7 @@ fit twice in the run.  A run whose means lie far from the intersection has diver
 too long for the explicit coupling of motor and gear): it is said so, not tabled.  Exit
 code 0; 1 if the co-simulation stopped early or diverged; 2 for a bad argument or an SSP that
 cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
-and libcosimpy (`pip install "herringbone[cosim]"`).
+and libcosimpy (`pip install libcosimpy`, or `pip install ".[cosim]"` in herringbone's source).
 """
 import argparse
 import io

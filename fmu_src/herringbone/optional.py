@@ -17,7 +17,8 @@ class MissingDependency(ImportError):
 
 def require(module: str, needed_for: str) -> ModuleType:
     """The imported `module` (e.g. "pandas", "matplotlib.pyplot"), or MissingDependency
-    "<needed_for> needs <package>, which is not installed: pip install 'herringbone[<extra>]'".
+    "<needed_for> needs <package>, which is not installed: pip install <package> (or ...
+    the <extra> extra)": the package is installed from its source, not an index.
     """
     package = module.split(".")[0]
     try:
@@ -27,4 +28,6 @@ def require(module: str, needed_for: str) -> ModuleType:
             raise
         extra = EXTRAS.get(package, "all")
         raise MissingDependency(f"{needed_for} needs {package}, which is not installed: "
-                                f"pip install 'herringbone[{extra}]'") from None
+                                f"pip install {package} (or every dependency of the {extra!r} "
+                                f"extra: pip install \".[{extra}]\" in herringbone's source "
+                                "folder)") from None

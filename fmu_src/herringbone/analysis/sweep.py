@@ -221,7 +221,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
     ValueError
         Before any work, anything not allowed (check_sweep); SceneError for no Scene.
     MissingDependency
-        pandas (or dask, tqdm) is not installed: `pip install "herringbone[analysis]"`.
+        pandas (or dask, tqdm) is not installed: `pip install pandas`, or the analysis extra.
 
     Examples
     --------
