@@ -9,7 +9,7 @@ from herringbone.analysis.plots import spread_apart
 def test_a_train_on_rigid_bearings_has_only_torsional_modes():
     modes = elastic_modes(load_scene("torsional"))
     assert len(modes) == 3
-    assert all(mode.kind == "torsional" for mode in modes)
+    assert all(mode.kind.startswith("torsional (") for mode in modes)
 
 
 def test_reference_modes_are_named_by_their_dominant_motion():
@@ -19,13 +19,32 @@ def test_reference_modes_are_named_by_their_dominant_motion():
     named = {round(m.frequency, -1): (m.kind, m.bodies) for m in modes}
     # the motor against the load on the shafts; the mesh mode (the wheel turning against the
     # pinion); halves alike exert no moment about the line of centres, so the tilts move alone
-    assert named[110.0] == ("torsional", ("load", "motor"))
-    assert named[680.0] == ("torsional", ("wheel",))
-    assert named[1500.0] == ("lateral", ("wheel",))
-    assert named[2060.0] == ("tilt", ("wheel",))
-    assert named[13350.0] == ("tilt", ("pinion",))
+    assert named[110.0] == ("torsional (100 % of kinetic energy)", ("load", "motor"))
+    assert named[680.0] == ("torsional (98 % of kinetic energy)", ("wheel",))
+    assert named[1500.0] == ("lateral (95 % of kinetic energy)", ("wheel",))
+    assert named[2060.0] == ("tilt (100 % of kinetic energy)", ("wheel",))
+    assert named[13350.0] == ("tilt (100 % of kinetic energy)", ("pinion",))
     # the pinion's lateral and torsional motions share these two modes
-    assert {named[4400.0][0], named[10420.0][0]} == {"lateral/torsional", "torsional/lateral"}
+    assert named[4400.0][0] == "lateral (59 % of kinetic energy)"
+    assert named[10420.0][0] == "torsional (56 % of kinetic energy)"
+
+
+def test_the_campbell_diagram_names_each_mode_as_info_does():
+    """`herringbone campbell reference` named the 10.4 kHz and 4397 Hz modes
+    "torsional/lateral (pinion)" and "lateral/torsional (pinion)" where `herringbone info`
+    says "torsional (56 % of kinetic energy)" and "lateral (59 % of kinetic energy)": the
+    diagram now takes info's naming (report.mode_character), each label info's words for its
+    mode and the bodies that move in it."""
+    from herringbone.analysis.report import scene_report
+
+    scene = load_scene("reference")
+    lines = [line.split("Hz", 1) for line in scene_report(scene).splitlines()
+             if line.rstrip().endswith("% of kinetic energy)")]
+    info = {round(float(head.split()[-1]), 2): words.strip() for head, words in lines}
+    modes = elastic_modes(scene)
+    assert [info[round(m.frequency, 2)] for m in modes] == [m.kind for m in modes]
+    assert modes[-2].label == "10419 Hz torsional (56 % of kinetic energy): pinion"
+    assert modes[-3].label == "4397 Hz lateral (59 % of kinetic energy): pinion"
 
 
 def test_labels_are_spread_at_least_a_gap_apart_and_under_the_ceiling():
@@ -267,3 +286,243 @@ def test_a_branchs_pictures_dot_every_orbit_computed(monkeypatch, tmp_path):
     (entry,) = [handle for handle, text in zip(legend.legend_handles, legend.get_texts())
                 if text.get_text() == "K_v, stable orbits"]
     assert entry.get_marker() == "o"
+
+
+def drawn_run(monkeypatch, tmp_path, scene, results):
+    """The figures run_report.plot_run draws for a run: (time histories, spectra); those
+    drawn before closed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    from herringbone.analysis import plots, run_report
+
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda figure, path, **kw: drawn.append(figure))
+    run_report.plot_run(scene, results, tmp_path / "run.csv")
+    return drawn
+
+
+def amplitude_at(line, frequency):
+    """A spectrum line's amplitude at the bin nearest `frequency` (Hz)."""
+    import numpy as np
+
+    return float(line.get_ydata()[np.argmin(np.abs(line.get_xdata() - frequency))])
+
+
+def test_a_runs_spectrum_at_the_default_interval_reads_what_fine_samples_do(monkeypatch,
+                                                                            tmp_path):
+    """`herringbone run reference --stop-time 0.2 --plot`: the spectrum took the run's samples
+    every 100 µs (Nyquist 5 kHz; the train rings at 10.4 and 13.4 kHz and the mesh force jumps
+    at every contact switch): F_mesh read 773.9 N at 250 Hz and 1308.6 N at 2.5 kHz, against
+    41.5 N and 18.1 N sampled every 1 µs. Its samples now come from the compiled integrator
+    run again at 128 a period of the fastest mode (0.59 µs): within 5 % of those (40.8 N,
+    17.6 N), and the title says where they come from and how often."""
+    import numpy as np
+
+    import herringbone
+    from herringbone.analysis.plots import amplitude_spectrum, whole_mesh_periods
+
+    scene = load_scene("reference")
+    drawn = drawn_run(monkeypatch, tmp_path, scene, herringbone.simulate(scene, stop_time=0.2))
+    fine = herringbone.simulate(scene, stop_time=0.2, output_interval=1e-6)
+    keep, periods = whole_mesh_periods(fine["time"], 250.0)
+    frequency, amplitude = amplitude_spectrum(fine["F_mesh"][keep], 1e-6)
+    force = drawn[-1].axes[1].get_lines()[0]  # kN
+    for harmonic in (250.0, 2500.0):
+        truth = float(amplitude[np.argmin(np.abs(frequency - harmonic))])
+        assert 1e3 * amplitude_at(force, harmonic) == pytest.approx(truth, rel=0.05), harmonic
+    assert periods == 25
+    title = drawn[-1].axes[0].get_title()
+    assert "the last 25 mesh periods" in title and "f_mesh 250.0 Hz" in title
+    assert "sampled every 0.592 µs by the compiled integrator run again" in title
+    assert "every 100 µs, do not resolve it" in title
+    assert drawn[-1].axes[1].get_xlim()[1] > 1.34e4  # the fastest modes show
+
+
+def test_a_run_whose_speed_changes_marks_the_harmonics_of_its_window(monkeypatch, tmp_path):
+    """docs/scenes.md's torque table (M_motor 500 then 1000 N·m from 10 ms; M_load 1800 N·m)
+    speeds the pinion up from 157 rad/s to about 650: the spectrum said "f_mesh 250.0 Hz",
+    the starting speed's, sized its window from it and marked its harmonics at 250, 500, 750
+    Hz, and the time picture read "w0 1500 rpm". Now the mesh frequency is the mean pinion
+    speed's over the window (818 Hz: 4910 rpm), the harmonics are bands over the speeds there
+    (a line fitted to them: 607-1032 Hz), and the time picture gives the speed's range."""
+    import math
+
+    import numpy as np
+
+    import herringbone
+
+    scene = herringbone.scene_from_dict({
+        "components": {"bearings": False}, "parameters": {"stagger": 0.5},
+        "experiment": {"stop_time": 0.1, "output_interval": 1e-4},
+        "inputs": {"table": [[0.0, 500.0, 1800.0], [0.01, 1000.0, 1800.0]]}}, name="table")
+    drawn = drawn_run(monkeypatch, tmp_path, scene, herringbone.simulate(scene))
+    histories, spectra = (figure.axes for figure in drawn)
+    assert "(pinion 1508-59" in histories[0].get_title()
+    assert "w0 1500 rpm" in histories[0].get_title()
+    title = spectra[0].get_title()
+    mesh = float(title.split("f_mesh ")[1].split(" Hz")[0])
+    fine = herringbone.simulate(scene, output_interval=1e-6)
+    window = fine["time"] >= 0.1 - 40.0 / mesh
+    assert mesh == pytest.approx(np.mean(fine["w_pinion"][window]) * 10 / (2 * math.pi),
+                                 rel=2e-3)
+    assert mesh == pytest.approx(818.4, abs=1.0)
+    assert "the last 40 mesh periods" in title
+    bands = [patch.get_x() for patch in spectra[0].patches]
+    widths = [patch.get_width() for patch in spectra[0].patches]
+    assert bands[0] == pytest.approx(607.0, abs=5.0) and widths[0] == pytest.approx(425.0,
+                                                                                      abs=10.0)
+    assert bands[1] == pytest.approx(2 * bands[0])
+    assert not [line for line in spectra[0].get_lines() if line.get_color() == "C3"]
+
+
+def test_each_bodys_bearings_have_a_panel_and_a_style_a_side(monkeypatch, tmp_path):
+    """`herringbone run lead_error --plot`: the four bearing traces shared one panel, a few
+    percent apart and crossing at every mesh period, and could not be told apart. Each body's
+    now has its own panel, left solid and right dashed in colours of their own, named in
+    the legend; the reference scene's equal bearings are drawn once a body."""
+    import herringbone
+
+    scene = load_scene("lead_error")
+    drawn = drawn_run(monkeypatch, tmp_path, scene, herringbone.simulate(scene, stop_time=0.02))
+    axes = drawn[0].axes
+    assert len(axes) == 4
+    for panel, body in zip(axes[1:3], ("pinion", "wheel")):
+        lines = panel.get_lines()
+        assert [(line.get_color(), line.get_linestyle()) for line in lines] == [
+            ("C0", "-"), ("C1", "--")]
+        labels = [text.get_text() for text in panel.get_legend().get_texts()]
+        assert [label.split(" (mean")[0] for label in labels] == [f"{body} left",
+                                                                   f"{body} right"]
+    scene = load_scene("reference")
+    drawn = drawn_run(monkeypatch, tmp_path, scene, herringbone.simulate(scene, stop_time=0.02))
+    assert [[text.get_text().split(" (mean")[0] for text in panel.get_legend().get_texts()]
+            for panel in drawn[0].axes[1:3]] == [["pinion left = right"],
+                                                 ["wheel left = right"]]
+
+
+def drawn_sweep(monkeypatch):
+    """The figures sweep_plots draws, laid out as _save lays them out; those drawn before
+    closed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    from herringbone.analysis import sweep_plots
+
+    drawn = []
+
+    def save(figure, path, **kw):
+        figure.tight_layout()
+        figure.canvas.draw()
+        drawn.append(figure)
+
+    monkeypatch.setattr(sweep_plots, "_save", save)
+    return drawn
+
+
+def lead_error_branch():
+    """A branch over the reference scene's speeds whose left half carries more of the load (a
+    lead error): K_v_half up to 2.1 % over K_v, and a helix half out of contact at two
+    orbits."""
+    import numpy as np
+    import pandas as pd
+
+    speeds = np.array([100.0, 300.0, 470.0, 700.0, 1000.0])
+    k_v = np.array([1.51, 1.47, 1.77, 1.50, 1.52])
+    return pd.DataFrame({"w0_pinion": speeds, "speed_rpm": speeds * 30 / np.pi, "K_v": k_v,
+                         "K_v_half": k_v * np.array([1.02, 1.021, 1.02, 1.02, 1.021]),
+                         "dte_p2p_um": [13.6, 13.0, 21.7, 15.0, 14.2],
+                         "contact_lost_share": [0.0, 0.0, 0.12, 0.03, 0.0],
+                         "stability": "stable", "event": ""})
+
+
+def test_a_lead_errors_sweep_draws_the_more_loaded_halfs_factor(monkeypatch, tmp_path):
+    """`herringbone sweep lead_error --speeds 100 1000 12` printed "K_v_half ... 1.8087 ... the
+    left half carries 51.7 %" but its pictures drew K_v alone, like the reference scene's.
+    Where K_v_half exceeds K_v by more than HALF_FACTOR_SPREAD somewhere, the K_v panel draws
+    it too (its own colour), on the resonance curve and the parameter curve, by shooting and
+    by time integration; halves alike (K_v_half = K_v) draw none."""
+    import numpy as np
+
+    from herringbone.analysis import sweep_plots
+
+    drawn = drawn_sweep(monkeypatch)
+    branch = lead_error_branch()
+    timed = branch.assign(stability="time").drop(columns="event").assign(dte_rms_um=3.0)
+    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], 10, "branch")
+    sweep_plots.plot_resonance_curve(timed.drop(columns="stability"), tmp_path / "t.png", [],
+                                     10, "time")
+    sweep_plots.plot_parameter_sweep(branch.assign(dbeta_left=np.linspace(0, 2e-4, 5)),
+                                     ["dbeta_left"], tmp_path / "p.png", "parameter")
+    for figure, label in zip(drawn, ["K_v_half (more loaded half), stable orbits",
+                                     "K_v_half (more loaded half)",
+                                     "K_v_half (more loaded half), stable orbits"]):
+        (half,) = [line for line in figure.axes[0].get_lines() if line.get_label() == label]
+        assert np.allclose(half.get_ydata(), branch["K_v_half"])
+        assert half.get_color() == sweep_plots.HALF_COLOUR
+        assert label in [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    from herringbone.analysis.sweep_plots import HALF_FACTOR_SPREAD
+
+    assert HALF_FACTOR_SPREAD == 0.01
+    alike = branch.assign(K_v_half=branch["K_v"] * 1.005)  # within HALF_FACTOR_SPREAD
+    sweep_plots.plot_resonance_curve(alike, tmp_path / "a.png", [], 10, "alike")
+    assert not [line for line in drawn[-1].axes[0].get_lines()
+                if str(line.get_label()).startswith("K_v_half")]
+
+
+def test_a_speed_sweeps_resonance_curve_marks_contact_loss(monkeypatch, tmp_path):
+    """`herringbone sweep jump_resonance --speeds 2300 2500 11` printed "a helix half out of
+    contact at 58 points", and the parameter sweeps' pictures marked such points, but the
+    resonance curve marked none. It now draws the same open square at each point with
+    contact_lost_share > 0, on both panels."""
+    from herringbone.analysis import sweep_plots
+
+    drawn = drawn_sweep(monkeypatch)
+    branch = lead_error_branch()
+    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], 10, "branch")
+    for panel, column in zip(drawn[0].axes[:2], ("K_v", "dte_p2p_um")):
+        (marked,) = [line for line in panel.get_lines()
+                     if line.get_label() == sweep_plots.CONTACT_LOST]
+        assert list(marked.get_xdata()) == list(branch["speed_rpm"][2:4])
+        assert list(marked.get_ydata()) == list(branch[column][2:4])
+        assert marked.get_marker() == "s" and marked.get_markerfacecolor() == "none"
+
+
+def test_resonance_labels_stand_apart_above_the_curve_joined_to_their_lines(monkeypatch,
+                                                                             tmp_path):
+    """`herringbone sweep reference --speeds 100 1000 12`: the labels of the resonances at
+    4102 and 4119 rpm (684 and 2059 Hz) and at 8794 and 8984 rpm (4397 and 1497 Hz) stood at
+    the foot of the K_v panel, across each other's lines and the K_v curve. They now stand
+    above the panel, under the rad/s axis, none over another, each joined by a leader to the
+    foot of its line at its speed."""
+    import numpy as np
+    from matplotlib.text import Text
+
+    from herringbone.analysis import sweep_plots
+
+    drawn = drawn_sweep(monkeypatch)
+    natural = [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
+    sweep_plots.plot_resonance_curve(lead_error_branch(), tmp_path / "r.png", natural, 10,
+                                     "reference")
+    figure = drawn[0]
+    panel = figure.axes[0]
+    renderer = figure.canvas.get_renderer()
+    boxes = [Text.get_window_extent(text, renderer) for text in panel.texts]  # no leader
+    resonances = sweep_plots.resonances_between(natural, 10, 100.0, 1000.0)
+    assert len(boxes) == len(resonances) == 9
+    top = panel.get_window_extent(renderer).y1
+    assert min(box.y0 for box in boxes) > top  # above the panel, off the data
+    ordered = sorted(boxes, key=lambda box: box.x0)
+    assert all(b.x0 >= a.x1 for a, b in zip(ordered, ordered[1:]))  # none over another
+    for text, (speed, _, frequency) in zip(panel.texts, resonances):
+        assert text.get_text() == f" {frequency:.0f} Hz"
+        assert text.xy == pytest.approx((speed * 30 / np.pi, 1.0))
+        assert text.arrow_patch is not None
+    axis = [child for child in panel.child_axes if child.get_xlabel()]
+    assert axis[0].get_window_extent(renderer).y0 >= max(box.y1 for box in boxes)

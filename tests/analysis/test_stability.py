@@ -348,16 +348,57 @@ def test_band_edges_are_bisected_to_their_tolerance_whatever_the_grid(resonance_
     assert "edges to ±0.005 rad/s" in printed[0]
     # the chart's curve crosses 0 at the edges it shades, between its charted speeds
     speeds, exponent = stability.chart_curve(coarse)
-    assert len(speeds) == len(coarse.speeds) + 2 * len(coarse.unstable_bands)
+    assert len(speeds) == (len(coarse.speeds) + len(coarse.probed_speeds)
+                           + 2 * len(coarse.unstable_bands))
     assert list(exponent[np.isin(speeds, band)]) == [0.0, 0.0]
+
+
+def test_a_coarse_chart_probes_where_bands_hide_or_merge():
+    """`herringbone stability parametric_resonance --speeds 1000 12000 100` (111 rad/s apart)
+    gave 1711.13-1889.05 rad/s as one band over two stable gaps, and had no band at 1040-1083,
+    1118-1141 or 1394-1435 rad/s (|λ|max up to 1.010), which fall between its speeds. It now
+    probes each interval beside an unstable speed or a near-unstable peak at 7 speeds more
+    (13.9 rad/s apart) and the midpoint of each two unstable ones: over 1000-3000 rad/s it
+    gives the bands of a chart 1 rad/s apart but one of 8.7 rad/s (2839.96-2848.64, narrower
+    than the probes' spacing), at 337 monodromies besides its 100; the summary says which
+    widths its spacing can miss."""
+    from herringbone.cli.stability import summary
+
+    scene = herringbone.load_scene(ROOT / "examples" / "parametric_resonance.toml")
+    coarse = stability.stability_chart(scene, np.linspace(1000.0, 12000.0, 100))
+    fine = stability.stability_chart(scene, np.arange(1000.0, 3000.5, 1.0))
+    spacing = coarse.grid_step / coarse.refine_split
+    assert spacing == pytest.approx(13.89, abs=0.01)
+    found = [band for band in coarse.unstable_bands if band[1] < 3000.0]
+    missed = [band for band in fine.unstable_bands if band not in found]
+    (thin,) = [band for band in fine.unstable_bands if 2800.0 < band[0] < 3000.0]
+    assert thin == pytest.approx((2839.96, 2848.64), abs=0.01) and thin[1] - thin[0] < spacing
+    others = [band for band in fine.unstable_bands if band != thin]
+    assert len(found) == len(others) == 10
+    assert np.allclose(found, others, atol=0.02), missed
+    assert np.allclose(found[4:7], [(1711.13, 1753.09), (1759.60, 1779.56), (1879.00, 1889.05)],
+                       atol=0.01)
+    assert len(coarse.probed_speeds) == 337
+    assert stability.largest_multiplier(scene, 1732.5) == pytest.approx(1.159, abs=1e-3)
+    lines = summary(coarse)
+    assert "probed 337 more speeds, a monodromy each besides the 100 charted" in lines[-2]
+    assert lines[-1] == ("bands, and stable gaps between bands, narrower than the grid step, "
+                         "111 rad/s, may be missed or merged where the chart did not probe, "
+                         "and than 13.9 rad/s where it probed: give more speeds")
 
 
 @pytest.fixture(scope="module")
 def undamped_chart():
     """models/undamped.toml charted over 100-2000 rad/s in 20 speeds: parametric resonance at
-    100 and 1100 rad/s (|λ|max 1.005 and 1.0025), every other multiplier on the unit circle."""
-    return stability.stability_chart(herringbone.load_scene(ROOT / "models" / "undamped.toml"),
-                                     np.linspace(100.0, 2000.0, 20))
+    100 and 1100 rad/s (|λ|max 1.005 and 1.0025), every other charted multiplier on the unit
+    circle; four thin bands more between the charted speeds, probed beside the unstable ones
+    (an undamped train has bands wherever a combination of its modes meets a mesh order)."""
+    return stability.stability_chart(undamped_train(), np.linspace(100.0, 2000.0, 20))
+
+
+def undamped_train():
+    """models/undamped.toml."""
+    return herringbone.load_scene(ROOT / "models" / "undamped.toml")
 
 
 def test_an_undamped_train_is_neutral_where_its_exponent_is_rounding(undamped_chart):
@@ -372,11 +413,17 @@ def test_an_undamped_train_is_neutral_where_its_exponent_is_rounding(undamped_ch
     assert rounding.max() > 0 and np.all(rounding < chart.resolution[~growing] / 10)
     assert np.all(chart.resolution < 1e-10)  # far below any band worth the name
     assert np.all(np.abs(chart.largest_exponent[~growing]) <= chart.exponent_resolution[~growing])
-    assert len(chart.unstable_bands) == 2
-    for (low, high), speed in zip(chart.unstable_bands, (100.0, 1100.0)):
-        assert low <= speed <= high and high - low <= 200.0  # no wider than its neighbours
+    for speed in (100.0, 1100.0):
+        (low, high), = [(a, b) for a, b in chart.unstable_bands if a <= speed <= b]
+        assert high - low <= 200.0  # no wider than its neighbours
     assert not any(low <= s <= high for low, high in chart.unstable_bands
                    for s in chart.speeds[~growing])
+    # the bands probed between the charted speeds grow inside their edges and not outside
+    assert len(chart.unstable_bands) == 6
+    for low, high in chart.unstable_bands[1:]:
+        excess = stability.largest_multiplier(
+            undamped_train(), np.array([low - 0.01, low + 0.01, high - 0.01, high + 0.01])) - 1.0
+        assert np.all(excess[[1, 2]] > 1e-3) and np.all(np.abs(excess[[0, 3]]) < 1e-10)
 
 
 def test_the_summary_of_an_undamped_train_says_nothing_decays(undamped_chart, tmp_path,
@@ -389,7 +436,7 @@ def test_the_summary_of_an_undamped_train_says_nothing_decays(undamped_chart, tm
     lines = summary(undamped_chart)
     assert not any("decays" in line and "every" in line for line in lines), lines
     assert any("neither grows nor decays" in line and "18 of 20" in line for line in lines)
-    assert len([line for line in lines if line.startswith("unstable:")]) == 2
+    assert len([line for line in lines if line.startswith("unstable:")]) == 6
     assert main(["stability", "undamped", "--speeds", "200", "1000", "9", "--no-progress",
                  "-o", str(tmp_path / "chart.png")]) == 0
     printed = capsys.readouterr().out

@@ -4,8 +4,9 @@ excites a mode (the resonance speeds of `herringbone info`).
 
 The model has no speed-dependent stiffness or gyroscopic terms, so each natural frequency
 (at the period-mean mesh stiffness, herringbone.model.assembly.natural_modes) is a horizontal line.
-Each mode is named by the kind of motion that holds most of its kinetic energy: torsional (the
-angles φ), lateral (the displacements x along the mesh force) or tilt (the tilts ψ).
+Each mode is named as `herringbone info` names it (report.mode_character): by the kind of motion
+that holds most of its kinetic energy, torsional (the angles φ), lateral (the displacements x
+along the mesh force) or tilt (the tilts ψ), and its share.
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from ..arguments import speed_sweep_problem
 from ..model.assembly import GearTrainModel, natural_modes
 from ..model.parameters import RPM_PER_RAD_S
 from .plots import _pyplot, _save, spread_apart
-from .report import HARMONICS, resonance_speeds
+from .report import HARMONICS, mode_character, resonance_speeds
 
 
 @dataclass(frozen=True)
@@ -29,22 +30,23 @@ class Crossing:
     frequency: float  # natural frequency, Hz
 
 
-# the kind of motion of each coordinate, by the prefix of its name (docs/model.md section 1)
-MOTION_KINDS = {"phi": "torsional", "x": "lateral", "psi": "tilt"}
-SHARE_NAMED = 0.25  # a kind or a body holding this share of a mode's kinetic energy is named
+SHARE_NAMED = 0.25  # a body holding this share of a mode's kinetic energy is named
 
 
 @dataclass(frozen=True)
 class Mode:
     """A natural mode named by what moves in it."""
     frequency: float  # Hz
-    kind: str  # "torsional", "lateral", "tilt", or kinds joined by "/" (largest share first)
+    # what `herringbone info` calls it (report.mode_character): the kind of coordinate holding
+    # the largest share of its kinetic energy, and that share, e.g. "torsional (56 % of
+    # kinetic energy)"
+    kind: str
     bodies: tuple[str, ...]  # motor, pinion, wheel, load: those that hold SHARE_NAMED or more
 
     @property
     def label(self) -> str:
-        """For instance "684 Hz torsional (wheel)"."""
-        return f"{self.frequency:.0f} Hz {self.kind} ({', '.join(self.bodies)})"
+        """For instance "684 Hz torsional (98 % of kinetic energy): wheel"."""
+        return f"{self.frequency:.0f} Hz {self.kind}: {', '.join(self.bodies)}"
 
 
 def _named(shares: dict[str, float]) -> list[str]:
@@ -54,22 +56,25 @@ def _named(shares: dict[str, float]) -> list[str]:
 
 
 def elastic_modes(scene) -> list[Mode]:
-    """The elastic natural modes (ascending frequency, no rigid rotation), each named by the
-    kinetic-energy shares m_i·v_i² of its mass-normalized eigenvector's coordinates, summed by
-    kind of motion and by body."""
+    """The elastic natural modes (ascending frequency, no rigid rotation), each named as
+    `herringbone info` names it (report.mode_character: the kind of coordinate with the
+    largest share of the kinetic energy m_i·v_i² of its mass-normalized eigenvector, and that
+    share: one name for a mode in both), with the bodies holding SHARE_NAMED of it or more."""
     frequencies, shapes, coordinates = natural_modes(scene)
     mass = GearTrainModel(scene).mass
-    elastic = frequencies > 1e-6 * max(frequencies.max(), 1.0)
+    rigid_below = 1e-6 * max(frequencies.max(), 1.0)
     modes = []
-    for frequency, shape in zip(frequencies[elastic], shapes.T[elastic]):
+    for frequency, shape in zip(frequencies, shapes.T):
+        if frequency <= rigid_below:
+            continue
         energy = mass * shape**2 / float(np.sum(mass * shape**2))
-        kinds: dict[str, float] = {}
         bodies: dict[str, float] = {}
         for name, share in zip(coordinates, energy):
-            motion, body = name.split("_", 1)
-            kinds[MOTION_KINDS[motion]] = kinds.get(MOTION_KINDS[motion], 0.0) + share
+            body = name.split("_", 1)[1]
             bodies[body] = bodies.get(body, 0.0) + share
-        modes.append(Mode(float(frequency), "/".join(_named(kinds)), tuple(_named(bodies))))
+        modes.append(Mode(float(frequency),
+                          mode_character(frequency, shape, mass, coordinates, rigid_below),
+                          tuple(_named(bodies))))
     return modes
 
 

@@ -72,39 +72,51 @@ def _plot_halves(axes, time, results) -> None:
     axes.set_ylabel("mesh force, kN")
 
 
-def _plot_bearing_ripple(axes, time, results, bearings) -> None:
-    """Each bearing reaction's ripple about its own mean (kN), the mean in the legend: the
-    ripple is a few percent of the mean, lost on a scale from zero. A body's left and right
-    bearings are drawn once where they carry equal forces."""
-    drawn: list[str] = []
-    for name in bearings:
-        body, side = name.removeprefix("F_brg_").rsplit("_", 1)
-        if any(_same(results[other], results[name]) for other in drawn):
-            continue
-        others = [n for n in bearings if n != name and n.startswith(f"F_brg_{body}_")]
-        if others and all(_same(results[n], results[name]) for n in others):
-            label = f"{body}, left = right"
-        else:
-            label = f"{body} {side}"
+# each bearing's trace on its body's panel: the left one solid, the right one dashed, each its
+# own colour, so that traces a few percent apart that cross at every mesh period (a lead
+# error's) can be told apart; four in one panel lie on top of each other
+BEARING_STYLES = {"left": ("C0", "-"), "right": ("C1", "--")}
+
+
+def bearing_bodies(results) -> dict[str, list[str]]:
+    """The bearing outputs by body: {"pinion": ["F_brg_pinion_left", ...], "wheel": [...]}, in
+    the order of the outputs."""
+    bodies: dict[str, list[str]] = {}
+    for name in results:
+        if name.startswith("F_brg_"):
+            bodies.setdefault(name.removeprefix("F_brg_").rsplit("_", 1)[0], []).append(name)
+    return bodies
+
+
+def _plot_bearing_ripple(axes, time, results, body, bearings) -> None:
+    """One body's bearing reactions as their ripple about each one's mean (kN), the mean in
+    the legend: the ripple is a few percent of the mean, lost on a scale from zero. The left
+    and right bearings (BEARING_STYLES) are drawn once where they carry equal forces."""
+    if len(bearings) > 1 and all(_same(results[n], results[bearings[0]]) for n in bearings):
+        shown = [(bearings[0], f"{body} left = right", BEARING_STYLES["left"])]
+    else:
+        shown = [(name, f"{body} {name.rsplit('_', 1)[1]}",
+                  BEARING_STYLES.get(name.rsplit("_", 1)[1], ("C2", ":"))) for name in bearings]
+    for name, label, (colour, style) in shown:
         force = results[name] / 1e3
-        axes.plot(time, force - force.mean(), color=f"C{len(drawn)}", lw=0.8,
+        axes.plot(time, force - force.mean(), color=colour, ls=style, lw=0.8,
                   label=f"{label} (mean {force.mean():+.2f} kN)")
-        drawn.append(name)
-    axes.set_ylabel("bearing reaction\nabout its mean, kN")
+    axes.set_ylabel(f"{body} bearings,\nabout the mean, kN")
 
 
 def plot_time_histories(results: dict, path, title: str) -> None:
-    """Panels against time (ms): mesh force and its halves (kN), the bearing reactions' ripple
-    about their means (kN), dte (µm); spans with a half out of contact shaded."""
+    """Panels against time (ms): mesh force and its halves (kN), each body's bearing
+    reactions' ripple about their means (kN; a panel a body), dte (µm); spans with a half out
+    of contact shaded."""
     plt = _pyplot()
     time = results["time"] * 1e3
-    bearings = [n for n in results if n.startswith("F_brg_")]
-    panels = 3 if bearings else 2
-    figure, axes = plt.subplots(panels, 1, figsize=(11, 2.6 * panels + 0.6), sharex=True)
+    bodies = bearing_bodies(results)
+    panels = 2 + len(bodies)
+    figure, axes = plt.subplots(panels, 1, figsize=(11, 2.3 * panels + 0.6), sharex=True)
     lost = contact_lost(results)
     _plot_halves(axes[0], time, results)
-    if bearings:
-        _plot_bearing_ripple(axes[1], time, results, bearings)
+    for panel, (body, bearings) in zip(axes[1:], bodies.items()):
+        _plot_bearing_ripple(panel, time, results, body, bearings)
     axes[-1].plot(time, results["dte"] * 1e6, color="C2", lw=0.9, label="dte")
     axes[-1].set_ylabel("dte, µm")
     axes[-1].set_xlabel("time, ms")
@@ -140,11 +152,22 @@ def amplitude_spectrum(signal, interval):
     return np.fft.rfftfreq(len(signal), interval), spectrum
 
 
-def _mark_frequencies(axes, mesh_frequency, natural, top):
-    marked = min(int(top / mesh_frequency), HARMONICS_MARKED)
-    for k in range(1, marked + 1):
-        axes.axvline(k * mesh_frequency, color="C3", lw=0.8, ls="--",
-                     label=f"mesh harmonics k·f_mesh, k ≤ {marked}" if k == 1 else None)
+def _mark_frequencies(axes, mesh_frequency, natural, top, band=None):
+    """The mesh harmonics k·f_mesh up to `top` Hz (at most HARMONICS_MARKED) as dashed lines,
+    or, where the speed changes over the samples (`band`: the least and largest mesh
+    frequency there, Hz), as shaded bands k·band the harmonics smear over (at most
+    HARMONICS_SHOWN: wider bands overlap); the natural frequencies as dotted lines."""
+    if mesh_frequency > 0.0 and band is None:
+        marked = min(int(top / mesh_frequency), HARMONICS_MARKED)
+        for k in range(1, marked + 1):
+            axes.axvline(k * mesh_frequency, color="C3", lw=0.8, ls="--",
+                         label=f"mesh harmonics k·f_mesh, k ≤ {marked}" if k == 1 else None)
+    elif mesh_frequency > 0.0:
+        marked = max(1, min(int(top / band[1]), HARMONICS_SHOWN))
+        for k in range(1, marked + 1):
+            axes.axvspan(k * band[0], k * band[1], color="C3", alpha=0.12, lw=0.0,
+                         label=f"mesh harmonics k·f_mesh over the speeds, k ≤ {marked}"
+                         if k == 1 else None)
     for number, f in enumerate(f for f in natural if 0 < f <= top):
         axes.axvline(f, color="C2", lw=0.8, ls=":",
                      label="natural frequencies" if number == 0 else None)
@@ -158,19 +181,21 @@ def _amplitude_floor(panel, amplitude: np.ndarray) -> None:
         panel.set_ylim(bottom=max(shown.min(), shown.max() * 10.0 ** -SPECTRUM_DECADES))
 
 
-def whole_mesh_periods(time, mesh_frequency: float) -> tuple[np.ndarray, int]:
+def whole_mesh_periods(time, mesh_frequency: float,
+                       longest: float | None = None) -> tuple[np.ndarray, int]:
     """(which samples, how many mesh periods): the largest whole number of mesh periods, at
-    least one, that fits in the second half of a run (its start-up transient left out), at
-    the run's end. Over a whole number of periods each mesh harmonic falls on a bin of the
-    spectrum; over the second half of a 20 ms run at 250 Hz, 2.5 periods, the odd ones fell
-    between two. N samples stand for N intervals (the spectrum's record length), so the
-    window's first sample, which its last repeats a whole number of periods later, is left
-    out; a run shorter than the period is taken whole."""
+    least one, that fits in `longest` s (None: the second half of a run, its start-up
+    transient left out), at the run's end. Over a whole number of periods each mesh harmonic
+    falls on a bin of the spectrum; over the second half of a 20 ms run at 250 Hz, 2.5
+    periods, the odd ones fell between two. N samples stand for N intervals (the spectrum's
+    record length), so the window's first sample, which its last repeats a whole number of
+    periods later, is left out; a run shorter than the period is taken whole."""
     time = np.asarray(time, dtype=float)
     interval = float(np.diff(time).mean())
     period = 1.0 / mesh_frequency
+    longest = 0.5 * (time[-1] - time[0]) if longest is None else longest
     # the 1e-9: a second half of exactly n periods is n, not n − 1 by rounding
-    periods = max(1, math.floor(0.5 * (time[-1] - time[0]) / period * (1.0 + 1e-9)))
+    periods = max(1, math.floor(longest / period * (1.0 + 1e-9)))
     samples = min(round(periods * period / interval), len(time))
     keep = np.zeros(len(time), dtype=bool)
     keep[len(time) - samples:] = True
@@ -178,32 +203,35 @@ def whole_mesh_periods(time, mesh_frequency: float) -> tuple[np.ndarray, int]:
 
 
 def plot_spectra(results: dict, path, mesh_frequency, natural, title, skip=0.0,
-                 keep=None, record: str = "record length") -> None:
+                 keep=None, record: str = "record length", mesh_band=None) -> None:
     """Amplitude spectra of dte (µm) and F_mesh (kN) of a run from `skip` s on (or of the
     samples `keep` says, e.g. whole_mesh_periods', which `record` names in the annotation),
-    with the mesh harmonics and the natural frequencies marked; log amplitude over log
-    frequency, up to the highest natural frequency the sampling resolves (Nyquist's), so that
-    a mode ringing far above the mesh frequency shows, and at least HARMONICS_SHOWN
-    harmonics."""
+    with the mesh harmonics and the natural frequencies marked (`mesh_band`: the least and
+    largest mesh frequency over the samples, Hz, where the speed changes: the harmonics are
+    drawn as the bands they smear over); log amplitude over log frequency, up to the highest
+    natural frequency the sampling resolves (Nyquist's), so that a mode ringing far above the
+    mesh frequency shows, and at least HARMONICS_SHOWN harmonics."""
     plt = _pyplot()
     keep = results["time"] >= skip if keep is None else keep
     interval = float(np.diff(results["time"][keep]).mean())
     nyquist = 0.5 / interval
     resolved = [f for f in natural if 0 < f < nyquist]
-    top = min(nyquist, 1.2 * max([(HARMONICS_SHOWN + 0.5) * mesh_frequency, *resolved]))
+    highest = mesh_frequency if mesh_band is None else mesh_band[1]
+    top = min(nyquist, 1.2 * max([(HARMONICS_SHOWN + 0.5) * highest, *resolved]))
     figure, axes = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
     for panel, name, scale, unit in ((axes[0], "dte", 1e6, "µm"),
                                      (axes[1], "F_mesh", 1e-3, "kN")):
         frequency, amplitude = amplitude_spectrum(results[name][keep] * scale, interval)
         panel.loglog(frequency[1:], amplitude[1:], color="k", lw=0.9, label=name)
         _amplitude_floor(panel, amplitude[1:][frequency[1:] <= top])
-        _mark_frequencies(panel, mesh_frequency, natural, top)
+        _mark_frequencies(panel, mesh_frequency, natural, top, mesh_band)
         panel.set_ylabel(f"{name} amplitude, {unit}")
         panel.grid(True, which="both", alpha=0.3)
         _legend_beside(panel)
     axes[1].set_xlim(frequency[1], top)
-    axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz ({record})",
+    axes[1].annotate(f"resolution {1.0 / (keep.sum() * interval):.3g} Hz ({record}); "
+                     f"sampled every {interval:.3g} s",
                      (0.01, 0.02), xycoords="axes fraction", fontsize=8)
     axes[1].set_xlabel("frequency, Hz")
-    axes[0].set_title(title)
+    axes[0].set_title(title, fontsize=10)
     _save(figure, path)

@@ -34,7 +34,7 @@ exponentials.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
@@ -50,6 +50,14 @@ _MATRICES_AT_ONCE = 8192  # exponentials evaluated in one batch (memory)
 # rad/s: the bracket a band edge between two charted speeds is bisected to (bisected_edges);
 # the edge printed is its midpoint, within half of it
 EDGE_TOLERANCE = 0.01
+# where a band may hide between two charted speeds or two bands merge over a stable gap,
+# each charted interval beside an unstable speed or beside a local maximum of |λ|max within
+# REFINE_MARGIN of 1 (not neutral: an undamped train's are rounding) is probed at REFINE_SPLIT
+# − 1 speeds more. On the example at 100 speeds over 1000-12000 rad/s (111 rad/s apart) the
+# grid alone showed the k = 6 band at 1711-1753 rad/s (|λ|max up to 1.159) nowhere and gave
+# 1711-1889 as one band over two stable gaps; probed, 1711.13-1753.09 stands apart
+REFINE_MARGIN = 1e-2
+REFINE_SPLIT = 8
 
 
 @dataclass(frozen=True)
@@ -234,6 +242,18 @@ class StabilityChart:
     mesh_teeth: int  # z_pinion: mesh frequency = speed·z_pinion/(2π)
     resolution: np.ndarray  # |λ|max's rounding at each speed, per mesh period (pure number)
     edge_tolerance: float = EDGE_TOLERANCE  # rad/s, the bisected brackets' width
+    # speeds probed between the charted ones where a band may hide or two merge
+    # (refined_speeds, then unstable_midpoints), rad/s ascending, and |λ|max there: the bands
+    # are of both
+    probed_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    probed_modulus: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    refine_split: int = REFINE_SPLIT  # each interval probed was split into this many
+
+    @property
+    def grid_step(self) -> float:
+        """The widest spacing of the charted speeds, rad/s: a band, or a stable gap between
+        two, narrower than it may fall between them unseen where the chart did not probe."""
+        return float(np.diff(self.speeds).max()) if len(self.speeds) > 1 else 0.0
 
     @property
     def largest_exponent(self) -> np.ndarray:
@@ -302,6 +322,26 @@ def bisected_edges(excess_at, stable, unstable, tolerance) -> np.ndarray:
     return 0.5 * (stable + unstable)
 
 
+def refined_speeds(speeds, largest, resolution, margin=REFINE_MARGIN,
+                   split=REFINE_SPLIT) -> np.ndarray:
+    """The speeds (rad/s) to probe between charted `speeds` (ascending) where a band may hide
+    or two merge: `split` − 1 evenly inside each interval beside a speed where |λ|max
+    (`largest`) exceeds 1 + `resolution`, or beside a local maximum of |λ|max above 1 −
+    `margin` that is not 1 within its resolution (neutral: rounding, no peak)."""
+    speeds, largest = np.asarray(speeds, dtype=float), np.asarray(largest, dtype=float)
+    if len(speeds) < 2:
+        return np.zeros(0)
+    resolution = np.broadcast_to(np.asarray(resolution, dtype=float), largest.shape)
+    padded = np.concatenate([[-np.inf], largest, [-np.inf]])
+    peak = (largest >= padded[:-2]) & (largest >= padded[2:])
+    near = peak & (largest > 1.0 - margin) & (np.abs(largest - 1.0) > resolution)
+    suspect = (largest > 1.0 + resolution) | near
+    intervals = np.flatnonzero(suspect[:-1] | suspect[1:])
+    inside = np.arange(1, split) / split
+    low, high = speeds[intervals, None], speeds[intervals + 1, None]
+    return (low + (high - low) * inside).ravel()
+
+
 def speed_bands(stretches, lengths, speeds, largest, resolution, substeps=SUBSTEPS,
                 step_phase=STEP_PHASE, tolerance=EDGE_TOLERANCE):
     """The unstable bands over charted speeds (rad/s, ascending) of the rigid-free system
@@ -332,7 +372,10 @@ def speed_bands(stretches, lengths, speeds, largest, resolution, substeps=SUBSTE
 def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
                     on_progress=None, edge_tolerance=EDGE_TOLERANCE) -> StabilityChart:
     """The parametric stability of the linear mesh over pinion speeds: the largest Floquet
-    multiplier |λ|max at each speed and the unstable bands between them.
+    multiplier |λ|max at each speed and the unstable bands, found at the speeds and at those
+    probed between them where a band may hide or two merge (refined_speeds: REFINE_SPLIT − 1
+    more monodromies in each interval beside an unstable speed or a near-unstable peak; then
+    unstable_midpoints: one between each two unstable speeds).
 
     Parameters
     ----------
@@ -369,35 +412,70 @@ def stability_chart(scene, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
     check_scene(scene)
     speeds = np.sort(check_speeds(speeds))
     # the model once for every batch and for the resolution (monodromy builds its own)
-    model = GearTrainModel(scene)
-    stretches, lengths = mesh_stretches(model)
-    durations = lengths / speeds[:, None]
+    stretches, lengths = mesh_stretches(GearTrainModel(scene))
+    steps = (substeps, step_phase)
+    charted = (speeds, *largest_moduli(stretches, lengths, speeds, *steps, on_progress))
+    probed = refined_speeds(*charted)
+    union = _joined(charted, (probed, *largest_moduli(stretches, lengths, probed, *steps)))
+    middles = unstable_midpoints(*union)
+    union = _joined(union, (middles, *largest_moduli(stretches, lengths, middles, *steps)))
+    bands = speed_bands(stretches, lengths, union[0], union[1], union[2], *steps,
+                        edge_tolerance)
+    extra = ~np.isin(union[0], speeds)
+    return StabilityChart(speeds, charted[1], bands, scene.parameters["z_pinion"], charted[2],
+                          edge_tolerance, union[0][extra], union[1][extra])
+
+
+def _joined(first, second) -> tuple[np.ndarray, ...]:
+    """Two (speeds, |λ|max, resolution) as one, by speed."""
+    joined = [np.concatenate([a, b]) for a, b in zip(first, second)]
+    order = np.argsort(joined[0], kind="stable")
+    return tuple(column[order] for column in joined)
+
+
+def unstable_midpoints(speeds, largest, resolution) -> np.ndarray:
+    """The midpoints (rad/s) between neighbouring speeds (ascending) where |λ|max exceeds
+    1 + `resolution` at both: a stable midpoint splits the run there into two bands, which
+    the line through the two would have shown as one."""
+    unstable = np.asarray(largest) > 1.0 + np.asarray(resolution)
+    pairs = np.flatnonzero(unstable[:-1] & unstable[1:])
+    return 0.5 * (np.asarray(speeds)[pairs] + np.asarray(speeds)[pairs + 1])
+
+
+def largest_moduli(stretches, lengths, speeds, substeps=SUBSTEPS, step_phase=STEP_PHASE,
+                   on_progress=None) -> tuple[np.ndarray, np.ndarray]:
+    """(|λ|max, its resolution) at each speed (rad/s) of the rigid-free system (mass I) made
+    of `stretches` of angular `lengths` (rad): in PROGRESS_BATCHES batches of speeds where
+    on_progress(count) is given, called as each is done; in one otherwise."""
+    size = stretches[0].stiffness.shape[-1]
+    durations = np.asarray(lengths) / np.asarray(speeds, dtype=float)[:, None]
     batches = np.array_split(np.arange(len(speeds)), min(len(speeds), PROGRESS_BATCHES)) \
         if on_progress is not None else [np.arange(len(speeds))]
-    parts = []
+    parts = [np.zeros(0)]
     for batch in batches:
-        phi = periodic_monodromy(np.eye(model.size - 1), stretches, durations[batch], substeps,
-                                 step_phase)
-        parts.append(np.abs(np.linalg.eigvals(phi)).max(axis=-1))
+        if len(batch):
+            phi = periodic_monodromy(np.eye(size), stretches, durations[batch], substeps,
+                                     step_phase)
+            parts.append(np.abs(np.linalg.eigvals(phi)).max(axis=-1))
         if on_progress is not None:
             on_progress(len(batch))
-    largest = np.concatenate(parts)
-    resolution = modulus_resolution(stretches, durations, substeps, step_phase)
-    bands = speed_bands(stretches, lengths, speeds, largest, resolution, substeps, step_phase,
-                        edge_tolerance)
-    return StabilityChart(speeds, largest, bands, scene.parameters["z_pinion"], resolution,
-                          edge_tolerance)
+    return (np.concatenate(parts),
+            modulus_resolution(stretches, durations, substeps, step_phase))
 
 
 def chart_curve(chart: StabilityChart) -> tuple[np.ndarray, np.ndarray]:
-    """(speeds rad/s, largest exponent 1/s) as the chart draws them: the charted speeds and
+    """(speeds rad/s, largest exponent 1/s) as the chart draws them: the charted speeds, those
+    probed between them (refined_speeds: the curve rises over the bands found there) and
     each band edge bisected between two of them, where the exponent is 0 (within its rounding
     and the bisection's tolerance), so that the curve crosses 0 where the shading begins and
     ends, not where the line between two charted speeds would."""
+    sampled = np.concatenate([chart.speeds, chart.probed_speeds])
     edges = np.array([edge for band in chart.unstable_bands for edge in band
-                      if not np.any(chart.speeds == edge)])
-    speeds = np.concatenate([chart.speeds, edges])
-    exponent = np.concatenate([chart.largest_exponent, np.zeros(len(edges))])
+                      if not np.any(sampled == edge)])
+    period = 2.0 * math.pi / (chart.probed_speeds * chart.mesh_teeth)
+    speeds = np.concatenate([sampled, edges])
+    exponent = np.concatenate([chart.largest_exponent, np.log(chart.probed_modulus) / period,
+                               np.zeros(len(edges))])
     order = np.argsort(speeds, kind="stable")
     return speeds[order], exponent[order]
 

@@ -3,8 +3,6 @@ speeds of `herringbone info` marked), a parameter curve or grid map, and a water
 points' dte spectra with the mesh orders and natural frequencies."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..model.parameters import RPM_PER_RAD_S, unit_of
@@ -26,7 +24,9 @@ def is_branch(table) -> bool:
 
 DOUBLED_COLOUR = "C0"  # a period-2 branch's lines on every panel
 # How a legend names a table column where its name is not what it shows
-SHOWN_AS = {"dte_p2p_um": "dte peak-to-peak"}
+HALF_LABEL = "K_v_half (more loaded half)"
+SHOWN_AS = {"dte_p2p_um": "dte peak-to-peak", "K_v_half": HALF_LABEL}
+HALF_COLOUR = "C1"  # K_v_half's line beside K_v's (black)
 
 
 # the dots at a branch's orbits (points), small against the time sweeps' triangles (5)
@@ -108,33 +108,63 @@ def draw_time_sweeps(axes, sweeps, columns) -> None:
                                ls="none", mfc=face, label=f"time sweep {name} ({label})")
 
 
+# K_v_half is drawn, and the sweep's summary names it, where it exceeds K_v by more than this
+# share at some point: there K_v, of the whole mesh, reads the more loaded half's dynamic load
+# short by that much
+HALF_FACTOR_SPREAD = 0.01
+
+
+def halves_differ(table) -> bool:
+    """Whether K_v_half exceeds K_v by more than HALF_FACTOR_SPREAD at some row: the halves
+    share the load unevenly (a lead error), K_v of their sum understates the more loaded
+    half's peak, and the pictures draw K_v_half beside it."""
+    return "K_v_half" in table and bool(
+        (table["K_v_half"] > (1.0 + HALF_FACTOR_SPREAD) * table["K_v"]).any())
+
+
+def draw_k_v(axes, table, along: str, branch: bool) -> None:
+    """K_v against the column `along` on one panel (a branch as `draw_branch` draws it), with
+    K_v_half in HALF_COLOUR where halves_differ, and an open square at each point where a
+    helix half lost contact (mark_contact_loss)."""
+    columns = [("K_v", "k")] + ([("K_v_half", HALF_COLOUR)] if halves_differ(table) else [])
+    for column, colour in columns:
+        if branch:
+            draw_branch([axes], table, [(column, colour)], along=along)
+        else:
+            axes.plot(table[along], table[column], "o-" if column == "K_v" else "s--",
+                      color=colour, ms=3, lw=1.0,
+                      label="K_v = max F_mesh / F_static" if column == "K_v" else HALF_LABEL)
+    mark_contact_loss(axes, table, along, "K_v")
+
+
 def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> None:
-    """K_v (top) and dte peak-to-peak (bottom) against pinion speed, rpm (rad/s on top), each
-    resonance k·f_mesh = f_n in the range marked and labelled. A branch table (sweep's method
-    "shooting") is drawn as `draw_branch` says; `sweeps`: time sweeps drawn over it."""
+    """K_v (top; K_v_half beside it where the halves differ: draw_k_v) and dte peak-to-peak
+    (bottom) against pinion speed, rpm (rad/s on top), each resonance k·f_mesh = f_n in the
+    range marked and labelled (mark_resonances), a square at each point where a helix half
+    lost contact. A branch table (sweep's method "shooting") is drawn as `draw_branch` says;
+    `sweeps`: time sweeps drawn over it."""
     plt = _pyplot()
     branch = is_branch(table)
     if not branch:
         table = table.sort_values("w0_pinion")
-    rpm = table["speed_rpm"].to_numpy()
-    figure, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    figure, axes = plt.subplots(2, 1, figsize=(10, 7.5), sharex=True)
+    draw_k_v(axes[0], table, "speed_rpm", branch)
     if branch:
-        columns = [("K_v", "k"), ("dte_p2p_um", "C2")]
-        draw_branch(axes, table, columns)
-        draw_time_sweeps(axes, sweeps, columns)
+        draw_branch(axes[1:], table, [("dte_p2p_um", "C2")])
+        draw_time_sweeps(axes, sweeps, [("K_v", "k"), ("dte_p2p_um", "C2")])
     else:
-        axes[0].plot(rpm, table["K_v"], "o-", color="k", ms=3, lw=1.0,
-                     label="K_v = max F_mesh / F_static")
+        rpm = table["speed_rpm"].to_numpy()
         axes[1].plot(rpm, table["dte_p2p_um"], "o-", color="C2", ms=3, lw=1.0,
                      label=SHOWN_AS["dte_p2p_um"])
         axes[1].plot(rpm, table["dte_rms_um"], "s-", color="C0", ms=3, lw=1.0, label="dte rms")
+    mark_contact_loss(axes[1], table, "speed_rpm", "dte_p2p_um")
     axes[0].set_ylabel("dynamic factor K_v")
     axes[1].set_ylabel("dte, µm")
     axes[1].set_xlabel("pinion speed, rpm")
     mark_resonances(axes, natural, z_pinion, table["w0_pinion"].min(),
                     table["w0_pinion"].max())
-    top = axes[0].secondary_xaxis("top", functions=(lambda n: n / RPM_PER_RAD_S,
-                                                     lambda w: w * RPM_PER_RAD_S))
+    top = axes[0].secondary_xaxis(LABEL_STRIP, functions=(lambda n: n / RPM_PER_RAD_S,
+                                                          lambda w: w * RPM_PER_RAD_S))
     top.set_xlabel("pinion speed, rad/s")
     for panel in axes:
         panel.grid(True, alpha=0.3)
@@ -143,42 +173,55 @@ def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> 
     _save(figure, path)
 
 
-# rpm between two resonance labels, as a share of the speeds swept: a label's height at 7 pt
+# rpm between two resonance labels, at least, as a share of the speeds swept; and at least a
+# label's height at 7 pt and a gap (LABEL_POINTS) on the panel's width as drawn
 LABEL_GAP = 0.018
+LABEL_POINTS = 11.0
+# the resonance labels stand in a strip above the top panel, off the data (inside the panel
+# they cross the K_v curve, and moved apart, each other's lines: the reference scene's lie
+# 17 rpm apart at 4102 and 4119 rpm), each joined to its line by a leader; shares of the
+# panel's height: where a label's foot is, and where the rad/s axis goes, above the labels
+LABEL_FOOT = 1.04
+LABEL_STRIP = 1.24
 
 
 def mark_resonances(axes, natural, z_pinion, low, high) -> None:
     """Each resonance k·f_mesh = f_n between the speeds low and high (rad/s): a dashed line
-    on every panel, one legend entry per order k in the order of k, and f_n written at the
-    foot of the first panel, labels moved apart where lines lie close."""
+    on every panel, one legend entry per order k in the order of k, and f_n written above
+    the first panel (LABEL_FOOT), labels moved apart where lines lie close (a label's width
+    on the panel as drawn, at least LABEL_GAP of the speeds), each joined to its line by a
+    leader."""
     resonances = resonances_between(natural, z_pinion, low, high)
     for k in sorted({k for _, k, _ in resonances}):
         for panel in axes:  # the legend's entries, in the order of k
             panel.plot([], [], color=f"C{3 + k}", lw=0.8, ls="--",
                        label=f"k·f_mesh = f_n, k = {k}")
     rpm = [speed * RPM_PER_RAD_S for speed, _, _ in resonances]
-    places = spread_apart(rpm, LABEL_GAP * (high - low) * RPM_PER_RAD_S, math.inf)
-    for (_, k, f), at, place in zip(resonances, rpm, places):
+    for (_, k, _), at in zip(resonances, rpm):
         for panel in axes:
             panel.axvline(at, color=f"C{3 + k}", lw=0.8, ls="--")
-        axes[0].annotate(f" {f:.0f} Hz", (at, 0.0), xytext=(place, 0.0), rotation=90,
+    left, right = axes[0].get_xlim()
+    width = axes[0].get_position().width * axes[0].figure.get_figwidth() * 72.0  # pt
+    gap = max(LABEL_GAP * (high - low) * RPM_PER_RAD_S, LABEL_POINTS / width * (right - left))
+    places = spread_apart(rpm, gap, right - 0.5 * gap)
+    for (_, k, f), at, place in zip(resonances, rpm, places):
+        axes[0].annotate(f" {f:.0f} Hz", (at, 1.0), xytext=(place, LABEL_FOOT), rotation=90,
                          xycoords=("data", "axes fraction"),
-                         textcoords=("data", "axes fraction"), fontsize=7, ha="right",
-                         va="bottom", color=f"C{3 + k}")
+                         textcoords=("data", "axes fraction"), fontsize=7, ha="center",
+                         va="bottom", color=f"C{3 + k}", annotation_clip=False,
+                         arrowprops={"arrowstyle": "-", "color": f"C{3 + k}", "lw": 0.6,
+                                     "shrinkA": 0.0, "shrinkB": 0.0})
 
 
 def plot_parameter_sweep(table, axes_names, path, title) -> None:
-    """K_v against one swept quantity (a curve; a branch table as `draw_branch` draws it) or
-    over two (a coloured grid map)."""
+    """K_v against one swept quantity (a curve, K_v_half beside it where the halves differ:
+    draw_k_v) or over two (a coloured grid map of K_v), a square at each point where a helix
+    half lost contact."""
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(9, 5))
     if len(axes_names) == 1:
         name = axes_names[0]
-        if is_branch(table):
-            draw_branch([axes], table, [("K_v", "k")], along=name)
-        else:
-            axes.plot(table[name], table["K_v"], "o-", color="k", ms=3, label="K_v")
-        mark_contact_loss(axes, table, name, "K_v")
+        draw_k_v(axes, table, name, is_branch(table))
         axes.set_xlabel(_axis_label(name))
         axes.set_ylabel("dynamic factor K_v")
         axes.legend()

@@ -12,6 +12,7 @@ from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
 from .sweep import SPEED, point_label, resonation_summary, swept_columns
 from .sweep_plots import (
+    halves_differ,
     is_branch,
     plot_parameter_sweep,
     plot_resonance_curve,
@@ -19,10 +20,6 @@ from .sweep_plots import (
     resonances_between,
 )
 from .sweep_point import SETTLED_DRIFT
-
-# the summary gives K_v_half where it exceeds K_v by more than this share at some point: there
-# K_v, of the whole mesh, reads the more loaded half's dynamic load short by that much
-HALF_FACTOR_SPREAD = 0.01
 
 
 def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[Path]:
@@ -119,11 +116,10 @@ def _k_v_lines(table) -> list[str]:
 
 def _half_lines(table, where: str) -> list[str]:
     """K_v_half's range and the left half's share of the load, where at some point K_v_half
-    exceeds K_v by more than HALF_FACTOR_SPREAD: the halves share the load unevenly (a lead
-    error), and K_v, of the two halves' sum, understates the more loaded half's peak. `where`:
-    which rows, in words, as _k_v_lines took them."""
-    if "K_v_half" not in table or not (
-            table["K_v_half"] > (1.0 + HALF_FACTOR_SPREAD) * table["K_v"]).any():
+    exceeds K_v by more than HALF_FACTOR_SPREAD (sweep_plots.halves_differ): the halves share
+    the load unevenly (a lead error), and K_v, of the two halves' sum, understates the more
+    loaded half's peak. `where`: which rows, in words, as _k_v_lines took them."""
+    if not halves_differ(table):
         return []
     half, share = table["K_v_half"], 100.0 * table["load_share_left"]
     shares = (f"{share.min():.1f}" if f"{share.min():.1f}" == f"{share.max():.1f}"

@@ -112,5 +112,6 @@ def execute(args, parser) -> int:
     print(f"outputs written to {output}")
     if args.plot:
         from ..analysis.run_report import plot_run
-        print("\n".join(f"written: {path}" for path in plot_run(scene, results, output)))
+        written = plot_run(scene, results, output, None if args.reference else tolerance)
+        print("\n".join(f"written: {path}" for path in written))
     return 0

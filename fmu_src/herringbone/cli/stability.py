@@ -85,4 +85,24 @@ def summary(chart) -> list[str]:
     if not chart.unstable_bands:
         lines.append("no unstable band: every multiplier inside the unit circle"
                      + ("" if decaying.all() else " or on it within rounding"))
-    return lines
+    return lines + grid_lines(chart)
+
+
+def grid_lines(chart) -> list[str]:
+    """Where the chart's speeds may hide a band or merge two: the speeds it probed between
+    them (stability.refined_speeds and unstable_midpoints) and what they cost, and the
+    widths of band and stable gap that its spacing, and the probes', can miss."""
+    from ..analysis.stability import REFINE_MARGIN
+
+    step = chart.grid_step
+    if step <= 0.0:
+        return []
+    probed = len(chart.probed_speeds)
+    lines = [f"probed {probed} more speeds, a monodromy each besides the {len(chart.speeds)} "
+             f"charted: beside the unstable speeds and the peaks of |λ|max within "
+             f"{REFINE_MARGIN:g} of 1, and between neighbouring unstable ones"] if probed else []
+    finer = (f", and than {step / chart.refine_split:.3g} rad/s where it probed"
+             if probed else "")
+    return lines + [f"bands, and stable gaps between bands, narrower than the grid step, "
+                    f"{step:.3g} rad/s, may be missed or merged where the chart did not "
+                    f"probe{finer}: give more speeds"]
