@@ -654,3 +654,19 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys):
         one_error_line(capsys, "info")
     assert main(["run", str(MODELS / "torque_step.toml"), "--set", "M_motor=100"]) == 2
     assert "the scene's torques are a table of 2 rows" in one_error_line(capsys, "run")
+
+
+def test_stability_takes_set_as_the_other_commands_do(tmp_path, capsys):
+    """`stability --set` charts the changed scene: the undamped mesh (zeta_mesh = 0) of the
+    reference has bands the damped one has not."""
+    chart = str(tmp_path / "chart.png")
+    arguments = ["stability", REFERENCE, "--speeds", "100", "3000", "60", "-o", chart,
+                 "--no-progress"]
+    assert main(arguments) == 0
+    damped = capsys.readouterr().out
+    assert main(arguments + ["--set", "zeta_mesh=0", "--set", "h_shaft_in=0",
+                             "--set", "h_shaft_out=0"]) == 0
+    undamped = capsys.readouterr().out
+    assert undamped.startswith("scene reference with zeta_mesh = 0, h_shaft_in = 0 N.m.s/rad, "
+                               "h_shaft_out = 0 N.m.s/rad (--set)\n")
+    assert "no unstable band" in damped and "unstable:" in undamped

@@ -6,14 +6,15 @@ import math
 from pathlib import Path
 
 from ..model.parameters import RPM_PER_RAD_S
-from ..model.scene import load_scene
 from ..optional import require
 from .common import (
     add_output,
     add_progress,
     add_scene,
+    add_settings,
     add_speeds,
     default_output,
+    scene_of,
     speeds_of,
 )
 
@@ -27,6 +28,7 @@ PICTURES = (".png", ".pdf", ".svg")
 def declare(parser) -> None:
     """The options of `stability`."""
     add_scene(parser)
+    add_settings(parser)
     add_speeds(parser, (50.0, 3000.0, 300), "the chart's speeds")
     add_output(parser, "the chart; an existing file is replaced",
                "results/<scene>_stability.png", PICTURES)
@@ -40,7 +42,7 @@ def execute(args, parser) -> int:
 
     sweep = speeds_of(args, parser)
     assert sweep is not None  # the command has default speeds
-    scene = load_scene(args.scene)
+    scene = scene_of(args, parser)
     output = default_output(parser, args.output,
                             Path("results") / f"{scene.name}_stability.png", PICTURES)
     require("matplotlib", "the stability chart")
