@@ -171,3 +171,18 @@ def test_benchmark_help_from_the_checkout_lists_the_script_options(capsys):
     assert benchmark.benchmarks_folder() is not None  # the tests run from the checkout
     assert main(["benchmark", "extreme-scenes", "--help"]) == 0
     assert "--periods" in capsys.readouterr().out
+
+
+def test_the_command_runs_blas_on_one_thread_unless_told_otherwise():
+    """The command sets one BLAS thread before numpy loads (the model's matrices are small and
+    a BLAS's threads fight over a busy machine's cores); a count the user set is kept."""
+    import os
+
+    show = ("import herringbone.cli, numpy, os; "
+            "print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['OMP_NUM_THREADS'])")
+    clean = {k: v for k, v in os.environ.items()
+             if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    for given, expected in (({}, "1 1"), ({"OPENBLAS_NUM_THREADS": "4"}, "4 1")):
+        run = subprocess.run([sys.executable, "-c", show], env={**clean, **given},
+                             capture_output=True, text=True, timeout=120)
+        assert run.stdout.split("\n")[0] == expected, run.stderr[-2000:]
