@@ -24,12 +24,23 @@ runs before numpy is imported, to name a missing dependency) imports nothing hea
 from __future__ import annotations
 
 import importlib
+import importlib.util as _util
 import os as _os
+import sys as _sys
 
-from .fmu.installed import find_the_rest as _find_the_rest
+from .fmu.installed import installed_twin as _installed_twin
 
-# in an FMU's copy of the package, what the copy leaves out is found where it is installed
-_find_the_rest(__name__, _os.path.dirname(__file__))
+# An FMU's copy of the package gives way to the same version installed, which has what the
+# copy leaves out (fmu/installed.py): an import returns what sys.modules holds once it is done
+_twin = _installed_twin(__name__, _os.path.dirname(__file__))
+if _twin is not None:
+    for _name in [name for name in _sys.modules if name.startswith(f"{__name__}.")]:
+        del _sys.modules[_name]  # the copy's own (fmu.installed): the twin imports its own
+    _spec = _util.spec_from_file_location(__name__, _os.path.join(_twin, "__init__.py"),
+                                          submodule_search_locations=[_twin])
+    assert _spec is not None and _spec.loader is not None
+    _sys.modules[__name__] = _util.module_from_spec(_spec)
+    _spec.loader.exec_module(_sys.modules[__name__])
 
 # name -> the module that holds it
 _API = {

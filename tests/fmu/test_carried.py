@@ -4,6 +4,7 @@ import subprocess
 import sys
 import zipfile
 
+from herringbone import shipped
 from herringbone.compiling import sources
 from herringbone.fmu import carried, installed
 
@@ -81,7 +82,7 @@ def test_an_import_names_its_module_and_the_packages_above_it_inside_functions_t
 
 # A host process with the package installed (not editable: its finder, which would find the
 # rest of the package on its own, is left out), which had not imported herringbone before the
-# FMU: after a run of the FMU, the process imports the package's other modules
+# FMU: after a run of the FMU, the process uses the package, its modules and its data
 INSTALLED_AFTER_AN_FMU = """
 import sys
 sys.meta_path = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "").lower()]
@@ -92,27 +93,29 @@ import herringbone.fmu.core
 try:
     from herringbone.fmu.ssp import build_ssp
     import herringbone.analysis.sweep
-    print(herringbone.fmu.core.__file__, herringbone.analysis.sweep.__file__)
+    print(herringbone.fmu.core.__file__, herringbone.analysis.sweep.__file__,
+          herringbone.load_scene("jump_resonance").source)
 except ModuleNotFoundError as error:
     print(error)
 """
 
 
-def test_a_host_that_ran_an_fmu_imports_the_rest_of_the_installed_package(built_fmus,
-                                                                           tmp_path):
-    """The FMU's copy of the package carries only what its run imports; the modules it
-    leaves out come from the installed package where that is the one the FMU was built from,
-    and are refused with a message naming both and what to do where it is not."""
+def test_a_host_that_ran_an_fmu_uses_the_installed_package_after(built_fmus, tmp_path):
+    """The FMU's copy of the package carries only what its run imports, and its files go when
+    the host deletes the unpacked FMU: where the installed package is the one the FMU was
+    built from, it is the process's herringbone (its modules, its shipped scenes); where it is
+    not, a module the copy leaves out is refused with a message naming both and what to do."""
     site = tmp_path / "site"
     shutil.copytree(carried.PACKAGE, site / "herringbone",
                     ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(shipped.scenes_folder(), site / "herringbone" / "scenes")
     command = [sys.executable, "-c", INSTALLED_AFTER_AN_FMU, str(built_fmus["reference"]),
                str(site)]
     run = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-3000:]
-    core, sweep = run.stdout.split()
-    assert "/resources/herringbone/fmu/core.py" in core
-    assert sweep == str(site / "herringbone" / "analysis" / "sweep.py")
+    assert run.stdout.split() == [str(site / "herringbone" / "fmu" / "core.py"),
+                                  str(site / "herringbone" / "analysis" / "sweep.py"),
+                                  str(site / "herringbone" / "scenes" / "jump_resonance.toml")]
     with open(site / "herringbone" / "fmu" / "core.py", "a") as changed:
         changed.write("# another version\n")
     run = subprocess.run(command, capture_output=True, text=True, timeout=300)
