@@ -280,6 +280,12 @@ def run(problem):
         if problem == "input":
             one("M_motor", float("nan"))
         statuses.append(step(0.5 if problem == "time" else 1e-4))
+    if problem == "reset":  # a new slave over the same instance: the same again
+        statuses.append(call("fmi3Reset", [c_void_p], instance))
+        statuses.append(call("fmi3EnterInitializationMode", [c_void_p, c_bool, c_double,
+                             c_double, c_bool, c_double], instance, False, 0.0, 0.0, False, 0.0))
+        one("m_pinion", -1.0)
+        statuses.append(call("fmi3ExitInitializationMode", [c_void_p], instance))
     print(problem, *statuses, flush=True)
 for problem in sys.argv[2:]:
     run(problem)
@@ -296,9 +302,11 @@ def test_fmi3_host_without_a_log_callback_gets_statuses_and_stderr(fmus, tmp_pat
     script = tmp_path / "host.py"
     script.write_text(NO_LOGGER_HOST)
     run = subprocess.run([sys.executable, str(script), str(fmus["reference", 3]), "parameter",
-                          "input", "time"], capture_output=True, text=True, timeout=300)
+                          "input", "time", "reset"], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert run.stdout.split("\n")[:3] == ["parameter 0 4", "input 0 0 0 3", "time 0 0 0 3"]
-    assert "g: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg" in run.stderr
+    assert run.stdout.split("\n")[:4] == ["parameter 0 4", "input 0 0 0 3", "time 0 0 0 3",
+                                          "reset 0 0 0 0 0 0 4"]
+    # once for the parameter run, once for the reset's (a new slave over the same Logger)
+    assert run.stderr.count("g: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg") == 2
     assert "g: error: input M_motor is nan; allowed: any finite number" in run.stderr
     assert "g: error: doStep from t = 0.5 s, but the FMU is at t = 0.0001 s" in run.stderr

@@ -60,6 +60,8 @@ def installed_twin(package: str, carried: str) -> str | None:
     if spec is None or not spec.submodule_search_locations:
         return None
     installed = list(spec.submodule_search_locations)[0]
+    if os.path.isfile(os.path.join(installed, MARKER)):
+        return None  # another FMU's copy (or this one, on the path twice): not an installation
     if _same_text(carried, installed):
         return installed
     sys.meta_path.append(RefusingFinder(package, carried, installed))

@@ -113,10 +113,12 @@ class HerringboneGear(GearCore, Fmi3Slave):
         self.host_gave_no_logger = False
         if self.logger_address:  # in an FMU: pythonfmu3's library shares pythonfmu's teardown
             tear_down_state_first(kwargs.get("resources"))
+            stand_in = ctypes.cast(_log_unheard, ctypes.c_void_p).value
+            # fmi3Reset makes a new slave over the same Logger, whose callback is the stand-in
+            # an earlier one put there
             if pythonfmu3.__version__ == "0.3.4" \
-                    and _logger_callback(self.logger_address).value is None:
-                _logger_callback(self.logger_address).value = \
-                    ctypes.cast(_log_unheard, ctypes.c_void_p).value
+                    and _logger_callback(self.logger_address).value in (None, stand_in):
+                _logger_callback(self.logger_address).value = stand_in
                 self.host_gave_no_logger = True
         # pythonfmu3's logger is not pythonfmu's: no direct line to it while compiling
         self._setup(None)
