@@ -144,6 +144,11 @@ def test_unknown_parameter_is_refused_by_name(drivetrain, tmp_path):
     pytest.param({"gear": {"solver_method": "rk4"}},
                  "gear.solver_method is 'rk4'; allowed: 'auto', 'dop853', 'radau', "
                  "'exponential' (the compiled integrator's methods)", id="gear-string"),
+    # each allowed alone, not together: what the gear FMU's own scene then refuses
+    pytest.param({"gear": {"edge_ramp": 1.0}},
+                 "gear.edge_ramp is 1.0 m, over half the narrower face width (0.035 m); "
+                 "allowed: <= 0.0175 m, the contact ellipse's half-length in metres (1 mm is "
+                 "0.001)", id="gear-relation"),
 ])
 def test_a_value_its_fmu_does_not_allow_is_refused_by_name(drivetrain, tmp_path, parameters,
                                                            message):

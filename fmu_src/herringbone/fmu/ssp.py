@@ -203,6 +203,7 @@ def write_ssp(fmus: dict[str, Path], output: Path, stop_time: float = STOP_TIME,
                          f"{', '.join(FMU_FILES)}")
     described = {name: read_component(Path(fmus[name]), FMU_FILES[name]) for name in FMU_FILES}
     values = parameter_values(described, parameters or {})
+    check_gear_scene(Path(fmus["gear"]), values["gear"])
     ssd = system_structure(described, values, stop_time, step)
     entries = {"SystemStructure.ssd": ssd}
     entries.update({f"resources/{FMU_FILES[name]}": Path(fmus[name]).read_bytes()
@@ -311,6 +312,27 @@ def declared_range(variable, exclusive: tuple[bool, bool] | None = None) -> Rang
     low_open, high_open = exclusive or (False, False)
     return Range(low, high, low_open=low_open and low is not None,
                  high_open=high_open and high is not None)
+
+
+def check_gear_scene(fmu: Path, values: dict) -> None:
+    """Raise ValueError naming the gear's parameter where `values` ({name: value}) give its
+    FMU's scene parameters that do not go together (an edge ramp over half a face: what
+    Scene.with_parameters refuses, and the FMU with it), each value allowed on its own."""
+    from ..arguments import FMU_SCENE_MEMBER
+    from ..model.scene import SceneError
+
+    given = {name: value for name, value in values.items() if name in PARAMETERS}
+    if not given:
+        return
+    with tempfile.TemporaryDirectory(prefix="ssp_scene_") as folder:
+        path = Path(folder) / "scene.toml"
+        with zipfile.ZipFile(fmu) as archive:
+            path.write_bytes(archive.read(FMU_SCENE_MEMBER))
+        try:
+            load_scene(path).with_parameters(**given)
+        except SceneError as error:
+            raise ValueError(f"gear.{error.key} {error.problem.removeprefix(f'{error.key} ')}"
+                             if error.key else f"gear: {error.problem}") from None
 
 
 def _gear_problem(name: str, value) -> str | None:
