@@ -750,3 +750,19 @@ def test_a_lead_error_loads_one_half_beyond_what_k_v_says(reference_scene):
     assert ("K_v_half from 1.7372 to 1.7372 (stable orbits): the more loaded helix half, its "
             "peak over half the static force; the left half carries 67.3 % of the load "
             "(load_share_left)") in describe(scene, branch, 1.0).splitlines()
+
+
+def test_a_train_too_lightly_damped_for_the_derived_settle_is_refused_before_any_work():
+    """undamped's least-damped mode decays at 8e-13 1/s: the derived settle would be 8e12 s and
+    the sweep by time never ended; it is refused before any work, naming what to give, and
+    runs with the settle given."""
+    scene = herringbone.load_scene(MODELS / "undamped.toml")
+    with pytest.raises(ValueError, match=r"undamped at w0_pinion = 300: its least-damped mode "
+                                         r"decays at 8.\d+e-13 1/s, so the settle to 0.001 of "
+                                         r"the start's transient would be 8.\d+e\+12 s .*"
+                                         r"give the settle \(--settle-time"):
+        sweep(scene, speeds=[300.0, 500.0], method="time", workers=0, progress=False)
+    given = Protocol(settle_time=0.002, window_periods=4, floquet=False)
+    table = sweep(scene, speeds=[300.0], method="time", protocol=given, workers=0,
+                  progress=False)
+    assert table["settle_time_s"].iloc[0] == pytest.approx(0.002, rel=0.1)

@@ -27,7 +27,13 @@ from ..optional import require
 from ..shipped import named_as_typed
 from ..suggest import did_you_mean
 from .progress_bar import progress_bar
-from .sweep_point import Protocol, point_row, run_window
+from .sweep_point import (
+    Protocol,
+    least_damped_decay_rate,
+    point_row,
+    run_window,
+    settle_problem,
+)
 
 SPEED = "w0_pinion"
 MOST_AXES = 2
@@ -299,7 +305,9 @@ def check_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol()
     check_options(options, by_time)
     axes = sweep_axes(scene, speeds, params)
     for point in grid(axes):
-        problem = point_problem(scene_at(scene, point))
+        at = scene_at(scene, point)
+        problem = point_problem(at) or (settle_problem(protocol, least_damped_decay_rate(at))
+                                        if by_time else None)
         if problem is not None:
             where = ", ".join(f"{name} = {value:g}" for name, value in point.values)
             raise ValueError(f"{named_as_typed(scene)} at {where}: {problem}")

@@ -122,6 +122,29 @@ class Timing:
         return self.settle + np.arange(self.samples) * self.interval
 
 
+# The longest settle (s of simulated time) the protocol works out for itself: the shipped
+# scenes take 3.1 to 3.6 s, examples/parametric_resonance.toml 155 s; a train without damping
+# (models/undamped.toml: its slowest mode decays at 8e-13 1/s) would take 8e12 s, and a sweep
+# of it would not end
+LONGEST_DERIVED_SETTLE = 1000.0
+
+
+def settle_problem(protocol: Protocol, decay_rate: float) -> str | None:
+    """Why the protocol cannot work out a settle for a train whose least-damped mode decays at
+    `decay_rate` (1/s: least_damped_decay_rate): it would pass LONGEST_DERIVED_SETTLE; None
+    where it can or the protocol gives the settle."""
+    if protocol.settle_time is not None:
+        return None
+    settle = math.log(1.0 / protocol.settle_residual) / decay_rate if decay_rate > 0.0 \
+        else math.inf
+    if settle <= LONGEST_DERIVED_SETTLE:
+        return None
+    return (f"its least-damped mode decays at {decay_rate:.3g} 1/s, so the settle to "
+            f"{protocol.settle_residual:g} of the start's transient would be {settle:.3g} s of "
+            f"simulated time; allowed: up to {LONGEST_DERIVED_SETTLE:g} s: give the settle "
+            "(--settle-time, Protocol(settle_time=...)) for a train this lightly damped")
+
+
 def least_damped_decay_rate(scene, model: GearTrainModel | None = None) -> float:
     """σ (1/s) of the slowest-decaying mode other than the rigid rotation (the train's
     eigenvalues at the period-mean stiffness and damping; rigid: |λ| < 1e-6·|λ|max). The rigid
@@ -168,12 +191,15 @@ def mesh_period(scene) -> float:
 def timing(scene, protocol: Protocol, model: GearTrainModel | None = None) -> Timing:
     """The settle and the window of a scene under a protocol (module docstring); `model`: the
     scene's GearTrainModel, if already at hand (its eigenvalues give both the settle and the
-    figures' refinement)."""
+    figures' refinement). ValueError where the derived settle is too long (settle_problem)."""
     period = mesh_period(scene)
     model = GearTrainModel(scene) if model is None else model
     modes = model.eigenvalues()
     settle = protocol.settle_time
     if settle is None:
+        problem = settle_problem(protocol, _least_damped(modes))
+        if problem is not None:
+            raise ValueError(f"{named_as_typed(scene)}: {problem}")
         settle = math.log(1.0 / protocol.settle_residual) / _least_damped(modes)
     # 1e-9: a settle given as whole periods stays that many periods despite rounding
     periods = math.ceil(settle / period - 1e-9)
