@@ -164,6 +164,9 @@ def test_a_speed_without_a_converged_orbit_falls_back_to_time_integration(refere
     assert list(on_grid["w0_pinion"]) == [600.0, 700.0, 800.0]
     assert list(on_grid["method"]) == ["shooting", "time", "shooting"]
     assert list(on_grid["stability"]) == ["stable", "time", "stable"]
+    # the time point says how far from a steady state it is, as a sweep by time's do
+    assert np.isnan(on_grid["window_drift"].iloc[[0, 2]]).all()
+    assert 0.0 <= on_grid["window_drift"].iloc[1] < 1e-2
     timed = window_figures(run_window(reference_scene.with_parameters(w0_pinion=700.0), short),
                            static_mesh_force(reference_scene))
     assert on_grid["K_v"].iloc[1] == timed["K_v"]

@@ -152,7 +152,8 @@ class Branch:
         orbit's period), floquet_max (|λ|max of the orbit over its period),
         floquet_exponent_per_s, stability ('stable', 'unstable' or 'time' where no orbit
         converged), method, on_grid, event, mesh_periods (the orbit's period: 1 or 2 mesh
-        periods), branch (0 this one, 1… the doubled ones), change_over_mesh_period."""
+        periods), branch (0 this one, 1… the doubled ones), change_over_mesh_period; and
+        window_drift where a point ran by time (sweep_point.window_drift; NaN for orbits)."""
         import pandas as pd
 
         tables = [self.rows(0)] + [b.rows(n + 1) for n, b in enumerate(self.doubled)]
@@ -506,11 +507,14 @@ class Continuation:
     def by_time(self, value):
         """A requested value that shooting could not reach: sweep_point's time protocol.
         Returns the time run's end position."""
-        from .sweep_point import run_window_from, static_mesh_force, window_figures
+        from .sweep_point import run_window_from, static_mesh_force, window_drift, window_figures
 
         at = self.axis.scene_at(value)
         window, end = run_window_from(at, self.protocol)
-        figures = window_figures(window, static_mesh_force(at))
+        force = static_mesh_force(at)
+        # how far from a steady state its figures are (the summary names a point over 1 %)
+        figures = {**window_figures(window, force),
+                   "window_drift": window_drift(window, self.protocol, force)}
         self.points.append(BranchPoint(value, self.axis.speed_at(value), None, "time", True,
                                        (), figures, follows=self.axis.follows(value)))
         return end

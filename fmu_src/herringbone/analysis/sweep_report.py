@@ -83,7 +83,8 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
                   f"k = {k}, f_n = {f:.1f} Hz" for s, k, f in marks]
     if (table["contact_lost_share"] > 0).any():
         lost = int((table["contact_lost_share"] > 0).sum())
-        lines.append(f"a helix half out of contact at {lost} points (contact_lost_share > 0)")
+        lines.append(f"a helix half out of contact at {lost} point{'s' if lost != 1 else ''} "
+                     "(contact_lost_share > 0)")
     return "\n".join(lines)
 
 
@@ -109,7 +110,9 @@ def _k_v_lines(table) -> list[str]:
     helix half's factor (`_half_lines`)."""
     where = ""
     if is_branch(table) and (table["stability"] != "unstable").any():
-        table, where = table[table["stability"] != "unstable"], " (stable orbits)"
+        table = table[table["stability"] != "unstable"]
+        where = (" (stable orbits and points by time integration)"
+                 if (table["stability"] == "time").any() else " (stable orbits)")
     return [f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}{where}; "
             f"largest at {resonation_summary(table)}", *_half_lines(table, where)]
 
