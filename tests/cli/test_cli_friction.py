@@ -624,7 +624,7 @@ def test_a_command_whose_reader_has_gone_ends_quietly():
     assert command.wait(timeout=60) == 141 and error == b""
 
 
-def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys):
+def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, built_fmus):
     """--set NAME=VALUE runs the scene with a parameter or input torque changed, says so, and
     is checked as a scene file's value is (one line, exit 2, the setting named)."""
     csv = tmp_path / "at450.csv"
@@ -649,6 +649,15 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys):
                                "parameter; allowed: a scene file's [components] sets it")):
         assert main(["info", REFERENCE, "--set", setting]) == 2
         assert expected in one_error_line(capsys, "info")
+    assert main(["run", REFERENCE, "--set", "stop_time=0.01"]) == 2
+    assert ("--set stop_time: stop_time is of the scene's [experiment], not a parameter; "
+            "allowed: --stop-time") in one_error_line(capsys, "run")
+    assert main(["info", REFERENCE, "--set", 'M_motor="500"']) == 2
+    assert '--set M_motor="500": M_motor must be a number' in one_error_line(capsys, "info")
+    assert main(["sweep", REFERENCE, "--speeds", "100", "200", "2", "--method", "time",
+                 "--through-fmu", str(built_fmus["reference"]), "--set", "zeta_mesh=0.2"]) == 2
+    assert "--set with --through-fmu: the FMU runs the values it was built with" in \
+        one_error_line(capsys, "sweep")
     assert main(["info", REFERENCE, "--set", "w0_pinion=450", "--set", "w0_pinion=300"]) == 2
     assert "--set w0_pinion is given 2 times; allowed: each name once" in \
         one_error_line(capsys, "info")

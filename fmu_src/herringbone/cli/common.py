@@ -162,6 +162,10 @@ def scene_of(args, parser: argparse.ArgumentParser):
         if names.count(name) > 1:
             fail(parser, f"--set {name} is given {names.count(name)} times; allowed: each name "
                          "once")
+        if name in ("stop_time", "output_interval"):
+            fail(parser, f"--set {name}: {name} is of the scene's [experiment], not a "
+                         f"parameter; allowed: --{name.replace('_', '-')} where the command "
+                         "takes it")
         if name in COMPONENTS:
             fail(parser, f"--set {name}={_toml(value)}: {name} is a component, not a "
                          "parameter; allowed: a scene file's [components] sets it")
@@ -183,8 +187,10 @@ def scene_of(args, parser: argparse.ArgumentParser):
 
 
 def _toml(value) -> str:
-    """A --set value as a scene file writes it (true, not Python's True)."""
-    return ("true" if value else "false") if isinstance(value, bool) else str(value)
+    """A --set value as a scene file writes it (true, not Python's True; a string quoted)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f'"{value}"' if isinstance(value, str) else str(value)
 
 
 class _SpeedsAction(argparse.Action):

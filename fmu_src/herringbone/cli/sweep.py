@@ -136,6 +136,10 @@ def execute(args, parser) -> int:
 
     if args.workers is not None and (args.workers < 0 or args.workers != int(args.workers)):
         fail(parser, f"--workers {args.workers:g}: allowed: a whole number >= 0")
+    if args.settings and args.through_fmu is not None:
+        fail(parser, "--set with --through-fmu: the FMU runs the values it was built with; "
+                     "allowed: --set without --through-fmu, or the values in a scene file "
+                     "whose FMU `herringbone build-fmu` builds")
     if args.rpm and args.speeds is None and args.speed is None:
         fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT "
                      "or --speed W")
