@@ -545,37 +545,31 @@ def test_a_run_that_starts_with_points_in_tension_says_why_f_mesh_starts_high(tm
                     "which start unloaded, and the run starts with a transient")
 
 
-def test_torques_that_do_not_balance_are_said_by_info_and_run(tmp_path, capsys):
-    """A scene that gives M_motor alone keeps the reference's M_load = 1800 N·m, which no
-    longer balances it: the train accelerates (the pinion from 157 to 380 rad/s in 20 ms)
-    without a word before; info and the run's summary say so, a balanced scene not."""
+@pytest.mark.parametrize("scene_text, said, balanced", [
+    # M_motor alone keeps the reference's M_load = 1800 N·m, which no longer balances it: the
+    # pinion from 157 to 380 rad/s in 20 ms without a word before
+    ("[parameters]\nz_pinion = 14\n[inputs]\nM_motor = 2000.0\n",
+     "M_load = 1800 N·m does not balance M_motor = 2000 N·m (u = 2.57143): the train "
+     "accelerates (steady running needs M_load = u·M_motor = 5142.86 N·m)", "reference"),
+    # docs/scenes.md's example: M_motor stepped alone at 0.05 s, the pinion from 157 to 425
+    # rad/s; torque_step, whose rows all balance, says nothing
+    ("[inputs]\ntable = [[0.0, 500.0, 1800.0], [0.05, 1000.0, 1800.0]]\n",
+     "from t = 0.05 s M_load = 1800 N·m does not balance M_motor = 1000 N·m (u = 3.6): the "
+     "train accelerates while they hold (steady running needs M_load = u·M_motor)",
+     "torque_step"),
+], ids=["constant", "table"])
+def test_torques_that_do_not_balance_are_said_by_info_and_run(tmp_path, capsys, scene_text,
+                                                               said, balanced):
+    """Torques that do not balance accelerate the train: info and the run's summary say so,
+    of constant torques and of an input table's rows alike; a balanced scene says nothing."""
     scene = tmp_path / "unbalanced.toml"
-    scene.write_text("[parameters]\nz_pinion = 14\n[inputs]\nM_motor = 2000.0\n")
-    said = ("M_load = 1800 N·m does not balance M_motor = 2000 N·m (u = 2.57143): the train "
-            "accelerates (steady running needs M_load = u·M_motor = 5142.86 N·m)")
+    scene.write_text(scene_text)
     assert main(["info", str(scene)]) == 0
     assert said in capsys.readouterr().out.splitlines()
     assert main(["run", str(scene), "--stop-time", "1e-3", "--no-progress",
                  "-o", str(tmp_path / "run.csv")]) == 0
     assert said in capsys.readouterr().out.splitlines()
-    assert main(["info", "reference"]) == 0
-    assert "does not balance" not in capsys.readouterr().out
-
-
-def test_an_input_table_that_stops_balancing_is_said(tmp_path, capsys):
-    """docs/scenes.md's example steps M_motor to 1000 N·m at 0.05 s and keeps M_load at 1800
-    N·m: the pinion runs from 157 to 425 rad/s, which info and the run's summary now say (they
-    said it of constant torques only); torque_step, whose rows all balance, says nothing."""
-    scene = tmp_path / "stepped.toml"
-    scene.write_text("[inputs]\ntable = [[0.0, 500.0, 1800.0], [0.05, 1000.0, 1800.0]]\n")
-    said = ("from t = 0.05 s M_load = 1800 N·m does not balance M_motor = 1000 N·m (u = 3.6): "
-            "the train accelerates while they hold (steady running needs M_load = u·M_motor)")
-    assert main(["info", str(scene)]) == 0
-    assert said in capsys.readouterr().out.splitlines()
-    assert main(["run", str(scene), "--stop-time", "1e-3", "--no-progress",
-                 "-o", str(tmp_path / "run.csv")]) == 0
-    assert said in capsys.readouterr().out.splitlines()
-    assert main(["info", "torque_step"]) == 0
+    assert main(["info", balanced]) == 0
     assert "does not balance" not in capsys.readouterr().out
 
 
