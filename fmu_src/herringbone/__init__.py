@@ -28,14 +28,14 @@ import importlib.util as _util
 import os as _os
 import sys as _sys
 
-from .fmu.installed import installed_twin as _installed_twin
+from .installed import installed_twin as _installed_twin
 
 # An FMU's copy of the package gives way to the same version installed, which has what the
-# copy leaves out (fmu/installed.py): an import returns what sys.modules holds once it is done
+# copy leaves out (installed.py): an import returns what sys.modules holds once it is done
 _twin = _installed_twin(__name__, _os.path.dirname(__file__))
 if _twin is not None:
     for _name in [name for name in _sys.modules if name.startswith(f"{__name__}.")]:
-        del _sys.modules[_name]  # the copy's own (fmu.installed): the twin imports its own
+        del _sys.modules[_name]  # the copy's own (installed): the twin imports its own
     _spec = _util.spec_from_file_location(__name__, _os.path.join(_twin, "__init__.py"),
                                           submodule_search_locations=[_twin])
     assert _spec is not None and _spec.loader is not None

@@ -4,9 +4,9 @@ import subprocess
 import sys
 import zipfile
 
-from herringbone import shipped
+from herringbone import installed, shipped
 from herringbone.compiling import sources
-from herringbone.fmu import carried, installed
+from herringbone.fmu import carried
 
 # A host process that has never imported herringbone runs the FMU (a state round trip, then a
 # bad parameter, whose message is an error path), and prints the herringbone modules it

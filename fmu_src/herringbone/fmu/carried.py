@@ -13,8 +13,8 @@ import ast
 import shutil
 from pathlib import Path
 
+from .. import installed
 from ..compiling import sources
-from . import installed
 
 PACKAGE = sources.ROOT  # herringbone
 # the slaves' modules: what pythonfmu's script (a copy of slave.py or slave3.py) imports
@@ -44,7 +44,7 @@ def stage_package(folder: Path) -> Path:
         copy = target / source.relative_to(PACKAGE)
         copy.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(source, copy)
-    (target / installed.MARKER).write_text("the modules an FMU's run imports (fmu/installed.py)\n")
+    (target / installed.MARKER).write_text("an FMU's copy of the package (installed.py)\n")
     return target
 
 
