@@ -381,10 +381,10 @@ def test_a_coarse_chart_probes_where_bands_hide_or_merge():
     assert len(coarse.probed_speeds) == 337
     assert stability.largest_multiplier(scene, 1732.5) == pytest.approx(1.159, abs=1e-3)
     lines = summary(coarse)
-    assert "probed 337 more speeds, a monodromy each besides the 100 charted" in lines[-2]
-    assert lines[-1] == ("bands, and stable gaps between bands, narrower than the grid step, "
-                         "111 rad/s, may be missed or merged where the chart did not probe, "
-                         "and than 13.9 rad/s where it probed: give more speeds")
+    assert "probed 337 speeds besides the 100 charted (a monodromy each)" in lines[-2]
+    assert lines[-1] == ("a band, or a stable gap between two, narrower than the grid step, "
+                         "111 rad/s (13.9 rad/s where the chart probed), may be missed or "
+                         "merged: give more speeds to see finer")
 
 
 @pytest.fixture(scope="module")

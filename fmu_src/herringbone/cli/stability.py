@@ -100,11 +100,11 @@ def grid_lines(chart) -> list[str]:
     if step <= 0.0:
         return []
     probed = len(chart.probed_speeds)
-    lines = [f"probed {probed} more speeds, a monodromy each besides the {len(chart.speeds)} "
-             f"charted: beside the unstable speeds and the peaks of |λ|max within "
+    lines = [f"probed {probed} speeds besides the {len(chart.speeds)} charted (a monodromy "
+             f"each): beside the unstable speeds and the peaks of |λ|max within "
              f"{REFINE_MARGIN:g} of 1, and between neighbouring unstable ones"] if probed else []
-    finer = (f", and than {step / chart.refine_split:.3g} rad/s where it probed"
+    finer = (f" ({step / chart.refine_split:.3g} rad/s where the chart probed)"
              if probed else "")
-    return lines + [f"bands, and stable gaps between bands, narrower than the grid step, "
-                    f"{step:.3g} rad/s, may be missed or merged where the chart did not "
-                    f"probe{finer}: give more speeds"]
+    return lines + [f"a band, or a stable gap between two, narrower than the grid step, "
+                    f"{step:.3g} rad/s{finer}, may be missed or merged: give more speeds to "
+                    "see finer"]
