@@ -197,10 +197,11 @@ def timing(scene, protocol: Protocol, model: GearTrainModel | None = None) -> Ti
     modes = model.eigenvalues()
     settle = protocol.settle_time
     if settle is None:
-        problem = settle_problem(protocol, _least_damped(modes))
+        rate = _least_damped(modes)
+        problem = settle_problem(protocol, rate)
         if problem is not None:
             raise ValueError(f"{named_as_typed(scene)}: {problem}")
-        settle = math.log(1.0 / protocol.settle_residual) / _least_damped(modes)
+        settle = math.log(1.0 / protocol.settle_residual) / rate
     # 1e-9: a settle given as whole periods stays that many periods despite rounding
     periods = math.ceil(settle / period - 1e-9)
     return Timing(period, periods * period, period / protocol.samples_per_period,

@@ -151,39 +151,50 @@ def _setting(text: str) -> tuple[str, object]:
 def scene_of(args, parser: argparse.ArgumentParser):
     """The command's scene: SCENE (a file or a shipped scene's name) with --set's changes, an
     input torque by Scene.with_inputs, a parameter by Scene.with_parameters; one line naming
-    the setting where one is refused. The changes are said in a line on stdout first."""
-    from ..model.parameters import COMPONENTS, INPUTS, unit_of, with_unit
+    the setting where one is refused (`_setting_refused`). The changes are said in a line on
+    stdout first."""
+    from ..model.parameters import INPUTS, unit_of, with_unit
     from ..model.scene import load_scene
 
     scene = load_scene(args.scene)
     settings = getattr(args, "settings", [])
     names = [name for name, _ in settings]
     for name, value in settings:
-        if names.count(name) > 1:
-            fail(parser, f"--set {name} is given {names.count(name)} times; allowed: each name "
-                         "once")
-        if name in ("stop_time", "output_interval"):
-            fail(parser, f"--set {name}: {name} is of the scene's [experiment], not a "
-                         f"parameter; allowed: --{name.replace('_', '-')} where the command "
-                         "takes it")
-        if name in COMPONENTS:
-            fail(parser, f"--set {name}={_toml(value)}: {name} is a component, not a "
-                         "parameter; allowed: a scene file's [components] sets it")
-        if name in INPUTS and len(scene.inputs.times) > 1:
-            fail(parser, f"--set {name}={_toml(value)}: the scene's torques are a table of "
-                         f"{len(scene.inputs.times)} rows; allowed: --set of a torque on a "
-                         "scene with constant torques")
+        refused = _setting_refused(name, value, names.count(name), scene)
+        if refused is not None:
+            fail(parser, refused)
         try:
             scene = (scene.with_inputs(**{name: value}) if name in INPUTS
                      else scene.with_parameters(**{name: value}))
         except (SceneError, TypeError) as error:
-            reason = str(error).split(": ", 1)[-1]
-            fail(parser, f"--set {name}={_toml(value)}: {reason}")
-    if getattr(args, "settings", []):
+            problem = error.problem if isinstance(error, SceneError) else str(error)
+            fail(parser, f"--set {name}={_toml(value)}: {problem}")
+    if settings:
         changes = ", ".join(f"{name} = {with_unit(_toml(value), unit_of(name))}"
                             for name, value in settings)
         print(f"scene {scene.name} with {changes} (--set)")
     return scene
+
+
+def _setting_refused(name: str, value, count: int, scene) -> str | None:
+    """The line that refuses --set NAME=VALUE (`name` given `count` times) on `scene` before
+    its value is tried, or None: a name given twice, the experiment's keys (options of their
+    own), a component, a torque of a scene whose torques are a table."""
+    from ..model.parameters import COMPONENTS, INPUTS
+
+    given = f"--set {name}={_toml(value)}"
+    if count > 1:
+        return f"--set {name} is given {count} times; allowed: each name once"
+    if name in ("stop_time", "output_interval"):
+        return (f"--set {name}: {name} is of the scene's [experiment], not a parameter; "
+                f"allowed: --{name.replace('_', '-')} where the command takes it")
+    if name in COMPONENTS:
+        return (f"{given}: {name} is a component, not a parameter; allowed: a scene file's "
+                "[components] sets it")
+    if name in INPUTS and len(scene.inputs.times) > 1:
+        return (f"{given}: the scene's torques are a table of {len(scene.inputs.times)} rows; "
+                "allowed: --set of a torque on a scene with constant torques")
+    return None
 
 
 def _toml(value) -> str:

@@ -318,21 +318,21 @@ def check_gear_scene(fmu: Path, values: dict) -> None:
     """Raise ValueError naming the gear's parameter where `values` ({name: value}) give its
     FMU's scene parameters that do not go together (an edge ramp over half a face: what
     Scene.with_parameters refuses, and the FMU with it), each value allowed on its own."""
+    import tomllib
+
     from ..arguments import FMU_SCENE_MEMBER
-    from ..model.scene import SceneError
+    from ..model.scene import SceneError, scene_from_dict
 
     given = {name: value for name, value in values.items() if name in PARAMETERS}
     if not given:
         return
-    with tempfile.TemporaryDirectory(prefix="ssp_scene_") as folder:
-        path = Path(folder) / "scene.toml"
-        with zipfile.ZipFile(fmu) as archive:
-            path.write_bytes(archive.read(FMU_SCENE_MEMBER))
-        try:
-            load_scene(path).with_parameters(**given)
-        except SceneError as error:
-            raise ValueError(f"gear.{error.key} {error.problem.removeprefix(f'{error.key} ')}"
-                             if error.key else f"gear: {error.problem}") from None
+    with zipfile.ZipFile(fmu) as archive:
+        tables = tomllib.loads(archive.read(FMU_SCENE_MEMBER).decode("utf-8"))
+    try:
+        scene_from_dict(tables, source=f"{fmu}:{FMU_SCENE_MEMBER}").with_parameters(**given)
+    except SceneError as error:
+        raise ValueError(f"gear.{error.key} {error.problem.removeprefix(f'{error.key} ')}"
+                         if error.key else f"gear: {error.problem}") from None
 
 
 def _gear_problem(name: str, value) -> str | None:
