@@ -268,10 +268,12 @@ class GearCore:
         slave checks the open one), its setter through _set. A variable that is not a real
         carries its unit in its description."""
         kind = KINDS[parameter.kind]
+        description = parameter.description if kind == "real" or not parameter.unit \
+            else f"{parameter.description} [{parameter.unit}]"
+        if parameter.default is None and name not in self.scene.given:
+            description += "; follows the masses and geometry set while at its start value"
         declaration = Declaration(
-            name, kind, causality, variability,
-            parameter.description if kind == "real"
-            else f"{parameter.description} [{parameter.unit}]",
+            name, kind, causality, variability, description,
             getter=lambda: self._value_taken(name), setter=lambda value: self._set(name, value))
         if kind == "real":
             declaration.unit = parameter.unit
@@ -509,7 +511,11 @@ class GearCore:
 
     def _get_fmu_state(self):
         """Everything the run goes on from, as JSON data: the position (floats exactly, by
-        repr; the contact set by its cycle and interval), the steps taken, the values."""
+        repr; the contact set by its cycle and interval), the steps taken, the values. Before
+        initialization the run is first brought up to the values set, as a get of an output
+        brings it: a state keeps a run with the values it was started from."""
+        if not self.initialized:
+            self._start_if_changed()
         state = {"format": STATE_FORMAT, "values": dict(self.values),
                  "start_time": self.start_time, "stop_time": self.stop_time, "mode": self.mode,
                  "experiment_tolerance": self.experiment_tolerance,
