@@ -1,11 +1,14 @@
 """The package's layout and the installed package as the product: the
 stepping contract both integrators keep, no import cycles, an FMU runtime guard that imports
-nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`. The install
-itself (non-editable, commands run from a temporary folder) is .ci/installed_package's."""
+nothing heavy, shipped scenes by name, `herringbone scenes` and `build-fmu`, what the wheel
+and the sdist carry. The install itself (non-editable, commands run from a temporary folder)
+is .ci/installed_package's."""
 import ast
 import re
+import shutil
 import subprocess
 import sys
+import tarfile
 import tomllib
 from pathlib import Path
 
@@ -226,6 +229,46 @@ def test_the_wheel_ships_the_scenes_and_examples():
                 for path in PACKAGE.rglob("__init__.py")}
     assert packages | {"herringbone.scenes", "herringbone.examples"} == set(setuptools["packages"])
     assert shipped.scene_files()["reference"].resolve() == (MODELS / "reference.toml").resolve()
+
+
+# What the source distribution carries beside the package (MANIFEST.in), and what a checkout
+# generates, which it must not carry
+SDIST_FOLDERS = ("docs", "tests", "benchmarks", ".ci", "models", "examples")
+SDIST_FILES = ("README.md", "CHANGELOG.md", "build_fmu.py", "mkdocs.yml", "pyproject.toml",
+               "MANIFEST.in")
+GENERATED = (".git", ".venv", "dist", "build", "results", "site", "*.egg-info", "__pycache__",
+             "*.py[cod]", "*.fmu", ".pytest_cache", ".hypothesis", ".mypy_cache", ".ruff_cache")
+DECOYS = ("dist/reference-fmi2.fmu", "results/reference.csv", "site/index.html",
+          "tests/__pycache__/conftest.cpython-311.pyc", "tests/.pytest_cache/v/cache/nodeids",
+          "tests/fmu/reference.fmu", "fmu_src/herringbone/__pycache__/files.cpython-311.pyc")
+
+
+def test_the_sdist_carries_the_docs_tests_and_tools_and_nothing_generated(tmp_path):
+    """The source distribution of the checkout (setuptools' own, as `python -m build --sdist`
+    makes it; a copy of the checkout with generated files added): the pages and the picture
+    the README links, every test file (tests/helpers included), the benchmarks, the CI
+    scripts, the CHANGELOG and build_fmu.py; no build, result, cache or FMU."""
+    checkout = tmp_path / "checkout"
+    shutil.copytree(ROOT, checkout, ignore=shutil.ignore_patterns(*GENERATED))
+    for decoy in DECOYS:
+        (checkout / decoy).parent.mkdir(parents=True, exist_ok=True)
+        (checkout / decoy).write_text("generated\n")
+    program = ("import sys; from setuptools import build_meta; "
+               "print(build_meta.build_sdist(sys.argv[1]))")
+    run = subprocess.run([sys.executable, "-c", program, str(tmp_path / "sdist")],
+                         cwd=checkout, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-3000:]
+    with tarfile.open(tmp_path / "sdist" / run.stdout.split()[-1]) as archive:
+        shipped_files = {name.partition("/")[2] for name in archive.getnames()}
+    wanted = {path.relative_to(checkout).as_posix() for folder in SDIST_FOLDERS
+              for path in (checkout / folder).rglob("*") if path.is_file()}
+    wanted -= set(DECOYS)
+    assert {"tests/helpers/__init__.py", "benchmarks/common.py", ".ci/run"} <= wanted
+    linked = set(re.findall(r"\]\(((?:docs/|CHANGELOG)[^)#]+)",
+                            (ROOT / "README.md").read_text(encoding="utf-8")))
+    assert len(linked) > 10 and "docs/images/run_reference.png" in linked
+    assert not (wanted | set(SDIST_FILES) | linked) - shipped_files
+    assert not set(DECOYS) & shipped_files
 
 
 def test_the_package_tells_no_history():
