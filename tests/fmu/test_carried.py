@@ -80,6 +80,19 @@ def test_an_import_names_its_module_and_the_packages_above_it_inside_functions_t
     assert "herringbone.analysis" not in carried.runtime_modules()
 
 
+def test_each_slaves_run_imports_its_own_fmi_package_alone():
+    """The FMI 3.0 FMU carries pythonfmu3 and the FMI 2.0 one pythonfmu (in their resources):
+    what each slave's run imports, inside functions too, names its own package and not the
+    other (a host of the FMI 3.0 FMU need not have pythonfmu: docs/fmi3.md)."""
+    fmi2 = carried.outside_imports(carried.runtime_modules(["herringbone.fmu.slave"]))
+    fmi3 = carried.outside_imports(carried.runtime_modules(["herringbone.fmu.slave3"]))
+    assert "pythonfmu" in fmi2 and "pythonfmu3" not in fmi2
+    assert "pythonfmu3" in fmi3 and "pythonfmu" not in fmi3
+    # the closure follows core.py to the logger; the kernels' imports are numba's and numpy's
+    assert "herringbone.fmu.pythonfmu_logger" in carried.runtime_modules(["herringbone.fmu.slave3"])
+    assert {"numpy", "numba", "scipy"} <= fmi3
+
+
 # A host process with the package installed (not editable: its finder, which would find the
 # rest of the package on its own, is left out), which had not imported herringbone before the
 # FMU: after a run of the FMU, the process uses the package, its modules and its data

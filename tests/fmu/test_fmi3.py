@@ -310,3 +310,73 @@ def test_fmi3_host_without_a_log_callback_gets_statuses_and_stderr(fmus, tmp_pat
     assert run.stderr.count("g: error: parameter m_pinion is -1.0 kg; allowed: > 0 kg") == 2
     assert "g: error: input M_motor is nan; allowed: any finite number" in run.stderr
     assert "g: error: doStep from t = 0.5 s, but the FMU is at t = 0.0001 s" in run.stderr
+
+
+# A host whose Python has the FMU's own FMI package and not the other one (pythonfmu3 without
+# pythonfmu, as docs/fmi3.md's host; pythonfmu without pythonfmu3): it runs the FMU, a bad
+# parameter's message included, and prints the FMI packages it imported
+WITHOUT_THE_OTHER_PACKAGE = r'''
+import sys
+
+class NotInstalled:
+    """The FMI package named in argv[2] is not installed: its import fails as such."""
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] == sys.argv[2]:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+sys.meta_path.insert(0, NotInstalled())
+import fmpy
+from fmpy.fmi1 import FMICallException
+result = fmpy.simulate_fmu(sys.argv[1], stop_time=0.002, output_interval=1e-3)
+try:
+    fmpy.simulate_fmu(sys.argv[1], stop_time=0.002, start_values={"m_pinion": -1.0})
+except FMICallException:
+    pass
+print(len(result), " ".join(sorted({name.split(".")[0] for name in sys.modules
+                                    if name.startswith("pythonfmu")})))
+'''
+
+
+@pytest.mark.parametrize(("version", "missing", "imported"),
+                         [(3, "pythonfmu", "pythonfmu3"), (2, "pythonfmu3", "pythonfmu")])
+def test_each_fmu_runs_in_a_host_without_the_other_versions_pythonfmu(fmus, tmp_path, version,
+                                                                     missing, imported):
+    """The FMI 3.0 FMU carries pythonfmu3 and needs no pythonfmu, the FMI 2.0 one the other
+    way round: each instantiates, runs and reports a bad parameter in a host whose Python has
+    the other package missing (its import fails), and imports only its own."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "host.py"
+    script.write_text(WITHOUT_THE_OTHER_PACKAGE)
+    run = subprocess.run([sys.executable, str(script), str(fmus["reference", version]), missing],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert run.stdout.split("\n")[-2] == f"3 {imported}"  # 3 samples; no other FMI package
+    assert "parameter m_pinion is -1.0 kg; allowed: " in run.stdout + run.stderr
+    assert "ModuleNotFoundError" not in run.stdout + run.stderr
+
+
+def test_the_host_line_speaks_to_an_fmi3_slave_without_pythonfmu(monkeypatch, capsys):
+    """HostLine (what the integrator's first start says through, before a compile) takes an
+    FMI 3.0 slave without importing pythonfmu: a WARNING reaches pythonfmu3's log as
+    fmi3Warning in its own category, an INFO as fmi3OK, and both reach stderr."""
+    import logging
+    import sys
+
+    from pythonfmu3 import Fmi3Slave
+    from pythonfmu3.enums import Fmi3Status
+
+    from herringbone.fmu.pythonfmu_logger import HostLine
+
+    for name in {"pythonfmu", *[name for name in sys.modules if name.startswith("pythonfmu.")]}:
+        monkeypatch.setitem(sys.modules, name, None)  # its import fails, submodules' too
+    slave = Fmi3Slave(instance_name="gear")
+    line = HostLine(slave, None)  # as the FMI 3.0 slave builds it (fmu/core.py, _setup)
+    line.say("compiling the integrator", logging.INFO)
+    line.say("cannot copy the compiled integrator", logging.WARNING)
+    logged = [(message.status, message.category, message.msg) for message in slave.log_queue]
+    assert logged == [(Fmi3Status.ok, "logAll", "gear: compiling the integrator"),
+                      (Fmi3Status.warning, "logStatusWarning",
+                       "gear: cannot copy the compiled integrator")]
+    assert "herringbone FMU gear: cannot copy" in capsys.readouterr().err

@@ -5,12 +5,15 @@ file by file, so the FMU carries the modules its slave imports, directly or thro
 (the closure of their import statements, those inside functions included: `runtime_modules`),
 and every kernel file, whose text is the key of the compiled code it carries
 (compiling.sources, compiling.cache.package_digest). The analysis, the command line, the builder
-and the scipy reference stay behind.
+and the scipy reference stay behind. What they import from outside the package
+(`outside_imports`) the host's Python gives, or the FMU's resources, where pythonfmu (FMI 2.0)
+or pythonfmu3 (FMI 3.0) puts its own package: each slave's run imports its own alone.
 """
 from __future__ import annotations
 
 import ast
 import shutil
+from collections.abc import Iterable
 from pathlib import Path
 
 from .. import installed
@@ -21,12 +24,13 @@ PACKAGE = sources.ROOT  # herringbone
 ENTRY_MODULES = ("herringbone.fmu.slave", "herringbone.fmu.slave3")
 
 
-def runtime_modules() -> set[str]:
-    """The names of the package's modules an FMU's run can import: ENTRY_MODULES, every kernel
-    module (carried whole: their text is the compiled code's key), and every module their
-    import statements name, followed through, with the packages that hold them."""
+def runtime_modules(entries: Iterable[str] = ENTRY_MODULES) -> set[str]:
+    """The names of the package's modules an FMU's run can import: the slaves' modules
+    `entries` (one alone: an FMU of that FMI version), every kernel module (carried whole:
+    their text is the compiled code's key), and every module their import statements name,
+    followed through, with the packages that hold them."""
     found: set[str] = set()
-    waiting = [*ENTRY_MODULES, *sources.kernel_modules()]
+    waiting = [*entries, *sources.kernel_modules()]
     while waiting:
         name = waiting.pop()
         if name not in found:
@@ -48,9 +52,28 @@ def stage_package(folder: Path) -> Path:
     return target
 
 
+def outside_imports(modules: Iterable[str]) -> set[str]:
+    """The top-level names of what the import statements of the package's `modules` name
+    outside the package (those inside functions included): "numpy", "pythonfmu3", ..."""
+    return {named.split(".")[0] for name in modules for named in _named(name)
+            if named.split(".")[0] != PACKAGE.name}
+
+
 def _imported(name: str) -> set[str]:
     """The package's modules that module `name`'s import statements name, and the packages
     above them (whose __init__ an import runs first)."""
+    modules = set()
+    for module in _named(name):
+        while module.startswith(PACKAGE.name):
+            if _module_path(module) is not None:
+                modules.add(module)
+            module = module.rpartition(".")[0]
+    return modules
+
+
+def _named(name: str) -> set[str]:
+    """What module `name`'s import statements name, as absolute names: modules, and for
+    `from m import x` also "m.x" (a submodule, maybe)."""
     path = _file_of(name)
     here = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
     named: set[str] = set()
@@ -62,13 +85,7 @@ def _imported(name: str) -> set[str]:
                     if node.level else node.module or "")
             named.add(base)
             named.update(f"{base}.{alias.name}" for alias in node.names)  # a submodule, maybe
-    modules = set()
-    for module in named:
-        while module.startswith(PACKAGE.name):
-            if _module_path(module) is not None:
-                modules.add(module)
-            module = module.rpartition(".")[0]
-    return modules
+    return named
 
 
 def _module_path(name: str) -> Path | None:

@@ -13,6 +13,11 @@ A message reaches the host where the flag is set and the categories are none or 
 message's own. It is read only under pythonfmu
 0.7, and only after the name found there is the instance's own, the check that the layout is
 the one described here; anything else answers None ("not known").
+
+Nothing here imports pythonfmu: the FMI 3.0 FMU runs the same core (fmu/core.py builds a
+HostLine for it too, with no logger) and carries pythonfmu3 alone, so a host need not have
+pythonfmu for it. A logger can be pythonfmu's only where pythonfmu runs the slave, and then it
+is imported already (`_running_pythonfmu`).
 """
 from __future__ import annotations
 
@@ -21,7 +26,8 @@ import logging
 import sys
 import weakref
 from collections.abc import Callable
-from types import FrameType
+from enum import IntEnum
+from types import FrameType, ModuleType
 
 FLAG, NAME, CATEGORIES, FUNCTIONS = 8, 16, 48, 72
 STRING_SIZE = 32  # libstdc++'s std::string: data pointer, size, a 16-byte buffer
@@ -30,15 +36,28 @@ _CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_in
                              ctypes.c_char_p, ctypes.c_char_p)
 
 
+class Status(IntEnum):
+    """The statuses HostLine says messages at: FMI 2.0's and FMI 3.0's numbers (fmi2Status,
+    fmi3Status), and the names pythonfmu's and pythonfmu3's `log` make a category of
+    (logStatusOk, logStatusWarning); either slave's log takes them."""
+    ok = 0
+    warning = 1
+
+
 def _pointer(address: int, offset: int) -> int | None:
     return ctypes.c_void_p.from_address(address + offset).value
 
 
+def _running_pythonfmu() -> ModuleType | None:
+    """pythonfmu where this process imported it (it runs an FMI 2.0 slave), else None; never
+    imports it (a host of the FMI 3.0 FMU may not have it)."""
+    return sys.modules.get("pythonfmu")
+
+
 def _is_instance(address: int | None, name: bytes) -> bool:
     """Whether `address` is pythonfmu 0.7's logger of the instance called `name`."""
-    import pythonfmu
-
-    if not address or not pythonfmu.__version__.startswith("0.7."):
+    pythonfmu = _running_pythonfmu()
+    if not address or pythonfmu is None or not pythonfmu.__version__.startswith("0.7."):
         return False
     size = ctypes.c_size_t.from_address(address + NAME + 8).value
     data = _pointer(address, NAME)
@@ -113,9 +132,7 @@ class HostLine:
     def say(self, message: str, level: int = logging.INFO) -> None:
         """Show `message` to the host: through its logger callback while it instantiates the
         FMU, else on stderr (and in the slave's log, where there is a slave)."""
-        from pythonfmu.enums import Fmi2Status
-
-        status = Fmi2Status.warning if level >= logging.WARNING else Fmi2Status.ok
+        status = Status.warning if level >= logging.WARNING else Status.ok
         text = f"{self._name.decode()}: {message}"
         if self._call is not None and self._instantiating():
             # hosts format the message printf-style

@@ -92,10 +92,12 @@ def tear_down_state_first(resources: str | os.PathLike | None) -> bool:
 
 def affected(logger_address: int | None) -> bool:
     """Whether a slave runs under pythonfmu 0.7's C++ side (in an FMU: the `logger` it passes
-    is set), whose releases these balance."""
-    import pythonfmu
-
-    return bool(logger_address) and pythonfmu.__version__.startswith("0.7.")
+    is set), whose releases these balance. Reads the pythonfmu that runs the slave, imported
+    already, and never imports it: the FMI 3.0 slave imports this module too, in a host that
+    may have pythonfmu3 alone."""
+    pythonfmu = sys.modules.get("pythonfmu")
+    return bool(logger_address) and pythonfmu is not None \
+        and pythonfmu.__version__.startswith("0.7.")
 
 
 class BalancedSlave:
