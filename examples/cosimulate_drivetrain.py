@@ -15,11 +15,13 @@ values where it sets none).  The step must fit a whole number of times in the st
 at least once in the averaging window (five mesh periods at that intersection), which must
 fit twice in the run.  A run whose means lie far from the intersection has diverged (a step
 too long for the explicit coupling of motor and gear): it is said so, not tabled.  Exit
-code 0; 1 if the co-simulation stopped early or diverged; 2 for a bad argument or an SSP that
-cannot be read or loaded.  Needs the Python that runs it to have the FMUs' dependencies
-and libcosimpy (`pip install libcosimpy`, or `pip install ".[cosim]"` in herringbone's source).
+code 0; 1 if the co-simulation stopped early or diverged; 2 for a bad argument, an SSP that
+cannot be read or loaded, or libcosimpy missing.  Needs the Python that runs it to have the
+FMUs' dependencies and libcosimpy (`pip install libcosimpy`, or `pip install ".[cosim]"` in
+herringbone's source): checked before anything is built, and said in one line where missing.
 """
 import argparse
+import importlib.util
 import io
 import math
 import subprocess
@@ -40,9 +42,22 @@ WINDOW_MESH_PERIODS = 5  # the mesh ripples the speeds at z_pinion·w/2π: avera
 # A settled run lies within 1e-5 of the intersection (docs/ssp.md); a mean more than 50 % off
 # it, or of the wrong sign, comes from a run that did not settle there.
 DIVERGED = 0.5
+# what runs the SSP, and the extra of herringbone that brings it
+COSIMULATOR, COSIM_EXTRA = "libcosimpy", "cosim"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
       "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
+
+
+def missing_cosimulator():
+    """What to say where libcosimpy is not installed (herringbone.optional's words for a
+    missing extra, which this process may not import: the gear FMU imports its own copy of
+    herringbone), or None; imports nothing."""
+    if importlib.util.find_spec(COSIMULATOR) is not None:
+        return None
+    return (f"the co-simulation needs {COSIMULATOR}, which is not installed: pip install "
+            f"{COSIMULATOR} (or every dependency of the {COSIM_EXTRA!r} extra: pip install "
+            f"\".[{COSIM_EXTRA}]\" in herringbone's source folder)")
 
 
 def read_ssp(path):
@@ -192,6 +207,9 @@ def main(argv=None):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             parser.error(f"--{name.replace('_', '-')} {value}: allowed: finite and > 0")
+    missing = missing_cosimulator()
+    if missing is not None:  # before a build that could not be used
+        parser.exit(2, f"{parser.prog}: {missing}\n")
     ssp = args.ssp
     if ssp is None:
         ssp = Path("dist") / "drivetrain.ssp"
