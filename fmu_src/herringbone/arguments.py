@@ -336,6 +336,9 @@ def output_path_problem(path: Path) -> str | None:
     removed again (the writer makes the folder), so that a command refused after its options
     were read leaves nothing behind."""
     path = Path(path)
+    unusable = name_problem(path)
+    if unusable is not None:
+        return unusable
     if path.is_dir():
         return f"{path} is a folder"
     ancestor = path.parent
@@ -360,9 +363,23 @@ def output_path_problem(path: Path) -> str | None:
     return None
 
 
+def name_problem(path: Path) -> str | None:
+    """Why the file system cannot even look `path` up ("File name too long": a name over its
+    255 bytes, which Path.is_dir() and exists() raise as OSError rather than answer), or
+    None."""
+    try:
+        Path(path).exists()
+    except OSError as error:
+        return f"the file system cannot look it up: {error.strerror or error}"
+    return None
+
+
 def output_file_problem(path: Path, suffixes: tuple[str, ...] = ()) -> str | None:
     """Why the file `path` cannot be written (see output_path_problem) or does not end in one
     of `suffixes` (any, when empty); None if it can."""
+    unusable = name_problem(Path(path))
+    if unusable is not None:
+        return unusable
     if suffixes and not Path(path).is_dir() and Path(path).suffix.lower() not in suffixes:
         return f"not a {' or '.join(suffixes)} file"
     return output_path_problem(Path(path))
@@ -396,6 +413,9 @@ def gear_fmu_problem(path: Path) -> str | None:
     import zipfile
 
     path = Path(path)
+    unusable = name_problem(path)
+    if unusable is not None:
+        return unusable
     if not path.is_file():
         return "no such FMU file" if not path.exists() else "a folder, not an FMU file"
     if path.suffix.lower() != ".fmu":
@@ -432,8 +452,10 @@ def output_path(text: str) -> Path:
 def output_folder(text: str) -> Path:
     """argparse `type=` for a folder to write files in: the Path, or ArgumentTypeError."""
     path = Path(text)
-    problem = (f"{path} is a file" if path.exists() and not path.is_dir()
-               else output_path_problem(path / "file"))
+    problem = name_problem(path)
+    if problem is None:
+        problem = (f"{path} is a file" if path.exists() and not path.is_dir()
+                   else output_path_problem(path / "file"))
     if problem is not None:
         raise argparse.ArgumentTypeError(f"{text}: cannot write there: {problem}; allowed: a "
                                          "folder that exists or can be made and that you can "

@@ -8,6 +8,8 @@ install, or `fmu_src` on the path) they are read where the repository keeps them
 """
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
@@ -55,11 +57,38 @@ def is_scene_name(scene) -> bool:
 def resolve_scene(scene) -> Path:
     """The scene file `scene` means: an existing file as it is; else, if written as a bare name
     ("reference"), the shipped scene of that name; else the path as given (whose loading then
-    says that there is no such file)."""
+    says that there is no such file; `unreadable` says what a path is that is there but is
+    no file to read)."""
     path = Path(scene)
     if not path.is_file() and is_scene_name(scene):
         return scene_files().get(str(scene), path)
     return path
+
+
+# what stat's file type says a path is, where it is neither a regular file nor a folder
+_FILE_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+               (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISSOCK, "a socket"))
+
+
+def unreadable(path: Path) -> str | None:
+    """Why `path`, which is there, is no scene file to read ("not a regular file: a character
+    device (a symbolic link to /dev/zero)", which load_scene calls "no such scene file"), or
+    None: where it is a regular file or a folder, or not there at all (load_scene says so in
+    its own words, a shipped scene's name among them). The command line asks before it
+    loads a scene (cli/common.scene_of)."""
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        if path.is_symlink():
+            return f"a symbolic link to {os.readlink(path)}, which does not exist"
+        return None
+    except OSError as error:  # a name over the file system's limit, a link loop, no access
+        return f"cannot be looked up: {error.strerror or error}"
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    kind = next((name for test, name in _FILE_KINDS if test(mode)), "of another kind")
+    link = f" (a symbolic link to {os.readlink(path)})" if path.is_symlink() else ""
+    return f"not a regular file: {kind}{link}"
 
 
 def headline(path: Path) -> str:

@@ -49,8 +49,8 @@ def no_work(monkeypatch):
     for module, name in (("analysis.sweep", "run_checked_points"), ("analysis.stability",
                                                            "stability_chart"),
                          ("analysis.run_progress", "simulate_with_progress"),
-                         ("analysis.campbell", "plot_campbell"),
-                         ("fmu.builder", "build_gear_fmu")):
+                         ("cli.run", "compiled_run"), ("analysis.campbell", "plot_campbell"),
+                         ("fmu.builder", "build_gear_fmu"), ("cli.build_fmu", "compile_first")):
         monkeypatch.setattr(importlib.import_module(f"herringbone.{module}"), name, refuse)
 
 
@@ -166,6 +166,7 @@ def test_build_fmu_names_its_fmu_by_scene_and_fmi_version(capsys):
 def test_build_fmu_of_another_scene_leaves_the_reference_fmu(tmp_path, monkeypatch, capsys):
     """Building torsional (FMI 2.0), then reference with --fmi 3, in a folder that already
     holds the reference FMI 2.0 FMU: each lands in its own file, the first untouched."""
+    from herringbone.cli import build_fmu
     from herringbone.fmu import builder
 
     built = []
@@ -176,6 +177,7 @@ def test_build_fmu_of_another_scene_leaves_the_reference_fmu(tmp_path, monkeypat
         return Path(output)
 
     monkeypatch.setattr(builder, "build_gear_fmu", build)
+    monkeypatch.setattr(build_fmu, "compile_first", lambda scene, progress: None)
     monkeypatch.chdir(tmp_path)
     (tmp_path / "dist").mkdir()
     reference = tmp_path / "dist" / "reference-fmi2.fmu"

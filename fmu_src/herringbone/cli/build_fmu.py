@@ -9,11 +9,21 @@ silently; an existing file of the same name is replaced.
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 from ..arguments import output_file, output_file_problem, output_folder
 from ..fmu.builder import DEFAULT_SCENE, FMI_VERSIONS, default_fmu_name
-from .common import CommandParser, add_scene, fail, say
+from .common import (
+    CommandParser,
+    _toml,
+    add_progress,
+    add_scene,
+    add_settings,
+    fail,
+    say,
+    scene_of,
+)
 from .common import execute as run_command
 
 NAME = "build-fmu"
@@ -27,21 +37,24 @@ SIMULATED = Path("results") / "<scene>_fmu.csv"
 def declare(parser, dist: Path = DIST) -> None:
     """The options of `build-fmu` (build_fmu.py's too, its FMUs in the checkout's dist/)."""
     add_scene(parser, optional_default=DEFAULT_SCENE)
+    add_settings(parser)
     # one thing built: the FMU (-o names it), the example FMUs or the SSP
     built = parser.add_mutually_exclusive_group()
     built.add_argument("-o", "--output", type=output_file(".fmu"), metavar="FILE",
                         help=f"a .fmu file to write: the FMU; an existing file is replaced "
                              f"(default: {dist}/<scene>-fmi<N>.fmu, e.g. "
                              f"{dist / default_fmu_name('reference', 2)}: each scene and FMI "
-                             "version its own file)")
+                             "version its own file; with --set, "
+                             f"{dist / default_fmu_name('reference+w0_pinion=450', 2)}, the "
+                             "settings in its name)")
     parser.add_argument("--fmi", type=int, choices=FMI_VERSIONS, default=2,
                         help="FMI version of the FMU: 2 (FMI 2.0, pythonfmu; the default) or 3 "
                              "(FMI 3.0, pythonfmu3)")
     parser.add_argument("--simulate", action="store_true",
                         help=f"then simulate the scene through the FMU with fmpy: a summary, "
                              f"and the outputs in {SIMULATED} (replaced if it exists)")
-    built.add_argument("--examples", type=output_folder, metavar="DIR",
-                        help="build the example drive-train FMUs into the folder DIR instead "
+    built.add_argument("--examples", type=output_folder, metavar="FOLDER",
+                        help="build the example drive-train FMUs into FOLDER instead "
                              "(InductionMotor.fmu, FanLoad.fmu, replaced if they exist)")
     built.add_argument("--ssp", type=output_file(".ssp"), metavar="FILE",
                         help="build the drive train (SCENE's gear, the example motor and fan) "
@@ -49,15 +62,14 @@ def declare(parser, dist: Path = DIST) -> None:
                              "FMI 2.0 FMUs, since libcosim, its host, reads FMI 2.0 only "
                              "(leave out --fmi 3); SCENE must have a motor and a load, which "
                              "the SSP connects")
+    add_progress(parser, "no progress lines on stderr while the integrator compiles, the "
+                         "first build on a machine (the notes before and after the compile "
+                         "stay)")
     parser.set_defaults(dist=dist)
 
 
-def execute(args, parser) -> int:
-    """Check the options, the scene and the outputs, then build what was asked; 2 with one
-    line for a bad scene or a scene or --fmi that --ssp cannot pack."""
-    from ..fmu import builder
-    from ..model.scene import load_scene
-
+def check_together(args, parser) -> None:
+    """One line and exit 2 for options that do not go together."""
     if args.ssp is not None and args.fmi != 2:
         fail(parser, f"--fmi {args.fmi} with --ssp: the SSP packs FMI 2.0 FMUs (libcosim, "
                      f"its host, reads FMI 2.0 only); allowed: --fmi 2, the default: leave out "
@@ -69,49 +81,120 @@ def execute(args, parser) -> int:
     if args.examples is not None and args.fmi != 2:
         fail(parser, f"--fmi {args.fmi} with --examples: the example FMUs are FMI 2.0 "
                      "(pythonfmu); allowed: leave out --fmi")
+    if args.examples is not None and args.settings:
+        fail(parser, "--set with --examples: the example FMUs (a motor and a fan) have no "
+                     "scene to change; allowed: --set with the gear FMU or --ssp")
+
+
+def execute(args, parser) -> int:
+    """Check the options, the scene and the outputs, then build what was asked; 2 with one
+    line for a bad scene or a scene or --fmi that --ssp cannot pack. With --set, the FMU (or
+    the SSP's) is built from the changed scene, written as a scene file of its own
+    (`scene_text`)."""
+    from ..fmu import builder
+
+    check_together(args, parser)
     if args.examples is not None:
         for path in builder.build_example_fmus(output_dir=args.examples):
             print(path)
         return 0
-    scene = load_scene(args.scene)  # a bad scene is reported before any build
+    scene = scene_of(args, parser)  # a bad scene or setting is reported before any build
     results = Path(str(SIMULATED).replace("<scene>", scene.name))
     if args.simulate and output_file_problem(results) is not None:
         fail(parser, f"--simulate writes {results}: {output_file_problem(results)}; run it "
                      "from a folder you can write in")
-    if args.ssp is not None:
-        from ..fmu.ssp import build_ssp, scene_problem
-
-        problem = scene_problem(scene)
+    with tempfile.TemporaryDirectory(prefix="build_fmu_scene_") as folder:
+        source = args.scene
+        if args.settings:  # the changed scene as a file, named as the scene
+            source = Path(folder) / f"{scene.name}.toml"
+            source.write_text(scene_text(scene, args.settings), encoding="utf-8")
+        if args.ssp is not None:
+            return ssp_archive(args, parser, scene, source)
+        output = args.output or args.dist / default_fmu_name(
+            scene.name + "".join(f"+{name}={_toml(value)}" for name, value in args.settings),
+            args.fmi)
+        problem = output_file_problem(output, (".fmu",))
         if problem is not None:
-            fail(parser, f"--ssp: {problem}")
-        print(f"built {build_ssp(scene=args.scene, output=args.ssp)}")
-        return 0
-    output = args.output or args.dist / default_fmu_name(scene.name, args.fmi)
-    problem = output_file_problem(output, (".fmu",))
-    if problem is not None:
-        fail(parser, f"cannot write {output}: {problem}; give -o FILE.fmu in a folder you can "
-                     "write in")
-    say(f"building {output}: the scene {scene.name} as an FMI {args.fmi}.0 FMU (the integrator "
-        "compiled or loaded first, then packed and validated)")
-    print(f"built {builder.build_gear_fmu(scene=args.scene, output=output, fmi_version=args.fmi)}")
+            fail(parser, f"cannot write {output}: {problem}; give -o FILE.fmu in a folder you "
+                         "can write in")
+        say(f"building {output}: the scene {scene.name} as an FMI {args.fmi}.0 FMU (the "
+            "integrator compiled or loaded first, then packed and validated)")
+        compile_first(source, not args.no_progress)
+        print(f"built {builder.build_gear_fmu(scene=source, output=output, fmi_version=args.fmi)}")
     if args.simulate:
         simulate(output, scene, results)
     return 0
 
 
+def ssp_archive(args, parser, scene, source: Path) -> int:
+    """--ssp: the drive train of `scene` (read from `source`) as an SSP archive."""
+    from ..fmu.ssp import build_ssp, scene_problem
+
+    problem = scene_problem(scene)
+    if problem is not None:
+        fail(parser, f"--ssp: {problem}")
+    compile_first(source, not args.no_progress)
+    print(f"built {build_ssp(scene=source, output=args.ssp)}")
+    return 0
+
+
+def compile_first(scene: Path, progress: bool) -> None:
+    """Load the integrator as the FMU of `scene` runs it, or compile it (the first build on a
+    machine, minutes), here before the build, which then finds it loaded: the note before and
+    after a compile on stderr, and between them a line every 10 s with `progress`."""
+    import threading
+
+    from ..integrate.first_start import compile_for_scene
+
+    compile_for_scene(scene, say=say, progress_every=10.0 if progress else threading.TIMEOUT_MAX)
+
+
+def scene_text(scene, settings) -> str:
+    """`scene` as a scene file (its components, the parameters it sets, its experiment and
+    torques), what an FMU built with --set carries: a header naming the scene and the
+    `settings` ((name, value) pairs) it was changed by."""
+    changes = " ".join(f"--set {name}={_toml(value)}" for name, value in settings)
+    lines = [f"# {scene.name} ({Path(scene.source).name}) with {changes}: written by herringbone "
+             "build-fmu", "", "[components]",
+             *(f"{name} = {_value(value)}" for name, value in scene.components.items()),
+             "", "[parameters]",
+             *(f"{name} = {_value(value)}" for name, value in scene.given.items()),
+             "", "[experiment]", f"stop_time = {_value(scene.experiment.stop_time)}",
+             f"output_interval = {_value(scene.experiment.output_interval)}", "", "[inputs]"]
+    inputs = scene.inputs
+    if len(inputs.times) == 1:
+        lines += [f"M_motor = {_value(inputs.M_motor[0])}", f"M_load = {_value(inputs.M_load[0])}"]
+    else:
+        rows = zip(inputs.times, inputs.M_motor, inputs.M_load)
+        lines.append("table = [" + ", ".join(f"[{', '.join(map(_value, row))}]" for row in rows)
+                     + "]")
+    return "\n".join(lines) + "\n"
+
+
+def _value(value) -> str:
+    """A value as TOML writes it, to every digit: true, 10, 0.0004, 1e+16, inf, nan."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    return repr(float(value))
+
+
 def simulate(fmu: Path, scene, csv_path: Path) -> None:
-    """The scene through its FMU with fmpy: the summary, and the outputs as CSV."""
+    """The scene through its FMU with fmpy: the summary (and `run`'s notes on what its samples
+    miss and where it leaves the model), then the outputs as CSV, timed apart."""
     import time
 
-    from ..analysis.run_report import summary, write_csv
+    from ..analysis.run_report import summary
     from ..fmu.run import simulate_scene_fmu
+    from .run import sampling_note, slip_notes, write_timed
 
     started = time.perf_counter()
     results = simulate_scene_fmu(fmu_path=fmu, scene=scene)
     wall = time.perf_counter() - started
-    write_csv(results, csv_path)
-    print(summary(scene, results, wall, f"its FMU {fmu}"))
-    print(f"outputs written to {csv_path}")
+    print("\n".join([summary(scene, results, wall, f"its FMU {fmu}"),
+                     *sampling_note(scene, results), *slip_notes(scene, results)]), flush=True)
+    write_timed(results, csv_path, wall)
 
 
 def main(argv: list[str] | None = None, prog: str = "herringbone build-fmu",

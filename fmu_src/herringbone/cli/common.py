@@ -11,17 +11,20 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import cast
 
 from ..arguments import (
-    SPEED_SWEEP_ALLOWED,
     OneLineParser,
     SpeedSweep,
+    name_problem,
     number,
     output_file,
     output_file_problem,
     output_folder,
     speed_sweep_problem,
 )
+from ..model.parameters import PINION_SPEED as W0_PINION_RANGE
+from ..model.parameters import RPM_PER_RAD_S
 from ..model.scene import SceneError
 from ..suggest import did_you_mean
 
@@ -99,6 +102,17 @@ class CommandParser(OneLineParser):
     """A command's parser: one-line errors (OneLineParser) and close-match suggestions for an
     unknown option."""
 
+    def error(self, message):
+        """OneLineParser's one line; a flag given a value (`--no-progress=yes`, which argparse
+        words "ignored explicit argument 'yes'") says that the flag takes none."""
+        import re
+
+        flag = re.fullmatch(r"argument (\S+): ignored explicit argument '(.*)'", message)
+        if flag:
+            option = flag[1].split("/")[-1]
+            message = f"{option}={flag[2]}: takes no value; allowed: {option} alone"
+        super().error(message)
+
     def unknown(self, extras: list[str]) -> None:
         """Stop on arguments the command does not take, suggesting the closest option."""
         options = [option for action in self._actions for option in action.option_strings]
@@ -151,11 +165,17 @@ def _setting(text: str) -> tuple[str, object]:
 def scene_of(args, parser: argparse.ArgumentParser):
     """The command's scene: SCENE (a file or a shipped scene's name) with --set's changes, an
     input torque by Scene.with_inputs, a parameter by Scene.with_parameters; one line naming
-    the setting where one is refused (`_setting_refused`). The changes are said in a line on
-    stdout first."""
+    the setting where one is refused (`_setting_refused`), or saying what SCENE is where it
+    is there but is no file to read (shipped.unreadable: a device, a pipe, a link to nothing,
+    a name too long). The changes are said in a line on stdout first."""
     from ..model.parameters import INPUTS, unit_of, with_unit
     from ..model.scene import load_scene
+    from ..shipped import unreadable
 
+    problem = unreadable(Path(args.scene))
+    if problem is not None:
+        fail(parser, f"{args.scene}: {problem}; allowed: a scene file (TOML) or the name of a "
+                     "shipped scene (`herringbone scenes`)")
     scene = load_scene(args.scene)
     settings = getattr(args, "settings", [])
     names = [name for name, _ in settings]
@@ -204,36 +224,60 @@ def _toml(value) -> str:
     return f'"{value}"' if isinstance(value, str) else str(value)
 
 
+# The most pinion speeds --speeds takes: a stability chart of 100 000 takes minutes (a few ms
+# a speed), a sweep by shooting about as long; a few more digits of COUNT (a typo, 99999999999)
+# ended in numpy's "Unable to allocate 745 GiB" and a traceback.
+MOST_SPEEDS = 100_000
+# the fastest pinion speed, rad/s: the scene's w0_pinion takes none faster (parameters.py)
+FASTEST_SPEED = float(cast(float, W0_PINION_RANGE.high))
+SPEEDS_ALLOWED = (f"0 < FROM < TO <= {FASTEST_SPEED:g} rad/s "
+                  f"({FASTEST_SPEED * RPM_PER_RAD_S:.0f} rpm with --rpm), COUNT >= 2 speeds, "
+                  f"at most {MOST_SPEEDS}")
+
+
 class _SpeedsAction(argparse.Action):
-    """Checks FROM TO COUNT at once (arguments.speed_sweep_problem)."""
+    """Checks FROM TO COUNT at once (arguments.speed_sweep_problem, and COUNT at most
+    MOST_SPEEDS); TO against FASTEST_SPEED once --rpm is known (speeds_of)."""
 
     def __call__(self, parser, namespace, values, option_string=None):
         low, high, count = values
         problem = speed_sweep_problem(low, high, count)
+        if problem is None and count > MOST_SPEEDS:
+            problem = f"COUNT {count:g} is more than {MOST_SPEEDS} speeds"
         if problem is not None:
             raise argparse.ArgumentError(self, f"{low:g} {high:g} {count:g}: {problem}; "
-                                               f"allowed: {SPEED_SWEEP_ALLOWED}")
+                                               f"allowed: {SPEEDS_ALLOWED}")
         setattr(namespace, self.dest, SpeedSweep(low, high, int(count)))
 
 
 def add_speeds(parser: argparse.ArgumentParser, default: tuple[float, float, int] | None,
                what: str) -> None:
     """--speeds FROM TO COUNT (checked as a whole) and --rpm, the same in every command."""
-    shown = "" if default is None else f" (default: {' '.join(f'{v:g}' for v in default)} rad/s)"
+    shown = "" if default is None else f" (default: {' '.join(f'{v:g}' for v in default)})"
     # the default apart, in rad/s: --rpm applies to the speeds given, and alone is refused
     parser.set_defaults(default_speeds=None if default is None else SpeedSweep(*default))
     parser.add_argument("--speeds", type=number, nargs=3, action=_SpeedsAction, default=None,
                         metavar=("FROM", "TO", "COUNT"),
                         help=f"{what}: COUNT pinion speeds from FROM to TO, rad/s (rpm with "
-                             f"--rpm); {SPEED_SWEEP_ALLOWED}{shown}")
+                             f"--rpm): 0 < FROM < TO <= {FASTEST_SPEED:g} "
+                             f"({FASTEST_SPEED * RPM_PER_RAD_S:.0f} with --rpm), COUNT from 2 "
+                             f"to {MOST_SPEEDS}{shown}")
     parser.add_argument("--rpm", action="store_true", help="FROM and TO of --speeds are in rpm")
 
 
 def speeds_of(args, parser) -> SpeedSweep | None:
     """--speeds with --rpm applied, else the command's default speeds (rad/s; None without
-    one); --rpm without --speeds is refused (it says what --speeds' FROM and TO are in)."""
+    one); --rpm without --speeds is refused (it says what --speeds' FROM and TO are in), and
+    so is a TO faster than FASTEST_SPEED."""
     if args.speeds is not None:
-        return args.speeds._replace(in_rpm=args.rpm)
+        sweep = args.speeds._replace(in_rpm=args.rpm)
+        if sweep.speeds()[-1] > FASTEST_SPEED:
+            low, high, count = sweep.low, sweep.high, sweep.size
+            fail(parser, f"--speeds {low:g} {high:g} {count}: TO {high:g} "
+                         f"{'rpm' if args.rpm else 'rad/s'} is faster than any pinion speed "
+                         f"a scene takes ({FASTEST_SPEED:g} rad/s, "
+                         f"{FASTEST_SPEED * RPM_PER_RAD_S:.0f} rpm); allowed: {SPEEDS_ALLOWED}")
+        return sweep
     if args.rpm and getattr(args, "speed", None) is None:
         fail(parser, "--rpm without --speeds; allowed: --rpm with --speeds FROM TO COUNT "
                      "(FROM and TO in rpm)")
@@ -256,17 +300,39 @@ def default_output(parser: argparse.ArgumentParser, given: Path | None, default:
     work."""
     if given is not None:
         return given
-    problem = (f"{default} is a file" if folder and default.exists() and not default.is_dir()
-               else output_file_problem(default / "file" if folder else default, suffixes))
+    problem = name_problem(default)
+    if problem is None:
+        problem = (f"{default} is a file" if folder and default.exists() and not default.is_dir()
+                   else output_file_problem(default / "file" if folder else default, suffixes))
     if problem is not None:
         fail(parser, f"cannot write {default}: {problem}; give -o "
                      f"{'FOLDER' if folder else 'FILE'} in a folder you can write in")
     return default
 
 
-def add_progress(parser: argparse.ArgumentParser) -> None:
-    """--no-progress: no progress bar on stderr."""
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+def add_progress(parser: argparse.ArgumentParser, what: str = "no progress bar on stderr"
+                 ) -> None:
+    """--no-progress: no progress bar on stderr (`what` it leaves out, where not a bar)."""
+    parser.add_argument("--no-progress", action="store_true", help=what)
+
+
+def progress_of(args) -> bool:
+    """Whether the work about to begin shows its progress bar: not with --no-progress, nor
+    where tqdm (the `analysis` extra) is not installed, which one line on stderr says then
+    (the work goes on without a bar). Called as the work begins, after every check, so that
+    a refused command still says one line."""
+    from ..optional import EXTRAS, MissingDependency, require
+
+    if args.no_progress:
+        return False
+    try:
+        require("tqdm", "the progress bar")
+    except MissingDependency:
+        say(f"no progress bar: tqdm is not installed; pip install tqdm brings it (or every "
+            f"dependency of the {EXTRAS['tqdm']!r} extra: pip install \".[{EXTRAS['tqdm']}]\" "
+            "in herringbone's source folder), and --no-progress leaves out this line")
+        return False
+    return True
 
 
 def say(message: str) -> None:

@@ -1,12 +1,24 @@
-"""`herringbone run SCENE`: simulate a scene (the compiled integrator the FMU runs, or the
-scipy reference with --reference), print a summary and write the outputs as CSV."""
+"""`herringbone run SCENE`: simulate a scene (the compiled integrator the FMU runs, by the method
+--method names, or the scipy reference with --reference), print a summary and write the
+outputs as CSV.
+
+The summary (analysis.run_report.summary) is printed before the CSV is written, its time that
+of the run alone; the CSV's writing is timed on a line of its own, since a long run's table
+takes longer to write than to compute (high_speed over 20 s: 4.6 s of run, then 40 s writing
+486 MB). After the table, a line each where the samples miss what the table reads from them
+(`sampling_note`) or where the run has left what the model describes (`slip_notes`).
+"""
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..arguments import (
     COMPILED_DEFAULT_TOLERANCE,
+    COMPILED_METHODS,
     COMPILED_TOLERANCE_ARGUMENT,
     OUTPUT_INTERVAL,
     REFERENCE_DEFAULT_TOLERANCE,
@@ -23,6 +35,8 @@ from .common import (
     add_settings,
     default_output,
     fail,
+    progress_of,
+    say,
     scene_of,
 )
 
@@ -30,25 +44,41 @@ NAME = "run"
 HELP = ("simulate a scene on the compiled integrator (what the FMU runs; --reference: the scipy "
         "reference), print a summary and write the outputs as CSV")
 SUFFIXES = (".csv",)
+# samples a period of the train's fastest natural mode below which the output samples miss
+# its swings: the table's least and largest samples fall short of the extremes (the
+# reference scene every 1e-4 s, 0.76 samples a period of its 13.2 kHz mode: F_mesh's least
+# sample 21 275 N where the steady state dips to 15 844 N)
+RESOLVING_SAMPLES = 8
+# rows of a CSV from which `run` says on stderr that it is writing them (about 20 µs a row)
+LONG_TABLE = 100_000
 
 
 def declare(parser) -> None:
     """The options of `run`."""
     add_scene(parser)
     add_settings(parser)
-    parser.add_argument("--stop-time", type=STOP_TIME.option_type,
+    parser.add_argument("--stop-time", type=STOP_TIME.option_type, metavar="SECONDS",
                         help="simulated seconds (default: the scene's)")
     parser.add_argument("--output-interval", type=OUTPUT_INTERVAL.option_type,
-                        help="seconds between output samples, at most the stop time "
-                             "(default: the scene's)")
+                        metavar="SECONDS",
+                        help="seconds between output samples, at most the stop time (default: "
+                             "the scene's); the summary says when they are too far apart for "
+                             "the train's fastest natural mode")
+    parser.add_argument("--method", choices=COMPILED_METHODS, default=None,
+                        help="the compiled integrator's method: auto (the default) picks for "
+                             "the scene (exponential where the mesh's contact sets allow it, "
+                             "else dop853, or radau for a stiff train); dop853: explicit "
+                             "Runge-Kutta of order 8, radau: implicit Radau IIA, exponential: "
+                             "exact steps of the linear contact sets (DOP853 elsewhere); not "
+                             "with --reference, which always runs scipy's DOP853")
     parser.add_argument("--reference", action="store_true",
                         help="run the scipy reference (DOP853) instead: independent of the "
-                             "compiled integrator, about 40-50 s of wall time per simulated "
-                             "second of the reference scene at its default tolerance, and in "
-                             "proportion to the fastest natural frequency (`info`) elsewhere: "
-                             "hours a second for modes in the MHz")
+                             "compiled integrator, about 20 s of CPU per simulated second of "
+                             "the reference scene at its default tolerance, and in proportion "
+                             "to the fastest natural frequency (`info`) elsewhere: hours a "
+                             "second for modes in the MHz")
     compiled, reference = COMPILED_TOLERANCE_ARGUMENT.allowed, REFERENCE_TOLERANCE_ARGUMENT.allowed
-    parser.add_argument("--tolerance", type=number,
+    parser.add_argument("--tolerance", type=number, metavar="TOL",
                         help="relative to the static mesh force: the error per step "
                              f"{compiled.describe()} (default {COMPILED_DEFAULT_TOLERANCE:g}); "
                              f"with --reference the error over the run {reference.describe()} "
@@ -71,13 +101,9 @@ def tolerance_of(args, parser) -> float:
     return args.tolerance
 
 
-def execute(args, parser) -> int:
-    """Check everything, run, write the CSV (and the PNGs), print the summary."""
-    from ..analysis.run_progress import simulate_with_progress
-    from ..analysis.run_report import summary, write_csv
-
-    tolerance = tolerance_of(args, parser)
-    scene = scene_of(args, parser)
+def span_of(args, parser, scene) -> tuple[float, float]:
+    """(stop time, output interval), s: the options, else the scene's [experiment]; one line
+    where the interval outlasts the stop time or the samples would not fit in memory."""
     stop_time = args.stop_time or scene.experiment.stop_time
     interval = args.output_interval or scene.experiment.output_interval
     if interval > stop_time:
@@ -91,27 +117,181 @@ def execute(args, parser) -> int:
     too_many = samples_problem(scene, stop_time, interval, names)
     if too_many is not None:
         fail(parser, too_many)
+    return stop_time, interval
+
+
+def execute(args, parser) -> int:
+    """Check everything, run, print the summary, write the CSV (and the PNGs)."""
+    from ..analysis.run_report import summary
+
+    tolerance = tolerance_of(args, parser)
+    if args.reference and args.method is not None:
+        fail(parser, f"--method {args.method} with --reference: the scipy reference runs "
+                     "scipy's DOP853, whatever --method says; allowed: --method without "
+                     "--reference (the compiled integrator's methods)")
+    scene = scene_of(args, parser)
+    stop_time, interval = span_of(args, parser, scene)
     output = default_output(parser, args.output, Path("results") / f"{scene.name}.csv",
                             SUFFIXES)
     if args.plot:
         require("matplotlib", "--plot")
-    started, start_time = time.perf_counter(), []
-
-    def ready():
-        start_time.append(time.perf_counter() - started)
-
-    # (the scipy reference has no compiled code to load: its start is not told apart)
-    results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
-                                     tolerance=tolerance, reference=args.reference,
-                                     progress=not args.no_progress,
-                                     on_ready=None if args.reference else ready)
-    wall = time.perf_counter() - started
-    write_csv(results, output)
-    integrator = "the scipy reference" if args.reference else "the compiled integrator"
-    print(summary(scene, results, wall, integrator, start_time[0] if start_time else None))
-    print(f"outputs written to {output}")
+    progress = progress_of(args)
+    if args.reference:
+        results, wall, integrator, start = reference_run(scene, stop_time, interval,
+                                                         tolerance, progress)
+    else:
+        results, wall, integrator, start = compiled_run(scene, stop_time, interval, tolerance,
+                                                        args.method or "auto", progress)
+    lines = [summary(scene, results, wall, integrator, start), *sampling_note(scene, results),
+             *slip_notes(scene, results)]
+    print("\n".join(lines), flush=True)  # before the CSV, which may take longer than the run
+    write_timed(results, output, wall)
     if args.plot:
         from ..analysis.run_report import plot_run
         written = plot_run(scene, results, output, None if args.reference else tolerance)
         print("\n".join(f"written: {path}" for path in written))
     return 0
+
+
+def reference_run(scene, stop_time: float, interval: float, tolerance: float, progress: bool):
+    """The scipy reference's run: (results, wall time s, what ran it in words, None: its start
+    is not told apart, there being no compiled code to load)."""
+    from ..analysis.run_progress import simulate_with_progress
+
+    started = time.perf_counter()
+    results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
+                                     tolerance=tolerance, reference=True, progress=progress)
+    return results, time.perf_counter() - started, "the scipy reference", None
+
+
+def compiled_run(scene, stop_time: float, interval: float, tolerance: float, method: str,
+                 progress: bool):
+    """The compiled integrator's run by `method`, as run_progress.simulate_with_progress runs
+    it (which takes no method): the arguments checked, a note on stderr before a compile, the
+    compiled loop loaded before the bar starts, the samples written into an array by
+    SampledProgressStepper (herringbone.simulate's numbers to the bit). Returns (results, wall
+    time s, what ran it in words with the method, the part of the wall time before the first
+    step s)."""
+    from ..analysis.progress_bar import progress_bar
+    from ..analysis.run_progress import SampledProgressStepper
+    from ..arguments import check_compiled_run
+    from ..integrate.compiled_stepper import CompiledStepper, warm_up
+    from ..integrate.contract import simulate_with, start_position
+    from ..integrate.first_start import announce_compiles
+    from ..model.assembly import GearTrainModel
+
+    started = time.perf_counter()
+    check_compiled_run(scene, stop_time, interval, tolerance, method)
+    announce_compiles(say)
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, tolerance, method)
+    warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
+    with progress_bar(stop_time, f"run {scene.name}", progress) as bar:
+        start = time.perf_counter() - started
+        results = simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
+                                interval)
+    chosen = ", picked by --method auto" if method == "auto" else ""
+    return (results, time.perf_counter() - started,
+            f"the compiled integrator ({stepper.method}{chosen})", start)
+
+
+def write_timed(results: dict, output: Path, run_wall: float) -> None:
+    """Write the CSV and say where, in how long and how large, apart from the run's own
+    `run_wall` s; a long table is announced on stderr first."""
+    from ..analysis.run_report import write_csv
+
+    rows = len(results["time"])
+    if rows >= LONG_TABLE:
+        say(f"writing {rows} rows to {output} ...")
+    started = time.perf_counter()
+    write_csv(results, output)
+    seconds = time.perf_counter() - started
+    size = output.stat().st_size
+    print(f"outputs written to {output} ({rows} rows, {size / 1e6:.3g} MB) in {seconds:.2f} s "
+          f"of wall time, which the run's {run_wall:.2f} s above leaves out")
+
+
+def sampling_note(scene, results: dict) -> list[str]:
+    """A line where the output samples give the train's fastest natural mode
+    (sweep_point.fastest_ringing, as --plot's spectra) fewer than RESOLVING_SAMPLES a period:
+    what they resolve, what they miss, and what to do."""
+    from ..analysis.sweep_point import fastest_ringing
+    from ..model.assembly import GearTrainModel
+    from ..shipped import named_as_typed
+
+    times = results["time"]
+    if len(times) < 3:
+        return []
+    interval = float(times[1] - times[0])
+    fastest = fastest_ringing(GearTrainModel(scene))
+    per_period = 1.0 / (interval * fastest)
+    if per_period >= RESOLVING_SAMPLES:
+        return []
+    finer = _two_digits_down(1.0 / (RESOLVING_SAMPLES * fastest))
+    speed = scene.parameters["w0_pinion"]
+    aliases = ", and a mean of them aliases it (below 2 a period)" if per_period < 2.0 else ""
+    return [f"The samples, every {interval * 1e6:.3g} µs, follow motion up to "
+            f"{1.0 / (RESOLVING_SAMPLES * interval):.0f} Hz ({RESOLVING_SAMPLES} a period) but "
+            f"give the train's fastest natural mode ({fastest:.0f} Hz) {per_period:.2g} a "
+            "period: the min and max of samples can miss its swings between them, reading "
+            f"F_mesh's peak and dip (K_v) short{aliases}; for the extremes give --output-interval "
+            f"{finer:g} or shorter, or for the steady state's true peaks `herringbone sweep "
+            f"{named_as_typed(scene)} --speeds FROM TO COUNT` about w0_pinion = {speed:g} "
+            "rad/s"]
+
+
+def _two_digits_down(value: float) -> float:
+    """`value` (> 0) cut to two significant digits, never rounded up: 9.47e-06 -> 9.4e-06."""
+    unit = 10.0 ** (math.floor(math.log10(value)) - 1)
+    return math.floor(value / unit * (1.0 + 1e-12)) * unit
+
+
+# the model's contact: one engaged tooth pair, loaded on its working flanks only (docs/model.md)
+MODEL_CONTACT = ("the model (one engaged tooth pair, no back flank, no re-engagement at the "
+                 "next tooth) does not describe that, and the outputs from there on are not "
+                 "the gear's")
+
+
+def slip_notes(scene, results: dict) -> list[str]:
+    """A line where the run has left what the model describes: the transmission error's swing
+    (dte's range so far) past a tooth pitch on the pitch circle, π·m_n/cos β (dte is
+    Rp·φp − Rw·φw: one pitch is the pinion a tooth ahead of or behind the wheel); and one
+    where no tooth is in contact from some time to the end of the run, for longer than a
+    period of the slowest natural mode (not a bounce: the pinion runs free of the wheel)."""
+    from ..model.geometry import GearGeometry
+
+    geometry = GearGeometry.from_parameters(scene.parameters)
+    pitch = geometry.radius_pinion * geometry.angular_pitch
+    times, dte = results["time"], results["dte"]
+    swing = np.maximum.accumulate(dte) - np.minimum.accumulate(dte)
+    past = np.flatnonzero(swing > pitch)
+    lines = []
+    if past.size:
+        first = past[0]
+        lines.append(f"From t = {times[first]:.4g} s the transmission error has swung over "
+                     f"{1e3 * swing[first]:.3g} mm, more than a tooth pitch ("
+                     f"{1e3 * pitch:.3g} mm on the pitch circle, π·m_n/cos β): the pinion has "
+                     f"slipped a tooth or more against the wheel; {MODEL_CONTACT}")
+    lost = _contact_lost_to_the_end(scene, times, results["n_contacts"])
+    if lost is not None:
+        lines.append(f"From t = {lost:.4g} s to the end ({times[-1] - lost:.3g} s) no tooth is "
+                     "in contact: the pinion runs free of the wheel, where a real pair meets "
+                     f"the back flank or the next tooth; {MODEL_CONTACT}")
+    return lines
+
+
+def _contact_lost_to_the_end(scene, times, contacts) -> float | None:
+    """The time (s) from which no tooth is in contact at any sample to the end of the run,
+    where contact was made before and the span is longer than a period of the slowest
+    natural mode; else None."""
+    from ..model.assembly import natural_modes
+
+    held = np.flatnonzero(np.asarray(contacts) > 0)
+    if contacts[-1] > 0 or held.size == 0:
+        return None
+    since = float(times[held[-1] + 1])
+    frequencies = natural_modes(scene)[0]
+    elastic = frequencies[frequencies > 1e-6 * max(frequencies.max(), 1.0)]
+    if elastic.size == 0 or times[-1] - since <= 1.0 / elastic.min():
+        return None
+    return since

@@ -14,6 +14,7 @@ from .common import (
     add_settings,
     add_speeds,
     default_output,
+    progress_of,
     scene_of,
     speeds_of,
 )
@@ -47,7 +48,7 @@ def execute(args, parser) -> int:
                             Path("results") / f"{scene.name}_stability.png", PICTURES)
     require("matplotlib", "the stability chart")
     speeds = sweep.speeds()
-    with progress_bar(len(speeds), f"stability {scene.name}", not args.no_progress,
+    with progress_bar(len(speeds), f"stability {scene.name}", progress_of(args),
                       unit="speed") as bar:
         chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)

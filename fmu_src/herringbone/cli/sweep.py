@@ -21,6 +21,7 @@ from ..arguments import (
     SWEEP_METHODS,
     WINDOW_PERIODS,
     existing_fmu,
+    name_problem,
     number,
     output_folder,
 )
@@ -34,6 +35,7 @@ from .common import (
     add_speeds,
     default_output,
     fail,
+    progress_of,
     scene_of,
     speeds_of,
 )
@@ -80,12 +82,15 @@ def declare(parser) -> None:
                         metavar=("NAME", "FROM", "TO", "COUNT"),
                         help="sweep a parameter (or M_motor, M_load) over COUNT values from "
                              "FROM to TO, in its unit; twice, or with --speeds, for a grid")
-    for argument, default in ((SETTLE_RESIDUAL, 1e-3), (SETTLE_TIME, None),
-                              (WINDOW_PERIODS, 50), (SAMPLES_PER_PERIOD, 64),
-                              (COMPILED_TOLERANCE_ARGUMENT, COMPILED_DEFAULT_TOLERANCE)):
+    for argument, default, metavar in ((SETTLE_RESIDUAL, 1e-3, "FRACTION"),
+                                       (SETTLE_TIME, None, "SECONDS"),
+                                       (WINDOW_PERIODS, 50, "N"), (SAMPLES_PER_PERIOD, 64, "N"),
+                                       (COMPILED_TOLERANCE_ARGUMENT, COMPILED_DEFAULT_TOLERANCE,
+                                        "TOL")):
         shown = "" if default is None else f"; default {default:g}"
         whole = "a whole number " if argument.whole else ""
         parser.add_argument(argument.option, type=argument.option_type, default=default,
+                            metavar=metavar,
                             help=f"{argument.meaning}: {whole}{argument.allowed.describe()}"
                                  f"{shown}")
     parser.add_argument("--method", choices=SWEEP_METHODS, default=None,
@@ -106,12 +111,13 @@ def declare(parser) -> None:
     parser.add_argument("--no-floquet", action="store_true",
                         help="skip a time point's linear_floquet_max (the linear mesh's "
                              "Floquet multiplier at its speed)")
-    parser.add_argument("--workers", type=number, help="where the points run: N Dask "
+    parser.add_argument("--workers", type=number, metavar="N", help="where the points run: N Dask "
                         "LocalCluster worker processes, with --method time (default: one per "
                         "core); 0: no Dask, run here one after the other, with either method "
                         "(shooting always runs here)")
-    parser.add_argument("--scheduler", help="with --method time: run on an existing Dask "
-                        "cluster, e.g. tcp://HOST:8786 (its workers need herringbone installed)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="with --method time: run on an existing Dask cluster at ADDRESS, "
+                             "e.g. tcp://HOST:8786 (its workers need herringbone installed)")
     parser.add_argument("--through-fmu", type=existing_fmu, metavar="FMU",
                         help="run each point through this gear FMU with fmpy (one built from "
                              "SCENE: herringbone build-fmu SCENE); its figures are those of "
@@ -159,21 +165,22 @@ def execute(args, parser) -> int:
     method = _method(parser, args, scene, speeds, params)
     # the points, the FMU and what the API checks besides: one line each, before any work
     check_sweep(scene, speeds, params, protocol, method, fmu=args.through_fmu)
+    progress = progress_of(args)
     started = time.perf_counter()
     time_sweeps = None
     if method == "shooting":
-        table, series = shooting_sweep(scene, speeds, protocol, progress=not args.no_progress,
+        table, series = shooting_sweep(scene, speeds, protocol, progress=progress,
                                        params=params,
                                        doubling=not args.no_period_doubling), None
         if args.time_sweeps and speeds is not None:
             time_sweeps = {direction: chained_time_sweep(scene, order, protocol,
-                                                         progress=not args.no_progress)
+                                                         progress=progress)
                            for direction, order in (("up", speeds), ("down", speeds[::-1]))}
     else:
         table, series = run_checked_points(
             scene, speeds, params, protocol,
             workers=None if args.workers is None else int(args.workers),
-            scheduler=args.scheduler, fmu=args.through_fmu, progress=not args.no_progress)
+            scheduler=args.scheduler, fmu=args.through_fmu, progress=progress)
     wall = time.perf_counter() - started
     written = write_outputs(scene, table, series, folder, time_sweeps)
     print(describe(scene, table, wall, through_fmu=args.through_fmu is not None,
@@ -222,7 +229,8 @@ def _output_folder(text: str) -> Path:
     """argparse `type=` for -o: a folder (arguments.output_folder); a new one not named with
     a file's suffix (FILE_SUFFIXES), checked before output_folder makes it. What exists is
     taken as it is: a folder, or a file that output_folder refuses."""
-    if not Path(text).exists() and Path(text).suffix.lower() in FILE_SUFFIXES:
+    if name_problem(Path(text)) is None and not Path(text).exists() \
+            and Path(text).suffix.lower() in FILE_SUFFIXES:
         raise argparse.ArgumentTypeError(
             f"{text}: names a {Path(text).suffix} file, but -o is a folder for sweep (the "
             "table and its pictures are written in it); allowed: a folder, e.g. -o "

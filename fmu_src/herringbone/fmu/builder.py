@@ -360,8 +360,8 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     """Compile the integrator for this machine as the scene's FMU runs it (once: later builds
     load it from the user's cache, herringbone.compiling.cache), saying so first and
-    showing progress on stdout, and copy the compiled code that a run of the FMU loads into
-    `folder`/numba_cache, which the FMU carries in its resources
+    showing progress on stderr (apart from what a caller prints), and copy the compiled code
+    that a run of the FMU loads into `folder`/numba_cache, which the FMU carries in its resources
     (herringbone.integrate.first_start.carry_for_scene). Returns that folder. Raises
     RuntimeError if the cache folder lacks what was compiled (it could not be written)."""
     from ..compiling import cache
@@ -369,7 +369,8 @@ def carry_compiled_integrator(scene: Path, folder: Path) -> Path:
     from ..integrate.compiled import walk
 
     # in this process: a build after the first (the test suite's) finds the code loaded
-    first_start.compile_for_scene(scene, say=lambda message: print(message, flush=True))
+    first_start.compile_for_scene(scene, say=lambda message: print(message, file=sys.stderr,
+                                                                   flush=True))
     cache.require_on_disk(walk.advance)  # before a fresh process would compile it again
     # what a run loads, taken in a fresh process: a compile caches every kernel the loop
     # calls as well (its own code holds them), and this process may hold other scenes' code
