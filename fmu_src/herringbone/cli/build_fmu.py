@@ -16,13 +16,13 @@ from ..arguments import output_file, output_file_problem, output_folder
 from ..fmu.builder import DEFAULT_SCENE, FMI_VERSIONS, default_fmu_name
 from .common import (
     CommandParser,
-    _toml,
     add_progress,
     add_scene,
     add_settings,
     fail,
     say,
     scene_of,
+    toml_value,
 )
 from .common import execute as run_command
 
@@ -111,8 +111,8 @@ def execute(args, parser) -> int:
         if args.ssp is not None:
             return ssp_archive(args, parser, scene, source)
         output = args.output or args.dist / default_fmu_name(
-            scene.name + "".join(f"+{name}={_toml(value)}" for name, value in args.settings),
-            args.fmi)
+            scene.name + "".join(f"+{name}={toml_value(value)}"
+                                 for name, value in args.settings), args.fmi)
         problem = output_file_problem(output, (".fmu",))
         if problem is not None:
             fail(parser, f"cannot write {output}: {problem}; give -o FILE.fmu in a folder you "
@@ -153,31 +153,23 @@ def scene_text(scene, settings) -> str:
     """`scene` as a scene file (its components, the parameters it sets, its experiment and
     torques), what an FMU built with --set carries: a header naming the scene and the
     `settings` ((name, value) pairs) it was changed by."""
-    changes = " ".join(f"--set {name}={_toml(value)}" for name, value in settings)
+    changes = " ".join(f"--set {name}={toml_value(value)}" for name, value in settings)
     lines = [f"# {scene.name} ({Path(scene.source).name}) with {changes}: written by herringbone "
              "build-fmu", "", "[components]",
-             *(f"{name} = {_value(value)}" for name, value in scene.components.items()),
+             *(f"{name} = {toml_value(value)}" for name, value in scene.components.items()),
              "", "[parameters]",
-             *(f"{name} = {_value(value)}" for name, value in scene.given.items()),
-             "", "[experiment]", f"stop_time = {_value(scene.experiment.stop_time)}",
-             f"output_interval = {_value(scene.experiment.output_interval)}", "", "[inputs]"]
+             *(f"{name} = {toml_value(value)}" for name, value in scene.given.items()),
+             "", "[experiment]", f"stop_time = {toml_value(scene.experiment.stop_time)}",
+             f"output_interval = {toml_value(scene.experiment.output_interval)}", "", "[inputs]"]
     inputs = scene.inputs
     if len(inputs.times) == 1:
-        lines += [f"M_motor = {_value(inputs.M_motor[0])}", f"M_load = {_value(inputs.M_load[0])}"]
+        lines += [f"M_motor = {toml_value(inputs.M_motor[0])}",
+                  f"M_load = {toml_value(inputs.M_load[0])}"]
     else:
         rows = zip(inputs.times, inputs.M_motor, inputs.M_load)
-        lines.append("table = [" + ", ".join(f"[{', '.join(map(_value, row))}]" for row in rows)
+        lines.append("table = [" + ", ".join(f"[{', '.join(map(toml_value, row))}]" for row in rows)
                      + "]")
     return "\n".join(lines) + "\n"
-
-
-def _value(value) -> str:
-    """A value as TOML writes it, to every digit: true, 10, 0.0004, 1e+16, inf, nan."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    return repr(float(value))
 
 
 def simulate(fmu: Path, scene, csv_path: Path) -> None:

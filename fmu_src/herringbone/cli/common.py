@@ -188,9 +188,9 @@ def scene_of(args, parser: argparse.ArgumentParser):
                      else scene.with_parameters(**{name: value}))
         except (SceneError, TypeError) as error:
             problem = error.problem if isinstance(error, SceneError) else str(error)
-            fail(parser, f"--set {name}={_toml(value)}: {problem}")
+            fail(parser, f"--set {name}={toml_value(value)}: {problem}")
     if settings:
-        changes = ", ".join(f"{name} = {with_unit(_toml(value), unit_of(name))}"
+        changes = ", ".join(f"{name} = {with_unit(toml_value(value), unit_of(name))}"
                             for name, value in settings)
         print(f"scene {scene.name} with {changes} (--set)")
     return scene
@@ -202,7 +202,7 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
     own), a component, a torque of a scene whose torques are a table."""
     from ..model.parameters import COMPONENTS, INPUTS
 
-    given = f"--set {name}={_toml(value)}"
+    given = f"--set {name}={toml_value(value)}"
     if count > 1:
         return f"--set {name} is given {count} times; allowed: each name once"
     if name in ("stop_time", "output_interval"):
@@ -217,11 +217,14 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
     return None
 
 
-def _toml(value) -> str:
-    """A --set value as a scene file writes it (true, not Python's True; a string quoted)."""
+def toml_value(value) -> str:
+    """A value as a scene file writes it, to every digit: true (not Python's True), 10,
+    0.0004, 1e+16, inf, nan, a string quoted."""
     if isinstance(value, bool):
         return "true" if value else "false"
-    return f'"{value}"' if isinstance(value, str) else str(value)
+    if isinstance(value, str):
+        return f'"{value}"'
+    return str(value) if isinstance(value, int) else repr(float(value))
 
 
 # The most pinion speeds --speeds takes: a stability chart of 100 000 takes minutes (a few ms
