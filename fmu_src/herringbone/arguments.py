@@ -31,6 +31,7 @@ from .model.parameters import (
     RPM_PER_RAD_S,
     Range,
     allowed_words,
+    as_float,
     number_problem,
     outputs_of,
 )
@@ -86,7 +87,7 @@ class Argument:
         if self.choices is not None:
             return None if isinstance(value, str) and value in self.choices \
                 else f"is {value!r}; allowed: {self.describe()}{did_you_mean(value, self.choices)}"
-        return number_problem(float(value) if isinstance(value, numbers.Real)
+        return number_problem(as_float(value) if isinstance(value, numbers.Real)
                               and not isinstance(value, bool) else value, self.allowed,
                               whole=self.whole, infinite=self.infinite, meaning=self.meaning)
 
@@ -126,8 +127,13 @@ REFERENCE_METHOD = Argument("method", None, "scipy's solve_ivp methods",
                             choices=REFERENCE_METHODS)
 COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
                            choices=COMPILED_METHODS)
+# The shortest max_step: under a ten-thousandth of the shortest period a train may have
+# (2π/1e8 rad/s = 63 ns, model/scene.py FASTEST_RING), and above the time's resolution of any
+# run up to 4500 s (2.2e-16·t). max_step = 1e-300 was taken and failed at the first step ("the
+# step size fell below the time's resolution").
+SHORTEST_MAX_STEP = 1e-12
 MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
-                    POSITIVE, infinite=True)
+                    Range(SHORTEST_MAX_STEP, None), infinite=True)
 # The FMU's solver settings, for fmu/core.py: the same ranges under the FMU's variable names.
 # max_step's start value says "no limit" with 0 there (a start value in the model description
 # cannot be inf); inf, the API's "no limit", is taken too.

@@ -147,7 +147,7 @@ def test_errors_of_run_name_the_command(capsys, tmp_path):
     assert main(["run", str(scene)]) == 2
     error = one_error_line(capsys, "run")
     # the unit, named as radians: the value was meant in degrees
-    assert "beta is 22.86 rad; allowed: (0, 1.5708) rad, an angle in radians" in error
+    assert "beta is 22.86 rad; allowed: [0.01, 1.4] rad, an angle in radians" in error
 
 
 def test_build_fmu_names_its_fmu_by_scene_and_fmi_version(capsys):
@@ -638,7 +638,7 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, bui
     assert first["F_mesh [N]"] == pytest.approx(250.0 / 0.021705, rel=1e-3)
     for setting, expected in (
             ("zeta=1", "--set zeta=1: unknown parameter 'zeta'; did you mean 'zeta_mesh'?"),
-            ("beta=5", "--set beta=5: beta is 5 rad; allowed: (0, 1.5708) rad"),
+            ("beta=5", "--set beta=5: beta is 5 rad; allowed: [0.01, 1.4] rad"),
             ("beta=abc", "--set 'beta=abc': the value 'abc' is not a number, true or false"),
             ("beta", "--set 'beta': allowed: NAME=VALUE"),
             ("bearings=false", "--set bearings=false: bearings is a component, not a "

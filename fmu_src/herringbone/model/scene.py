@@ -25,9 +25,10 @@ from typing import cast
 
 from ..shipped import is_scene_name, resolve_scene, scene_files
 from ..suggest import did_you_mean
-from .geometry import solid_cylinder_transverse_inertia
+from .geometry import HALVES, GearGeometry, solid_cylinder_transverse_inertia
 from .parameters import (
     COMPONENTS,
+    FINITE,
     INPUTS,
     PARAMETERS,
     POSITIVE,
@@ -35,6 +36,7 @@ from .parameters import (
     is_flag,
     number_problem,
     parameters_of,
+    short_repr,
 )
 
 
@@ -125,8 +127,7 @@ class Scene:
         (0.5, 157.08)
         >>> herringbone.load_scene("reference").with_parameters(zeta_mesh=-1.0)
         Traceback (most recent call last):
-        herringbone.model.scene.SceneError: with_parameters: zeta_mesh is -1.0; allowed: >= 0
-        and finite
+        herringbone.model.scene.SceneError: with_parameters: zeta_mesh is -1.0; allowed: [0, 10]
         """
         # checked here first, so that a bad value is named by this call, not the scene's file
         _check_parameters(changes, self.components, self.source, call="with_parameters")
@@ -266,8 +267,7 @@ def scene_from_dict(data: dict, name: str = "scene", source: str = "<scene>") ->
     (100.0, 0.05)
     >>> herringbone.scene_from_dict({"parameters": {"zeta_mesh": -1.0}})
     Traceback (most recent call last):
-    herringbone.model.scene.SceneError: <scene>: [parameters] zeta_mesh is -1.0; allowed: >= 0
-    and finite
+    herringbone.model.scene.SceneError: <scene>: [parameters] zeta_mesh is -1.0; allowed: [0, 10]
     """
     if not isinstance(data, Mapping):
         raise SceneError(f"data is {data!r} ({type(data).__name__}); allowed: a dict of the "
@@ -317,7 +317,7 @@ def _components(table, source):
             raise SceneError(f"unknown component '{key}'; allowed: {', '.join(COMPONENTS)}",
                              source, "components", key)
         if not is_flag(value):
-            raise SceneError(f"{key} must be true or false, got {value!r}", source,
+            raise SceneError(f"{key} must be true or false, got {short_repr(value)}", source,
                              "components", key)
         components[key] = bool(value)
     return {c: components.get(c, True) for c in COMPONENTS}
@@ -356,12 +356,139 @@ def _complete_parameters(given, components, source):
             values[name] = float(values[name])
         elif p.kind is bool:  # numpy's np.bool_ too
             values[name] = bool(values[name])
+    _check_axial_overlap(values, source)
     _check_edge_ramp(values, source)
+    derived = [f"J_{gear}" for gear in ("pinion", "wheel")
+               if components["bearings"] and values[f"J_{gear}"] is None]
+    for name in derived:
+        values[name] = _derived_inertia(values, name[2:], source)
+    _check_time_scales(values, components, source, derived)
+    return values
+
+
+def _derived_inertia(values, gear, source):
+    """J of a gear its scene leaves out: a solid cylinder of its pitch radius and body
+    (geometry.py), SceneError where that falls outside J's range (a 1e7 kg wheel of 1 m module
+    and 1000 teeth would be 7e11 kg.m2), naming the values it follows from."""
+    inertia = solid_cylinder_transverse_inertia(values, gear)
+    allowed = PARAMETERS[f"J_{gear}"].allowed
+    if not allowed.contains(inertia):
+        raise SceneError(
+            f"J_{gear} (not given: the solid cylinder m(3R^2+L^2)/12 of m_{gear} "
+            f"{values[f'm_{gear}']:g} kg, its pitch radius and the body's length) is "
+            f"{inertia:.3g} kg.m2; allowed: {allowed.describe()} kg.m2 (give J_{gear})",
+            source, "parameters", f"J_{gear}")
+    return inertia
+
+
+# The fastest an element of the train (a shaft, a bearing, the mesh) may ring, rad/s, and the
+# fastest it may damp a motion, 1/s: the square root of its stiffness, and its damping, times
+# Σ g²/m over the bodies it joins (g: its lever on each; element_rates). No lumped mode of a
+# gear train is faster (sound crosses a tooth of 10 µm module in 5 ns), and a run steps at
+# about the fastest: bearings of 1e13 N/m on a pinion of 1e-7 kg (1e10 rad/s) take 41 s for
+# 2 ms, I_pinion = 1e-18 fails at the first step (the step below the time's resolution), and
+# from 1e9 rad/s `info` loses a natural mode to rounding. The reference's fastest rings at
+# 1.1e5 rad/s, the fastest of 3000 random scenes the tests draw at 2.6e6 (and damps at 1.5e6
+# 1/s).
+FASTEST_RING = 1e8
+FASTEST_DAMPING = 1e9
+
+
+def element_rates(values, components) -> list[tuple[str, str, str, float, float, float, dict]]:
+    """Each elastic element of the train as (what it is, its stiffness parameter, its damping
+    parameter, its stiffness, its natural frequency sqrt(c·Σ g²/m) in rad/s, its damping rate
+    h·Σ g²/m in 1/s, {body parameter: its share g²/m}): g is the element's lever on the body
+    (1, a pitch radius, a bearing's or the face's distance from the gear's centre). The mesh
+    carries the points of every stream at once (ε_β and the edge ramps rounded up) and is
+    damped at 2·zeta_mesh times its frequency (docs/model.md section 3)."""
+    geometry = GearGeometry.from_parameters(values)
+    elements = []  # (what, its stiffness and damping parameters, its stiffness, shares)
+    if components["motor"]:
+        elements.append(("the input shaft", "C_shaft_in", "h_shaft_in", values["C_shaft_in"],
+                         {"I_motor": 1.0 / values["I_motor"],
+                          "I_pinion": 1.0 / values["I_pinion"]}))
+    if components["load"]:
+        elements.append(("the output shaft", "C_shaft_out", "h_shaft_out",
+                         values["C_shaft_out"], {"I_wheel": 1.0 / values["I_wheel"],
+                                                 "I_load": 1.0 / values["I_load"]}))
+    lever = values["groove"] / 2.0 + max(values["b_left"], values["b_right"])
+    mesh = {"I_pinion": geometry.radius_pinion ** 2 / values["I_pinion"],
+            "I_wheel": geometry.radius_wheel ** 2 / values["I_wheel"]}
     if components["bearings"]:
         for gear in ("pinion", "wheel"):
-            if values[f"J_{gear}"] is None:
-                values[f"J_{gear}"] = solid_cylinder_transverse_inertia(values, gear)
-    return values
+            mesh.update({f"m_{gear}": 1.0 / values[f"m_{gear}"],
+                         f"J_{gear}": lever ** 2 / values[f"J_{gear}"]})
+            for side in ("left", "right"):
+                elements.append((f"the {side} {gear} bearing", f"c_brg_{gear}_{side}",
+                                 f"h_brg_{gear}_{side}", values[f"c_brg_{gear}_{side}"],
+                                 {f"m_{gear}": 1.0 / values[f"m_{gear}"],
+                                  f"J_{gear}": geometry.bearing_position(side) ** 2
+                                  / values[f"J_{gear}"]}))
+    ramp = 2.0 * values["edge_ramp"] / geometry.axial_pitch
+    points = 2 * sum(math.ceil(geometry.axial_overlap(half) + ramp) for half in HALVES)
+    elements.append(("the mesh", "c_point", "zeta_mesh", values["c_point"] * points, mesh))
+    rates = []
+    for what, name, damping, stiffness, shares in elements:
+        ring = math.sqrt(stiffness * sum(shares.values()))
+        rate = 2.0 * values["zeta_mesh"] * ring if damping == "zeta_mesh" \
+            else values[damping] * sum(shares.values())
+        rates.append((what, name, damping, stiffness, ring, rate, shares))
+    return rates
+
+
+def _check_time_scales(values, components, source, derived=()):
+    """SceneError where an element rings faster than FASTEST_RING or damps faster than
+    FASTEST_DAMPING (element_rates), naming first (the key) the light body that makes it ring,
+    or the damping that damps it, then the element and its stiffness or its body; `derived`:
+    the inertias the scene did not give (said so, with the mass they follow)."""
+    for what, name, damping, stiffness, ring, rate, shares in element_rates(values,
+                                                                            components):
+        body = max(shares, key=lambda key: shares[key])
+        weight = f"{values[body]:.3g} {PARAMETERS[body].unit}"
+        if body in derived:
+            mass = f"m_{body[2:]}"
+            weight += f" (not given: the solid cylinder of {mass} {values[mass]:g} kg)"
+        if ring > FASTEST_RING:
+            by = (f"{name} {values[name]:g} {PARAMETERS[name].unit}" if name != "c_point" else
+                  f"{round(stiffness / values[name])} points of c_point {values[name]:g} N/m")
+            raise SceneError(
+                f"{body} is {weight}, on which {what} rings at {ring:.3g} rad/s ({by}); "
+                f"allowed: up to {FASTEST_RING:g} rad/s, sqrt(stiffness/mass) of each shaft, "
+                "bearing and the mesh (no gear train has a faster mode, and a run steps at it)",
+                source, "parameters", body)
+        if rate > FASTEST_DAMPING:
+            unit = PARAMETERS[damping].unit
+            ringing = f" (ringing at {ring:.3g} rad/s)" if damping == "zeta_mesh" else ""
+            raise SceneError(
+                f"{damping} is {values[damping]:g}{'' if unit == '1' else ' ' + unit}, which "
+                f"damps {what}{ringing} at {rate:.3g} 1/s on {body} {weight}; allowed: up to "
+                f"{FASTEST_DAMPING:g} 1/s, damping/mass of each shaft, bearing and the mesh (a "
+                "run steps at it)", source, "parameters", damping)
+
+
+# The most axial pitches a helix half may span (ε_β = b/p_x): each holds a contact point of each
+# of the half's two lines of engagement, and every point costs every step: 200 (1600 points on
+# the mesh) run the reference's 2 ms in 0.3 s as 8 do, where a 35 mm face of 0.1 µm module
+# (43 000) takes `info` 5.5 s. No gear is that wide: a face of 200 pitches is 980 modules at a
+# helix of 40°.
+MOST_AXIAL_PITCHES = 200
+
+
+def _check_axial_overlap(values, source):
+    """SceneError where a helix half spans more than MOST_AXIAL_PITCHES axial pitches
+    p_x = π·m_n/sin β: naming the face, with the module and helix that make its pitch."""
+    geometry = GearGeometry.from_parameters(values)
+    for half in HALVES:
+        pitches = geometry.axial_overlap(half)
+        if pitches > MOST_AXIAL_PITCHES:
+            key = f"b_{half}"
+            most = MOST_AXIAL_PITCHES * geometry.axial_pitch
+            raise SceneError(
+                f"{key} is {values[key]!r} m, {pitches:.3g} axial pitches p_x = π·m_n/sin(beta) "
+                f"= {geometry.axial_pitch:.3g} m (m_n {values['m_n']:g} m, beta "
+                f"{values['beta']:g} rad); allowed: at most {MOST_AXIAL_PITCHES} pitches a "
+                f"face, {key} <= {most:.3g} m with this m_n and beta (each pitch holds two "
+                "contact points, and each point costs every step)", source, "parameters", key)
 
 
 def _check_edge_ramp(values, source):
@@ -411,9 +538,11 @@ def _inputs(table, source, call=None):
             raise error("table must be a list of rows [time, M_motor, M_load]", "table")
         for i, row in enumerate(rows):
             if not isinstance(row, list) or len(row) != 3 or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool)
-                    and math.isfinite(v) for v in row):
-                raise error(f"table row {i} is {row!r}; allowed: three finite numbers "
+                    isinstance(v, (int, float))
+                    and number_problem(v, FINITE) is None for v in row):
+                shown = (f"[{', '.join(short_repr(v) for v in row)}]"
+                         if isinstance(row, list) else repr(row))
+                raise error(f"table row {i} is {shown}; allowed: three finite numbers "
                             "[time, M_motor, M_load]", "table")
         times = [float(row[0]) for row in rows]
         if times[0] != 0.0:
