@@ -523,3 +523,14 @@ def test_balanced_torques_keep_the_angular_momentum(reference_scene, method):
                                   method=method)
     momentum = _angular_momentum(result, reference_scene.parameters, geometry.ratio)
     assert np.ptp(momentum) / abs(momentum[0]) < 1e-10
+
+
+def test_simulate_stops_a_runaway_with_a_message_naming_the_torques(reference_scene):
+    """A load torque of 1e19 N·m flings the train ever faster, its contact events ever denser:
+    simulate ran without end (the FMU's doSteps were bounded, its runs were not). Each of its
+    compiled calls now has the FMU's budget of steps, and the message says what to check."""
+    runaway = reference_scene.with_inputs(M_motor=500.0, M_load=1e19)
+    with pytest.raises(herringbone.StepBudgetExceeded,
+                       match=r"the train runs away; check the torques M_motor = 500 and "
+                             r"M_load = 1e\+19 N\.m$"):
+        herringbone.simulate(runaway, stop_time=0.01, output_interval=1e-3)

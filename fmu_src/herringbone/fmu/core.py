@@ -49,9 +49,13 @@ from herringbone.fmu.pythonfmu_logger import HostLine  # noqa: E402
 from herringbone.integrate import first_start  # noqa: E402
 from herringbone.integrate.compiled_stepper import (  # noqa: E402
     DEFAULT_TOLERANCE,
+    STEP_BUDGET_FLOOR,
+    STEP_BUDGET_PER_MAX_STEP,
+    STEP_BUDGET_PER_MODE,
     STIFFNESS_RATIO,
     CompiledStepper,
     StepBudgetExceeded,
+    step_budget,
     warm_up,
 )
 from herringbone.integrate.contract import Position, start_position  # noqa: E402
@@ -68,17 +72,6 @@ from herringbone.model.parameters import (  # noqa: E402
 )
 
 DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (docs/model.md)"
-# Runaway guard: a doStep of h may take STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max
-# internal steps (|λ|max the fastest eigenvalue). Measured on the shipped scenes at the default
-# tolerance: at most 2·h·|λ|max + 10 (from_rest), so the bound leaves 50 times that, and a
-# tolerance of 1e-12 (about 4.5 times the steps of 1e-7 for an order-8 method) fits. A stalled
-# step stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
-STEP_BUDGET_FLOOR = 10_000
-STEP_BUDGET_PER_MODE = 100
-# and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
-# compiled loop counts in 64 bits)
-STEP_BUDGET_PER_MAX_STEP = 2
-MOST_STEPS = 2**62
 # a run's times must resolve the train's fastest time scale to this share (_resolution_problem)
 RESOLVED_SHARE = 1e-3
 EPSILON = float(np.finfo(float).eps)
@@ -132,17 +125,6 @@ KINDS = {bool: "boolean", int: "integer", str: "string", float: "real"}
 CONVERT = {"real": float, "integer": int, "boolean": bool, "string": str}
 # what a refused read returns
 REFUSED = {"real": math.nan, "integer": 0, "int64": 0, "boolean": False, "string": ""}
-
-
-def step_budget(step_size, fastest_rate, max_step) -> int:
-    """Internal steps a doStep of `step_size` s may take before it counts as a runaway:
-    STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max (`fastest_rate`, 1/s), and with a
-    `max_step` (s; 0 or inf: none) STEP_BUDGET_PER_MAX_STEP·h/max_step more; at most
-    MOST_STEPS."""
-    steps = STEP_BUDGET_PER_MODE * step_size * fastest_rate
-    if 0.0 < max_step < math.inf:
-        steps += STEP_BUDGET_PER_MAX_STEP * step_size / max_step
-    return int(min(STEP_BUDGET_FLOOR + steps, MOST_STEPS))
 
 
 def latest_end(fastest_rate) -> float:

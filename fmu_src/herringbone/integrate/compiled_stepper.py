@@ -181,6 +181,30 @@ NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
 # them after the call, so a progress bar or a budget watch lags this many samples; the call's
 # own cost (a few µs) and the step that ends on its last time are shared by as many
 SAMPLES_PER_CALL = 64
+# Runaway guard: a run over h s (a doStep, a call of advance or advance_sampled) may take
+# STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max internal steps (|λ|max the fastest
+# eigenvalue). Measured on the shipped scenes at the default
+# tolerance: at most 2·h·|λ|max + 10 (from_rest), so the bound leaves 50 times that, and a
+# tolerance of 1e-12 (about 4.5 times the steps of 1e-7 for an order-8 method) fits. A stalled
+# run stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
+STEP_BUDGET_FLOOR = 10_000
+STEP_BUDGET_PER_MODE = 100
+# and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
+# compiled loop counts in 64 bits)
+STEP_BUDGET_PER_MAX_STEP = 2
+MOST_STEPS = 2**62
+
+
+def step_budget(span, fastest_rate, max_step) -> int:
+    """Internal steps a run over `span` s may take before it counts as a runaway:
+    STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max (`fastest_rate`, 1/s), and with a
+    `max_step` (s; 0 or inf: none) STEP_BUDGET_PER_MAX_STEP·h/max_step more; at most
+    MOST_STEPS."""
+    steps = STEP_BUDGET_PER_MODE * span * fastest_rate
+    if 0.0 < max_step < math.inf:
+        steps += STEP_BUDGET_PER_MAX_STEP * span / max_step
+    return int(min(STEP_BUDGET_FLOOR + steps, MOST_STEPS))
+
 
 COMPLETED = int(walk.Status.OK)  # as an int: compared after every call, unlike an enum's lookup
 
@@ -452,9 +476,19 @@ class CompiledStepper:
         scratch = np.empty((min(len(times), SAMPLES_PER_CALL), len(run.outputs)))
         for first in range(0, max(len(times), 1), SAMPLES_PER_CALL):
             chunk, after = times[first:first + SAMPLES_PER_CALL], first + SAMPLES_PER_CALL
-            self.sample(run, chunk, scratch[:len(chunk)] if rows is None else rows[first:after],
-                        times[after] if after < len(times) else end, torques,
-                        on_sample=on_sample)
+            call_end = times[after] if after < len(times) else end
+            budget = step_budget(call_end - run.time, self.fastest_rate, self.max_step)
+            try:
+                self.sample(run, chunk,
+                            scratch[:len(chunk)] if rows is None else rows[first:after],
+                            call_end, torques, max_steps=budget, on_sample=on_sample)
+            except StepBudgetExceeded:
+                raise StepBudgetExceeded(
+                    f"stopped at t = {run.time:.9g} s, short of t = {call_end:.9g} s, after "
+                    f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
+                    f"{STEP_BUDGET_PER_MODE}·h·|λ|max, |λ|max = {self.fastest_rate:.3g} 1/s): "
+                    f"the train runs away; check the torques M_motor = {torques[0]:g} and "
+                    f"M_load = {torques[1]:g} N.m") from None
             if on_progress is not None:
                 on_progress(run.time)
 
