@@ -788,14 +788,26 @@ def step(train, buffers, exact, state, motor_torque, load_torque, h, contact_los
     _from_modal(tables, exact, out)
     _keep_momentum(train, tables, state, motor_torque, load_torque, h, out)
     if not _phase_sure(train, buffers, tables, exact, h, state, out, speed_slow, speed_swing,
-                       length):
+                       length) and not _standing(speed_slow, speed_swing):
         return UNSURE
     if contact_loss and not keeps_sign(tables, exact, h, tables.approach_size,
                                        tables.approach_fast, approach_slow, approach_swing,
                                        loaded_variant_sign, _approach(train, state),
-                                       _approach(train, out)):
+                                       _approach(train, out)) \
+            and not _standing(approach_slow, approach_swing):
         return PHASE_SURE
     return CERTIFIED
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _standing(slow, swing):
+    """Whether a function of the state (its SlowBound `slow` and its fast modes' Σ|a_k|
+    `swing`) is zero over the whole step: nothing moves it. A train at rest with no torque,
+    its pinion on an end of its interval and its points touching unloaded, stands there: no
+    bound can say the angle stays inside or the approach keeps a sign, since both are zero,
+    and the steps would shrink to TURN_BACK_FLOOR of the floor (1.5e6 a second); standing, the
+    speed cannot carry the angle across an end, nor the approach cross zero."""
+    return slow.start == 0.0 and slow.drift == 0.0 and swing == 0.0
 
 
 @njit(**NUMBERS_ONLY)
