@@ -146,7 +146,7 @@ PROBE = """
 import json, pickle, sys
 from pathlib import Path
 from numba import typeof
-from herringbone.compiling import cache
+from herringbone.compiling import announce, cache
 from herringbone.integrate.compiled import walk
 from herringbone.integrate import first_start
 
@@ -175,7 +175,7 @@ write(version, "0" * 20, overloads)
 other_version = cache.why_not_cached(walk.hermite_root, signature)
 print(json.dumps(dict(before=before, after=after, on_other_cpu=on_other_cpu, cpu=key[1][1],
                       other_numba=other_numba, other_version=other_version, said=said,
-                      records=first_start._records())))
+                      records=announce._records())))
 """
 
 
@@ -193,12 +193,14 @@ def test_numba_is_asked_why_it_must_compile_and_the_compile_is_announced_first(t
                                      f"{found['cpu']}")
     assert found["other_numba"].startswith("the code was compiled by numba 0.1.0, and this is")
     assert found["other_version"] == "the cached code belongs to another version of the integrator"
-    (message, overloads_then), = found["said"]  # one message, said before numba compiled
+    # one message before numba compiled (the end's comes QUIET_SECONDS after, from a thread)
+    (message, overloads_then), = [said for said in found["said"] if "compiling" in said[0]]
     assert overloads_then == 0
-    assert message.startswith("compiling the integrator for this machine (there is no compiled "
-                              "code for this version of the integrator in ")
-    assert f"about {first_start.DEFAULT_COMPILE_SECONDS:.0f} s, once" in message
-    assert found["records"]["hermite_root"]["seconds"] > 0.0
+    assert message.startswith("compiling kernels of herringbone for this machine, "
+                              "walk.hermite_root first (there is no compiled code for this "
+                              "version of the integrator in ")
+    assert "later starts load them from " in message
+    assert found["records"]["walk.hermite_root"]["seconds"] > 0.0
 
 
 @pytest.mark.slow
@@ -227,8 +229,8 @@ def test_an_fmu_on_another_cpu_says_why_and_how_long_before_it_compiles(scene_fm
                          capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
     lines = [line.split(" ", 1) for line in run.stdout.splitlines()]
-    announced = [(float(at), text) for at, text in lines if "compiling the integrator" in text]
-    done = [(float(at), text) for at, text in lines if "compiled the integrator in" in text]
+    announced = [(float(at), text) for at, text in lines if "compiling kernels of" in text]
+    done = [(float(at), text) for at, text in lines if "kernels in" in text]
     assert len(announced) == 1 and len(done) == 1, run.stdout
     assert "the code was compiled for a pentium4 CPU, and this is a" in announced[0][1]
     assert announced[0][0] - started < ANNOUNCEMENT_BOUND  # said at the start, not after
@@ -265,3 +267,163 @@ def test_the_index_an_fmu_carries_does_not_depend_on_the_types_its_builder_made_
     stamp, entries = pickle.loads(carried)
     [(signature, _)] = entries
     assert signature == (types.Array(types.float64, 1, "C"), types.UniTuple(types.int64, 3))
+
+
+def test_the_cache_folder_is_where_the_environment_says_read_as_the_xdg_spec_asks(tmp_path,
+                                                                                  monkeypatch):
+    """$HERRINGBONE_CACHE_DIR with `~` expanded (an env file or a systemd unit leaves it) and
+    pinned where it was read; a relative $XDG_CACHE_HOME ignored, as the XDG spec says (each
+    working folder would get a cache of its own); an empty HOME taken as none (the cache went
+    to /.cache)."""
+    import pwd
+
+    home = tmp_path / "home"
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("HERRINGBONE_CACHE_DIR", raising=False)
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative")
+    assert cache.cache_root() == home / ".cache" / "herringbone" / "numba"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache.cache_root() == tmp_path / "xdg" / "herringbone" / "numba"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", "")
+    account = Path(pwd.getpwuid(os.getuid()).pw_dir)
+    assert cache.cache_root() == account / ".cache" / "herringbone" / "numba"
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.setenv("HERRINGBONE_CACHE_DIR", "~/hb")
+    assert cache.cache_root() == home / "hb"
+    monkeypatch.setenv("HERRINGBONE_CACHE_DIR", "hb")
+    assert cache.cache_root() == tmp_path / "hb"
+
+
+# Compiles one small kernel (the cache as the environment says) and prints where numba keeps
+# it and where the package it imported lives
+SMALL_COMPILE = """
+import herringbone
+from herringbone.integrate.compiled import walk
+walk.hermite_root(1.0, -1.0, -2.0, -2.0)
+print(walk.hermite_root._cache._cache_path)
+print(herringbone.__file__)
+"""
+
+
+def test_an_unwritable_cache_folder_is_said_once_and_nothing_goes_beside_the_package(tmp_path):
+    """Where the cache folder cannot be written, the code goes to a temporary folder of the
+    process, removed when it ends, and one line says so and what to set; numba's own
+    locators, left to decide, wrote it beside the package's source (site-packages, where `pip
+    uninstall` leaves it), or in ~/.cache/numba. The package runs from a copy here, so that
+    such files land there and are seen."""
+    package = tmp_path / "installed" / "herringbone"
+    shutil.copytree(SOURCE / "herringbone", package,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    (tmp_path / "file").write_text("in the way")
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(package.parent),
+                   "HERRINGBONE_CACHE_DIR": str(tmp_path / "file" / "cache")}
+    run = subprocess.run([sys.executable, "-c", SMALL_COMPILE], env=environment,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    kept, imported = run.stdout.split()
+    assert Path(imported).parent == package
+    written = [*package.rglob("*.nbi"), *Path(environment["HOME"]).rglob("*.nbi")]
+    assert not written
+    assert not Path(kept).exists()  # removed as the process ended
+    [line] = [line for line in run.stderr.splitlines() if "cannot write" in line]
+    assert f"cannot write in the cache folder {tmp_path / 'file' / 'cache'}" in line
+    assert "HERRINGBONE_CACHE_DIR" in line
+    assert "later starts load" not in run.stderr and "not kept" in run.stderr
+    assert "compiled walk.hermite_root in " in run.stderr  # said as the process ended
+
+
+def test_a_read_only_cache_folder_still_serves_the_code_it_holds(tmp_path, monkeypatch):
+    """The temporary folder that stands in for a cache folder this process cannot write in
+    starts as a copy of it: a cache filled beforehand and mounted read-only is loaded, not
+    compiled again."""
+    wanted = tmp_path / "read-only" / "kernels-0123"
+    wanted.mkdir(parents=True)
+    (wanted / "walk.advance-1.py311.nbi").write_bytes(b"an index")
+    monkeypatch.setattr(cache, "_refusal", lambda folder: "[Errno 30] Read-only file system")
+    stand_in = cache._kept(wanted)
+    assert stand_in != wanted and stand_in.name == wanted.name
+    assert (stand_in / "walk.advance-1.py311.nbi").read_bytes() == b"an index"
+    assert cache.not_kept(stand_in) == (wanted, "[Errno 30] Read-only file system")
+    assert cache.not_kept(wanted) is None
+
+
+def test_a_damaged_cache_file_is_compiled_again_and_written_anew(tmp_path):
+    """A truncated index (or code file) of a kernel reads as absent: numba compiles the kernel
+    again and writes over it, and the announcement names the file; numba's own reader raised
+    UnpicklingError, at every later start."""
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
+
+    def start():
+        run = subprocess.run([sys.executable, "-c", SMALL_COMPILE], env=environment,
+                             capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr[-3000:]
+        return run.stderr
+
+    start()
+    index, = Path(environment["HERRINGBONE_CACHE_DIR"]).glob("*/walk.hermite_root-*.nbi")
+    data, = index.parent.glob("walk.hermite_root-*.nbc")
+    for damaged in (index, data):
+        damaged.write_bytes(damaged.read_bytes()[:20])
+        said = start()
+        assert f"{damaged} cannot be read (" in said, said
+        assert "compiled again" in said
+        assert len(damaged.read_bytes()) > 20  # written anew
+    with open(index, "rb") as f:
+        pickle.load(f)
+        stamp, overloads = pickle.loads(f.read())
+    assert stamp == cache.package_digest() and len(overloads) == 1
+
+
+def test_an_fmu_seeds_over_a_damaged_index(tmp_path, monkeypatch):
+    """The user's index of a kernel, truncated: the entries the FMU carries replace it (it
+    raised UnpicklingError, and the FMU did not instantiate)."""
+    monkeypatch.setenv("HERRINGBONE_CACHE_DIR", str(tmp_path / "user"))
+    name, target = "walk.advance-1.py311.nbi", cache.kernels_folder()
+    carried = tmp_path / "fmu" / target.name
+    _write_index(carried, name, {("carried",): b"the carried code"})
+    target.mkdir(parents=True, exist_ok=True)
+    (target / name).write_bytes((carried / name).read_bytes()[:20])
+    assert cache._merge_index(carried, target, name)
+    entries = cache._index_file(target, name)._load_index()
+    assert list(entries) == [("carried",)]
+    assert (target / entries[("carried",)]).read_bytes() == b"the carried code"
+
+
+# Compiles one small kernel with nothing said to the announcer but how often to report
+# progress (on stderr, by default), then waits for the announcement's end
+ANNOUNCED = """
+import time
+from herringbone.compiling import announce
+from herringbone.integrate.compiled import walk
+announce.announce_compiles(every=0.05)
+walk.hermite_root(1.0, -1.0, -2.0, -2.0)
+time.sleep(announce.QUIET_SECONDS + 1.0)
+"""
+
+
+def test_every_compile_is_announced_on_stderr_with_its_progress_and_its_end(tmp_path):
+    """No caller has a word to say (herringbone.simulate, a sweep, a script): the compile is
+    announced on stderr as it starts, with what and why, then its progress, then its end and
+    time; nothing was said outside `herringbone run` and build-fmu, and progress lines only by
+    the builder."""
+    environment = {**fresh_user(tmp_path), "PYTHONPATH": str(SOURCE)}
+    run = subprocess.run([sys.executable, "-c", ANNOUNCED], env=environment,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert run.stdout == ""
+    lines = run.stderr.splitlines()
+    assert lines[0].startswith("compiling kernels of herringbone for this machine, "
+                               "walk.hermite_root first (there is no compiled code for this "
+                               "version of the integrator in ")
+    progress = [line for line in lines if line.startswith("  ... ")]
+    assert progress and all(": compiling walk.hermite_root" in line for line in progress)
+    assert lines[-1].startswith("compiled walk.hermite_root in ")
+    assert lines[-1].endswith(f"later starts load it from {cache_folder(environment)}")
+    assert len(lines) == 2 + len(progress)
+
+
+def cache_folder(environment) -> Path:
+    """The kernels folder of this version of the package under `environment`'s cache."""
+    return Path(environment["HERRINGBONE_CACHE_DIR"]) / f"kernels-{cache.package_digest()}"

@@ -7,5 +7,7 @@ package that holds kernels (`model.equations`, `integrate.compiled`):
 - `cache`: the compiled code on disk, keyed on the kernels' source text rather than on their
   folder: an FMU host unpacks the FMU to a new temporary folder for every run, and a cache
   written by one start is found by the next;
-- `sources`: the files that text is read from, plain paths (no numba).
+- `sources`: the files that text is read from, plain paths (no numba);
+- `announce`: a line on stderr (or to a caller's `say`) before, while and after numba compiles
+  kernels of the package.
 """

@@ -6,12 +6,19 @@ way each start would compile again (a minute). This locator keys the cache on th
 of every file that holds kernels or says how they are compiled (sources.py: numba alone
 would miss a change to a kernel that another file's kernel compiled in), in a per-user
 folder: $HERRINGBONE_CACHE_DIR, else $XDG_CACHE_HOME/herringbone/numba, else
-~/.cache/herringbone/numba. numba itself keeps apart the Python and numba versions and the
-CPU. Each version of the package adds a folder there (a few MB); deleting the folder is
+~/.cache/herringbone/numba (cache_root). numba itself keeps apart the Python and numba versions
+and the CPU. Each version of the package adds a folder there (a few MB); deleting the folder is
 always safe.
+
+Where that folder cannot be written, a temporary folder of the process stands in for it
+(kernels_folder): declined, numba's own locators would write the kernels beside the installed
+package, where `pip uninstall` leaves them. An index or code file there that numba cannot read
+(truncated, overwritten) reads as absent, so the kernel is compiled again and the file written
+over (_SparingIndexFile): numba's own reader raises, and every later start failed on it.
 """
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import io
@@ -45,11 +52,30 @@ def package_digest() -> str:
 
 
 def cache_root() -> Path:
-    """The per-user folder that holds a kernels-<digest> folder per version of the package."""
+    """The per-user folder that holds a kernels-<digest> folder per version of the package:
+    $HERRINGBONE_CACHE_DIR (`~` expanded: an env file or a systemd unit does not), else
+    $XDG_CACHE_HOME/herringbone/numba where that is an absolute path (the XDG spec says to
+    ignore a relative one: each working folder would get its own cache), else
+    .cache/herringbone/numba in the user's home (_home)."""
     if os.environ.get("HERRINGBONE_CACHE_DIR"):
-        return Path(os.environ["HERRINGBONE_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "herringbone" / "numba"
+        return Path(os.environ["HERRINGBONE_CACHE_DIR"]).expanduser().absolute()
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = Path(xdg) if os.path.isabs(xdg) else _home() / ".cache"
+    return base / "herringbone" / "numba"
+
+
+def _home() -> Path:
+    """$HOME where it is an absolute path, else the account's home (an empty HOME put the
+    cache in /.cache)."""
+    home = os.environ.get("HOME", "")
+    if os.path.isabs(home):
+        return Path(home)
+    try:
+        import pwd
+
+        return Path(pwd.getpwuid(os.getuid()).pw_dir)
+    except (ImportError, KeyError):  # not a POSIX system, or an account without an entry
+        return Path.home()
 
 
 class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
@@ -75,7 +101,8 @@ class SourceTextCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cac
         """The locator for a kernel of this package; None for anyone else's."""
         if Path(py_file).resolve() not in _claimed_files():
             return None  # not ours: numba's own locators decide
-        return super().from_function(py_func, py_file)  # None if the folder is not writable
+        # None only where not even a temporary folder can be written (kernels_folder)
+        return super().from_function(py_func, py_file)
 
 
 @functools.cache
@@ -87,16 +114,72 @@ def _claimed_files() -> frozenset[Path]:
 
 
 def install() -> None:
-    """Put the locator first (once per process); numba falls back to its own if it declines."""
+    """Put the locator first, and _SparingIndexFile where numba's Cache takes its index and
+    code files from (once per process); numba falls back to its own if the locator declines."""
     implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # type: ignore[attr-defined]  # numba < 0.62
     locators = implementation._locator_classes
     if SourceTextCacheLocator not in locators:
         locators.insert(0, SourceTextCacheLocator)
+    # numba's Cache makes its file object itself, from this module attribute: no other hook
+    caching.IndexDataCacheFile = _SparingIndexFile  # type: ignore[misc]
 
 
 def kernels_folder() -> Path:
-    """Where the kernels of this version of the package are cached (index .nbi, code .nbc)."""
-    return cache_root() / f"kernels-{package_digest()}"
+    """Where this process keeps the kernels of this version of the package (index .nbi, code
+    .nbc): kernels-<digest> in cache_root(), or where that cannot be written, a folder of that
+    name in a temporary one of the process's own (not_kept says which and why)."""
+    return _kept(cache_root() / f"kernels-{package_digest()}")
+
+
+def not_kept(folder) -> tuple[Path, str] | None:
+    """The cache folder that `folder` (kernels_folder's, or a kernel's) stands in for, and why
+    that cannot be written; None where `folder` is not a stand-in."""
+    return _STAND_INS.get(Path(folder))
+
+
+# stand-in folder -> (the cache folder it stands in for, why that cannot be written)
+_STAND_INS: dict[Path, tuple[Path, str]] = {}
+
+
+@functools.cache
+def _kept(wanted: Path) -> Path:
+    """`wanted`, made if absent, where this process can write there; else a stand-in of that
+    name in a new temporary folder, removed when the process ends, holding a copy of what
+    `wanted` holds (a read-only cache that holds the code still serves); `wanted` itself
+    where not even that can be made (the locator then declines)."""
+    refusal = _refusal(wanted)
+    if refusal is None:
+        return wanted
+    try:
+        stand_in = Path(tempfile.mkdtemp(prefix="herringbone-kernels-")) / wanted.name
+    except OSError:
+        return wanted
+    atexit.register(_remove, stand_in.parent, os.getpid())
+    try:
+        shutil.copytree(wanted, stand_in)
+    except OSError:  # shutil.Error among them: what could not be read is compiled
+        pass
+    stand_in.mkdir(exist_ok=True)
+    _STAND_INS[stand_in] = (wanted, refusal)
+    return stand_in
+
+
+def _refusal(folder: Path) -> str | None:
+    """Why this process cannot write in `folder` (made if absent), as numba would try it
+    (caching._CacheLocator.ensure_cache_path); None where it can."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError as error:
+        return error.strerror or str(error)  # not the name of numba's probe file
+    return None
+
+
+def _remove(folder: Path, owner: int) -> None:
+    """Remove a stand-in's temporary folder, in the process that made it only (a forked child
+    runs its parent's exit handlers too)."""
+    if os.getpid() == owner:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def seed_from(carried: Path) -> list[str]:
@@ -105,8 +188,8 @@ def seed_from(carried: Path) -> list[str]:
     the carried entries it lacks, with their code (_merge_index; an FMU carries its own
     scene's code only, and another FMU may have seeded that kernel with another method's).
     Returns the index files written; nothing if `carried` has none for this version. Raises
-    OSError if the cache folder cannot be written (the caller says so; numba then compiles
-    into its own cache)."""
+    OSError where kernels_folder cannot be written (not even a stand-in could be made: the
+    caller says so; numba then compiles into its own cache)."""
     source, target = Path(carried) / kernels_folder().name, kernels_folder()
     written = []
     for index in sorted(source.glob("*.nbi")) if source.is_dir() else []:
@@ -166,7 +249,13 @@ def carry_loaded(folder: Path) -> list[str]:
 
 def require_on_disk(dispatcher) -> None:
     """Raise RuntimeError, saying what to do, where the cache folder lacks code `dispatcher`
-    (one of this package's kernels) holds in this process: numba could not write it there."""
+    (one of this package's kernels) holds in this process: numba could not write it there,
+    or it went to a temporary folder that stands in for it (kernels_folder), which another
+    process does not see."""
+    stand_in = not_kept(dispatcher._cache._cache_path)
+    if stand_in is not None:
+        raise RuntimeError(f"the compiled integrator cannot be kept in {stand_in[0]} "
+                           f"({stand_in[1]}): set HERRINGBONE_CACHE_DIR to a writable folder")
     missing = [reason for reason in map(functools.partial(why_not_cached, dispatcher),
                                         dispatcher.overloads) if reason]
     if missing:
@@ -174,10 +263,47 @@ def require_on_disk(dispatcher) -> None:
                            f"({missing[0]}): set HERRINGBONE_CACHE_DIR to a writable folder")
 
 
-def _index_file(folder: Path, name: str, kind=caching.IndexDataCacheFile):
+def _index_file(folder: Path, name: str, kind=None):
     """numba's reader and writer of the index `name` (a kernel's .nbi) in `folder`, as this
-    version of the package stamps it (`kind`: numba's, or CarriedIndexFile)."""
-    return kind(str(folder), name[:-len(".nbi")], package_digest())
+    version of the package stamps it (`kind`: _SparingIndexFile, or CarriedIndexFile)."""
+    return (kind or _SparingIndexFile)(str(folder), name[:-len(".nbi")], package_digest())
+
+
+# code files of this package's cache numba could not read and has not written since: path ->
+# why (an index that cannot be read, why_not_cached reads itself)
+_UNREADABLE: dict[str, str] = {}
+
+
+class _SparingIndexFile(caching.IndexDataCacheFile):
+    """numba's index and code files of a kernel, except that one of this package's (stamped
+    with package_digest) that cannot be read reads as absent, as numba reads an index of
+    another numba: numba then compiles the kernel and writes over the file. numba's own
+    catches a missing file only, and a truncated index stopped every later start with an
+    UnpicklingError. A code file it could not read is kept in _UNREADABLE, for
+    why_not_cached."""
+
+    def _load_index(self):
+        try:
+            return super()._load_index()
+        except Exception:
+            if self._source_stamp != package_digest():
+                raise
+            return {}
+
+    def _load_data(self, name):
+        try:
+            return super()._load_data(name)
+        except OSError:
+            raise  # numba's load takes it for a missing file
+        except Exception as error:
+            if self._source_stamp != package_digest():
+                raise
+            _UNREADABLE[self._data_path(name)] = f"{type(error).__name__}: {error}"
+            raise OSError(f"cannot read {self._data_path(name)}") from error
+
+    def _save_data(self, name, data):
+        super()._save_data(name, data)
+        _UNREADABLE.pop(self._data_path(name), None)
 
 
 class CarriedIndexFile(caching.IndexDataCacheFile):
@@ -243,16 +369,17 @@ def why_not_cached(dispatcher, signature) -> str | None:
             stamp, overloads = pickle.loads(index.read()) if version == _numba_version() \
                 else (None, {})
     except FileNotFoundError:
-        return ("there is no compiled code for this version of the integrator in "
-                f"{index_path.parent}")
-    except Exception as error:  # a truncated or foreign file: numba would recompile too
-        return f"the cache index {index_path} cannot be read ({error})"
+        folder = (not_kept(index_path.parent) or (index_path.parent,))[0]
+        return f"there is no compiled code for this version of the integrator in {folder}"
+    except Exception as error:  # truncated or overwritten: read as absent (_SparingIndexFile)
+        return (f"its cache index {index_path} cannot be read ({type(error).__name__}: "
+                f"{error}): it is compiled again, and the index written anew")
     if version != _numba_version():
         return f"the code was compiled by numba {version}, and this is numba {_numba_version()}"
     if stamp != package_digest():
         return "the cached code belongs to another version of the integrator"
     if key in overloads:
-        return None
+        return _why_not_loaded(index_path.parent / overloads[key])
     machine = key[1]
     targets = {k[1] for k in overloads if k[0] == key[0]}
     if targets and machine not in targets:
@@ -261,6 +388,14 @@ def why_not_cached(dispatcher, signature) -> str | None:
         return (f"the code was compiled for a {cpus} CPU with other features" if same_cpu
                 else f"the code was compiled for a {cpus} CPU, and this is a {machine[1]}")
     return "the cached code was compiled for other argument types"
+
+
+def _why_not_loaded(data: Path) -> str | None:
+    """Why numba cannot load the code file `data` an index names; None where it can."""
+    if str(data) in _UNREADABLE:
+        return (f"its compiled code {data} cannot be read ({_UNREADABLE[str(data)]}): it is "
+                "compiled again, and the file written anew")
+    return None if data.is_file() else f"its compiled code {data} is missing"
 
 
 def _numba_version() -> str:

@@ -15,15 +15,17 @@ tests/integrate/test_compiled_memory.py checks that no run leaks or frees what i
 numba's option for this, `_nrt`, is private (its own tests use it); it is set here alone.
 
 Every kernel is cached (`"cache": True`) by cache.py's locator, which must be in place before
-numba sees the first kernel: importing this module puts it there.
+numba sees the first kernel: importing this module puts it there, and announce.py's word on
+every compile.
 """
 from __future__ import annotations
 
 from typing import Any
 
-from . import cache
+from . import announce, cache
 
 cache.install()
+announce.install()
 
 # walk.advance alone: the entry from Python, and what it inlines
 UNCOUNTED: dict[str, Any] = {"cache": True, "error_model": "numpy", "_nrt": False}

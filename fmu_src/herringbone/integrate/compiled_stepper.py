@@ -544,6 +544,12 @@ def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLE
     """Simulate a scene with the compiled integrator, what the FMU runs (reference_simulate's
     twin).
 
+    The first call on a machine for a method (the one `method` names or "auto" picks) compiles
+    the integrator's loop: minutes on two cores, announced on stderr as it starts, every 10 s
+    and at its end (first_start.announce_compiles hands the lines to a function of the
+    caller's instead); later calls, in any process, load it from the cache in about a second
+    (docs/integrator.md, First start).
+
     Parameters
     ----------
     scene : Scene
