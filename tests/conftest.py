@@ -1,4 +1,5 @@
 import os
+import sys
 
 # Small matrices only: BLAS threads fighting over two cores slow them tenfold (measured on
 # tests/analysis/test_stability.py); set before numpy loads BLAS.
@@ -10,6 +11,17 @@ from helpers import MODELS  # noqa: E402
 import herringbone  # noqa: E402
 
 # the fixtures every folder of tests shares; the shared functions live in helpers/
+
+
+@pytest.fixture(autouse=True)
+def _compiles_said_before_the_test():
+    """An announcement of compiles that are done ends a second after the last, from a thread
+    of its own (compiling/announce.py): in a test process it would land in the next test's
+    captured stderr, which may assert a command's one line. Said here, before the test
+    captures anything (on a warm cache there is none)."""
+    announce = sys.modules.get("herringbone.compiling.announce")
+    if announce is not None:
+        announce.finish()
 
 
 @pytest.fixture(scope="session")

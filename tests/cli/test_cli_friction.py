@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import MODELS
+from helpers import MODELS, one_error_line
 
 import herringbone
 from herringbone.cli import main
@@ -25,17 +25,6 @@ def reference_variant(folder, name: str, *replacements: tuple[str, str]):
     path = folder / f"{name}.toml"
     path.write_text(text)
     return path
-
-
-def one_error_line(capsys, command: str) -> str:
-    """The one line on stderr, checked to start with `herringbone COMMAND: `; nothing on
-    stdout."""
-    captured = capsys.readouterr()
-    assert captured.out == ""
-    assert captured.err.count("\n") == 1, captured.err
-    assert captured.err.startswith(f"herringbone {command}: "), captured.err
-    assert "Traceback" not in captured.err
-    return captured.err
 
 
 @pytest.fixture
@@ -261,11 +250,11 @@ def test_the_compiled_run_shows_progress_and_keeps_its_numbers(capsys):
     ready = []
     watched = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4)
     loaded_first = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4,
-                                          on_ready=lambda: ready.append(True))
+                                          on_ready=ready.append)
     for name in plain:
         assert np.array_equal(plain[name], watched[name]), name
         assert np.array_equal(plain[name], loaded_first[name]), name
-    assert ready == [True]
+    assert ready == ["exponential"]  # the method auto takes for the scene
     assert "s simulated" in capsys.readouterr().err
 
 
@@ -675,3 +664,15 @@ def test_stability_takes_set_as_the_other_commands_do(tmp_path, capsys):
     assert undamped.startswith("scene reference with zeta_mesh = 0, h_shaft_in = 0 N.m.s/rad, "
                                "h_shaft_out = 0 N.m.s/rad (--set)\n")
     assert "no unstable band" in damped and "unstable:" in undamped
+
+
+def test_a_compiles_end_is_said_before_the_commands_last_line(monkeypatch, capsys):
+    """A compile announced, done less than a second before the command stopped (the
+    reference's small kernels, then Ctrl-C as the bar starts), had its end said at exit,
+    after 'interrupted': the command says it first, and its own line stays last."""
+    from herringbone.compiling import announce
+
+    monkeypatch.setattr(announce, "finish", lambda: print("compiled", file=sys.stderr))
+    assert main(["run", "no_such_scene"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "compiled" and lines[-1].startswith("herringbone run: ")

@@ -9,23 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import MODELS
+from helpers import MODELS, one_error_line
 
 import herringbone
 from herringbone.cli import main
 
 REFERENCE = str(MODELS / "reference.toml")
-
-
-def one_error_line(capsys, command: str) -> str:
-    """The one line on stderr, checked to start with `herringbone COMMAND: `; nothing on
-    stdout."""
-    captured = capsys.readouterr()
-    assert captured.out == ""
-    assert captured.err.count("\n") == 1, captured.err
-    assert captured.err.startswith(f"herringbone {command}: "), captured.err
-    assert "Traceback" not in captured.err
-    return captured.err
 
 
 def summary_line(printed: str, start: str) -> str:

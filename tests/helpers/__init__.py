@@ -112,3 +112,14 @@ def benchmark_module(name):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def one_error_line(capsys, command: str) -> str:
+    """The one line on stderr, checked to start with `herringbone COMMAND: `; nothing on
+    stdout."""
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.count("\n") == 1, captured.err
+    assert captured.err.startswith(f"herringbone {command}: "), captured.err
+    assert "Traceback" not in captured.err
+    return captured.err

@@ -7,8 +7,6 @@ an array, the bar moved after each compiled call.
 """
 from __future__ import annotations
 
-import sys
-
 from ..arguments import check_compiled_run, check_reference_run
 from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_TOLERANCE
 from ..integrate.reference import checked_reference_run
@@ -53,9 +51,11 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
 
 
 def simulate_with_progress(scene, stop_time=None, output_interval=None, tolerance=None,
-                           reference=False, progress=True, on_ready=None) -> dict:
+                           reference=False, progress=True, on_ready=None,
+                           method="auto") -> dict:
     """herringbone.simulate (or with `reference` reference_simulate) with a progress bar on
-    stderr, and a note there before the integrator is compiled (once per machine).
+    stderr, and the integrator's compile announced there, as every compile is by default
+    (compiling/announce.py): before it starts, every 10 s and at its end.
 
     Parameters
     ----------
@@ -70,10 +70,13 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     progress : bool
         Show the bar.
     on_ready : callable or None
-        Called with no arguments once the integrator is ready to step: for the compiled one,
-        the model's tables built and its compiled loop loaded (compiled the first time), and
-        the bar up (importing tqdm takes milliseconds), so that a caller can tell that start
-        from the stepping.
+        Called once the integrator is ready to step, with the method that steps (the compiled
+        integrator's: "auto" resolved; None for the reference): for the compiled one, the
+        model's tables built and its compiled loop loaded (compiled the first time), and the
+        bar up (importing tqdm takes milliseconds), so that a caller can tell that start from
+        the stepping.
+    method : str
+        The compiled integrator's method (herringbone.simulate's `method`).
 
     Returns
     -------
@@ -89,23 +92,21 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         check_reference_run(scene, stop_time, output_interval, tolerance)
         with progress_bar(stop, f"run {scene.name}", progress) as bar:
             if on_ready is not None:
-                on_ready()
+                on_ready(None)
             return checked_reference_run(scene, stop_time, output_interval, tolerance,
                                          wrap=lambda stepper: _watched(stepper, bar, scene))[0]
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..integrate.contract import start_position
-    from ..integrate.first_start import announce_compiles
 
     tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
-    check_compiled_run(scene, stop_time, output_interval, tolerance)
-    announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
+    check_compiled_run(scene, stop_time, output_interval, tolerance, method)
     model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, tolerance)
+    stepper = CompiledStepper(model, tolerance, method)
     if on_ready is not None:
         warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
-            on_ready()
+            on_ready(stepper.method)
         return simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
                              output_interval)
 

@@ -51,6 +51,7 @@ def execute(module, args, parser: argparse.ArgumentParser) -> int:
     try:
         return module.execute(args, parser)
     except BaseException as error:
+        compiles_said()
         if interrupted(error):
             print(f"{parser.prog}: interrupted; files not finished are left as they were",
                   file=sys.stderr)
@@ -61,6 +62,15 @@ def execute(module, args, parser: argparse.ArgumentParser) -> int:
             raise
         print(f"{parser.prog}: {one_line(error)}", file=sys.stderr)
         return 2
+
+
+def compiles_said() -> None:
+    """The end of a compile's announcement said now, where it is done (compiling/announce.py
+    would say it a second later, or at exit: after the command's last line); none where no
+    kernel was loaded (the module imports numba: not imported for that alone)."""
+    announce = sys.modules.get(f"{__package__.rpartition('.')[0]}.compiling.announce")
+    if announce is not None:
+        announce.finish()
 
 
 # the exit code where the reader of the output left before it was written (`| head`): a shell

@@ -166,33 +166,20 @@ def reference_run(scene, stop_time: float, interval: float, tolerance: float, pr
 
 def compiled_run(scene, stop_time: float, interval: float, tolerance: float, method: str,
                  progress: bool):
-    """The compiled integrator's run by `method`, as run_progress.simulate_with_progress runs
-    it (which takes no method): the arguments checked, a note on stderr before a compile, the
-    compiled loop loaded before the bar starts, the samples written into an array by
-    SampledProgressStepper (herringbone.simulate's numbers to the bit). Returns (results, wall
+    """The compiled integrator's run by `method` with its bar (run_progress): (results, wall
     time s, what ran it in words with the method, the part of the wall time before the first
-    step s)."""
-    from ..analysis.progress_bar import progress_bar
-    from ..analysis.run_progress import SampledProgressStepper
-    from ..arguments import check_compiled_run
-    from ..integrate.compiled_stepper import CompiledStepper, warm_up
-    from ..integrate.contract import simulate_with, start_position
-    from ..integrate.first_start import announce_compiles
-    from ..model.assembly import GearTrainModel
+    step s: the model's tables and the compiled loop loaded)."""
+    from ..analysis.run_progress import simulate_with_progress
 
-    started = time.perf_counter()
-    check_compiled_run(scene, stop_time, interval, tolerance, method)
-    announce_compiles(say)
-    model = GearTrainModel(scene)
-    stepper = CompiledStepper(model, tolerance, method)
-    warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
-    with progress_bar(stop_time, f"run {scene.name}", progress) as bar:
-        start = time.perf_counter() - started
-        results = simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
-                                interval)
-    chosen = ", picked by --method auto" if method == "auto" else ""
+    started, ready = time.perf_counter(), []
+    results = simulate_with_progress(
+        scene, stop_time=stop_time, output_interval=interval, tolerance=tolerance,
+        method=method, progress=progress,
+        on_ready=lambda chosen: ready.append((time.perf_counter() - started, chosen)))
+    start, chosen = ready[0]
+    picked = ", picked by --method auto" if method == "auto" else ""
     return (results, time.perf_counter() - started,
-            f"the compiled integrator ({stepper.method}{chosen})", start)
+            f"the compiled integrator ({chosen}{picked})", start)
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:
