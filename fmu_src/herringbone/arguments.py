@@ -129,8 +129,8 @@ COMPILED_METHOD = Argument("method", None, "the compiled integrator's methods",
                            choices=COMPILED_METHODS)
 # The shortest max_step: under a ten-thousandth of the shortest period a train may have
 # (2π/1e8 rad/s = 63 ns, model/scene.py FASTEST_RING), and above the time's resolution of any
-# run up to 4500 s (2.2e-16·t). max_step = 1e-300 was taken and failed at the first step ("the
-# step size fell below the time's resolution").
+# run up to 4500 s (2.2e-16·t): below it a run fails at its first step ("the step size fell
+# below the time's resolution").
 SHORTEST_MAX_STEP = 1e-12
 MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no limit",
                     Range(SHORTEST_MAX_STEP, None), infinite=True)

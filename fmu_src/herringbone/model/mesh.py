@@ -27,8 +27,8 @@ PHASE_TOLERANCE = 1e-10
 # An edge ramp shorter than this share of the wider face acts as sharp edges (0): a point's
 # weight on the face, (min(z + r, b) - max(z - r, 0))/(2r), carries the rounding of z, about
 # 1e-16·b/r of the point's stiffness (1e-8 at this bound, 0.35 nm on the reference's 35 mm),
-# and all of it once r falls below the rounding of z: edge_ramp = 1e-20 m gave every point
-# weight 0, a run without a mesh force. A ramp that short is sharp for every purpose.
+# and all of it once r falls below the rounding of z (edge_ramp = 1e-20 m would give every point
+# weight 0, a run without a mesh force). A ramp that short is sharp for every purpose.
 SHARP_RAMP = 1e-8
 
 
