@@ -254,17 +254,13 @@ def finer_samples(scene, stop: float, count: int, interval: float,
     `stop` (those from 0 on), from the compiled integrator run again from the start with the
     scene's torques (`tolerance`: its own, relative to the static mesh force; None: its
     default)."""
-    import sys
-
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
     from ..integrate.contract import sampled_run
-    from ..integrate.first_start import announce_compiles
     from ..model.assembly import GearTrainModel
 
     times = stop - interval * np.arange(count)[::-1]
     times = times[times >= 0.0]
     times[-1] = stop
-    announce_compiles(lambda message: print(message, file=sys.stderr, flush=True))
     stepper = CompiledStepper(GearTrainModel(scene),
                               DEFAULT_TOLERANCE if tolerance is None else tolerance)
     result = sampled_run(stepper, scene, stop, times)

@@ -271,14 +271,13 @@ def _contact_lost_to_the_end(scene, times, contacts) -> float | None:
     """The time (s) from which no tooth is in contact at any sample to the end of the run,
     where contact was made before and the span is longer than a period of the slowest
     natural mode; else None."""
-    from ..model.assembly import natural_modes
+    from ..analysis.campbell import elastic_frequencies
 
     held = np.flatnonzero(np.asarray(contacts) > 0)
     if contacts[-1] > 0 or held.size == 0:
         return None
     since = float(times[held[-1] + 1])
-    frequencies = natural_modes(scene)[0]
-    elastic = frequencies[frequencies > 1e-6 * max(frequencies.max(), 1.0)]
+    elastic = elastic_frequencies(scene)
     if elastic.size == 0 or times[-1] - since <= 1.0 / elastic.min():
         return None
     return since

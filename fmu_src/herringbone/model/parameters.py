@@ -233,9 +233,8 @@ def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
     described = allowed_words(allowed, unit, whole, infinite, meaning)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return f"must be a number, got {type(value).__name__} {value!r}; allowed: {described}"
-    try:
-        number = float(value)
-    except OverflowError:  # a Python int past the largest float (10**400)
+    number = as_float(value)
+    if not isinstance(number, float):  # a Python int past the largest float (10**400)
         return f"is {short_repr(value)}, too large for a float; allowed: {described}"
     fits = (infinite and number == math.inf) or allowed.contains(number)
     if not fits or (whole and number != int(number)):
