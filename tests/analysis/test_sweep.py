@@ -7,6 +7,7 @@ import os
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -116,12 +117,6 @@ def test_settle_is_the_decay_of_the_least_damped_mode(reference_scene):
     assert 3.0 < when.settle < 4.0
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.filterwarnings("error::UserWarning")
 def test_a_local_cluster_leaves_port_8787_to_others(reference_scene):
     """A sweep's LocalCluster serves its scheduler's HTTP routes (health, metrics) on a free
@@ -137,24 +132,43 @@ def test_a_local_cluster_leaves_port_8787_to_others(reference_scene):
     assert len(table) == 1
 
 
+def _started_scheduler(scheduler_file, scheduler, log, deadline_s=60.0):
+    """Wait for `dask scheduler` to write its address to `scheduler_file`; fail with the
+    scheduler's own last words if it exits first or takes longer than `deadline_s` seconds."""
+    deadline = time.monotonic() + deadline_s
+    while not scheduler_file.exists():
+        if scheduler.poll() is not None or time.monotonic() > deadline:
+            pytest.fail(f"dask scheduler did not start (exit code {scheduler.poll()}):\n"
+                        f"{log.read_text()[-2000:]}")
+        time.sleep(0.1)
+
+
 @pytest.fixture
 def dask_scheduler_and_worker(tmp_path):
-    """`dask scheduler` and one `dask worker` (two processes) on 127.0.0.1, shut down after."""
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
+    """`dask scheduler` and one `dask worker` (two processes) on 127.0.0.1, shut down after.
+
+    The scheduler binds a port of its own choosing and names it in a scheduler file: a free
+    port found here and let go before the scheduler binds it can be taken by another test's
+    process in between, and a client then waits on a stranger."""
+    scheduler_file = tmp_path / "scheduler.json"
     bin_dir = Path(sys.executable).parent
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    processes = [subprocess.Popen([str(bin_dir / "dask"), "scheduler", "--host", "127.0.0.1",
-                                   "--port", str(port), "--no-dashboard"], env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
-    processes.append(subprocess.Popen([str(bin_dir / "dask"), "worker", address, "--host",
-                                       "127.0.0.1", "--nworkers", "2", "--nthreads", "1",
-                                       "--no-dashboard"], env=env, cwd=tmp_path,
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    commands = {"scheduler": ["scheduler", "--host", "127.0.0.1", "--port", "0"],
+                "worker": ["worker", "--host", "127.0.0.1", "--nworkers", "2", "--nthreads", "1"]}
+    processes = []
     try:
+        for name, arguments in commands.items():
+            with open(tmp_path / f"{name}.log", "w") as log:
+                processes.append(subprocess.Popen(
+                    [str(bin_dir / "dask"), *arguments, "--scheduler-file", str(scheduler_file),
+                     "--no-dashboard"], env=env, cwd=tmp_path, stdout=log,
+                    stderr=subprocess.STDOUT))
+            if name == "scheduler":
+                _started_scheduler(scheduler_file, processes[0], tmp_path / "scheduler.log")
         from dask.distributed import Client
-        with Client(address, timeout="30s") as client:
+        with Client(scheduler_file=str(scheduler_file), timeout="30s") as client:
             client.wait_for_workers(2, timeout=60)
+            address = client.scheduler.address
         yield address
     finally:
         for process in reversed(processes):
