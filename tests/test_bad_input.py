@@ -53,7 +53,8 @@ def allowed_words(argument: arguments.Argument) -> tuple[str, ...]:
     (the one home of the ranges): each choice quoted, or the range in words ("[1e-12, 0.01]")."""
     if argument.choices is not None:
         return tuple(repr(choice) for choice in argument.choices)
-    return (argument.allowed.describe() + (" or inf" if argument.infinite else ""),)
+    return (("0, " if argument.zero else "") + argument.allowed.describe()
+            + (" or inf" if argument.infinite else ""),)
 
 
 # The FMU's own settings: name -> what its message must say is allowed.
@@ -117,8 +118,10 @@ def _solver_cases():
     non_finite = [("nan", NAN), ("plus-inf", INF), ("minus-inf", -INF)]
     values = {"solver_tolerance": [("below-minimum", 1e-13), ("zero", 0.0), ("negative", -1e-7),
                                    ("above-maximum", 0.5)] + non_finite,
-              # inf is allowed: no limit, as 0 (test_fmi_contract runs it)
-              "max_step": [("below-minimum", -1e-3), ("nan", NAN), ("minus-inf", -INF)],
+              # inf is allowed: no limit, as 0 (test_fmi_contract runs it); between 0 and the
+              # API's shortest max_step a run would fail at its first step
+              "max_step": [("below-minimum", -1e-3), ("nan", NAN), ("minus-inf", -INF),
+                           ("tiny", 1e-300)],
               "solver_method": [("unknown", "rk4"), ("empty", ""), ("capitals", "DOP853")]}
     return [Case(f"{name}-{label}", "solver", name, value, (name, *allowed), ("fmu",))
             for name, allowed in SOLVER_SETTINGS.items() for label, value in values[name]]

@@ -65,7 +65,8 @@ REFERENCE_DEFAULT_TOLERANCE = 1e-10
 class Argument:
     """One argument: `name` in the API, `option` on the command line, the values allowed
     (`allowed`, or `choices` for names), `meaning` shown after what is allowed. `infinite`:
-    +inf is allowed too (it means "no limit")."""
+    +inf is allowed too (it means "no limit"); `zero`: 0 is allowed too (the same, where a
+    start value cannot be inf)."""
 
     name: str
     option: str | None
@@ -74,13 +75,14 @@ class Argument:
     choices: tuple[str, ...] | None = None
     infinite: bool = False
     whole: bool = False
+    zero: bool = False
 
     def describe(self) -> str:
         """What is allowed, in words: "> 0 and finite (simulated seconds)"."""
         if self.choices is not None:
             return f"{', '.join(repr(choice) for choice in self.choices)} ({self.meaning})"
         return allowed_words(self.allowed, whole=self.whole, infinite=self.infinite,
-                             meaning=self.meaning)
+                             meaning=self.meaning, zero=self.zero)
 
     def problem(self, value) -> str | None:
         """Why `value` is not allowed ("is -1.0; allowed: …"), or None if it is."""
@@ -89,7 +91,8 @@ class Argument:
                 else f"is {value!r}; allowed: {self.describe()}{did_you_mean(value, self.choices)}"
         return number_problem(as_float(value) if isinstance(value, numbers.Real)
                               and not isinstance(value, bool) else value, self.allowed,
-                              whole=self.whole, infinite=self.infinite, meaning=self.meaning)
+                              whole=self.whole, infinite=self.infinite, meaning=self.meaning,
+                              zero=self.zero)
 
     def check(self, value):
         """`value` itself if it is allowed; else ValueError("<name> is …; allowed: …")."""
@@ -136,11 +139,11 @@ MAX_STEP = Argument("max_step", None, "largest internal step, seconds; inf: no l
                     Range(SHORTEST_MAX_STEP, None), infinite=True)
 # The FMU's solver settings, for fmu/core.py: the same ranges under the FMU's variable names.
 # max_step's start value says "no limit" with 0 there (a start value in the model description
-# cannot be inf); inf, the API's "no limit", is taken too.
+# cannot be inf); inf, the API's "no limit", is taken too; between them the API's range.
 FMU_SOLVER_TOLERANCE = Argument("solver_tolerance", None, "error per step relative to the "
                                 "static mesh force", COMPILED_TOLERANCE)
 FMU_MAX_STEP = Argument("max_step", None, "largest internal step, seconds; 0 or inf: no "
-                        "limit", Range(0.0, None), infinite=True)
+                        "limit", MAX_STEP.allowed, infinite=True, zero=True)
 FMU_SOLVER_METHOD = Argument("solver_method", None, "the compiled integrator's methods",
                              choices=COMPILED_METHODS)
 INITIAL_PINION_ANGLE = Argument("initial_pinion_angle", None, "pinion angle at t = 0, rad")

@@ -197,7 +197,8 @@ BAD_VALUES = [
     ({"z_pinion": 0}, "z_pinion", "a whole number [1, 1000]"),
     ({"zeta_mesh": float("nan")}, "zeta_mesh", "[0, 10]"),
     ({"solver_tolerance": 0.5}, "solver_tolerance", "[1e-12, 0.01]"),
-    ({"max_step": -1.0}, "max_step", ">= 0"),
+    ({"max_step": -1.0}, "max_step", "0, >= 1e-12 or inf"),
+    ({"max_step": 1e-300}, "max_step", "0, >= 1e-12 or inf"),
     ({"M_motor": float("inf")}, "M_motor", "finite"),
 ]
 

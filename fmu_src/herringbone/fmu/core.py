@@ -64,6 +64,7 @@ from herringbone.model.assembly import GearTrainModel, output_names  # noqa: E40
 from herringbone.model.geometry import solid_cylinder_transverse_inertia  # noqa: E402
 from herringbone.model.parameters import (  # noqa: E402
     INPUTS,
+    NON_NEGATIVE,
     OUTPUTS,
     PARAMETERS,
     Parameter,
@@ -111,8 +112,8 @@ SOLVER_SETTINGS = {
         "FMU does not receive the experiment's tolerance)",
         allowed=FMU_SOLVER_TOLERANCE.allowed),
     "max_step": Parameter(
-        "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy)",
-        allowed=FMU_MAX_STEP.allowed),
+        "max_step", 0.0, "s", "largest internal step (0: no limit beyond accuracy; else at "
+        f"least {FMU_MAX_STEP.allowed.low:g} s)", allowed=NON_NEGATIVE),
     "solver_method": Parameter(
         "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
         "'radau' (implicit, L-stable, order 5, for stiff scenes), 'exponential' (time-invariant "

@@ -204,12 +204,12 @@ def with_unit(text: str, unit: str) -> str:
 
 
 def allowed_words(allowed: Range, unit: str = "", whole: bool = False, infinite: bool = False,
-                  meaning: str = "") -> str:
+                  meaning: str = "", zero: bool = False) -> str:
     """What `allowed` admits, as messages say it, with the unit: "> 0 N/m and finite",
     "[0.01, 1.4] rad, an angle in radians", "any finite number, in N.m". A range open at an
     end says "and finite" (Range.contains refuses inf, which "> 0" alone would seem to admit),
     unless `infinite` (+inf allowed too: "or inf") or `whole` (a whole number is finite);
-    `meaning` closes it in parentheses."""
+    `zero`: 0 allowed too ("0, >= 1e-12 or inf"); `meaning` closes it in parentheses."""
     bounded = allowed.low is not None or allowed.high is not None
     described = with_unit(allowed.describe(), unit) if bounded or unit in ("", "1") \
         else f"{allowed.describe()}, in {unit}"
@@ -218,25 +218,27 @@ def allowed_words(allowed: Range, unit: str = "", whole: bool = False, infinite:
     elif bounded and (allowed.low is None or allowed.high is None) and not whole:
         described += " and finite"
     described = f"a whole number {described}" if whole else described
+    described = f"0, {described}" if zero else described
     described += ", an angle in radians" if unit == "rad" else ""
     return described + (f" ({meaning})" if meaning else "")
 
 
 def number_problem(value, allowed: Range, unit: str = "", whole: bool = False,
-                   infinite: bool = False, meaning: str = "") -> str | None:
+                   infinite: bool = False, meaning: str = "", zero: bool = False) -> str | None:
     """Why `value` is not an allowed number, or None: the one check of a number against its
     range, for the parameters and inputs of a scene (check_value) and the run arguments
     (herringbone.arguments.Argument). The message gives the value and what is allowed with
     the unit ("is 22.86 rad; allowed: [0.01, 1.4] rad, an angle in radians"; allowed_words);
-    `whole`: a whole number; `infinite`: +inf allowed too ("no limit"); `meaning` closes it in
-    parentheses."""
-    described = allowed_words(allowed, unit, whole, infinite, meaning)
+    `whole`: a whole number; `infinite`: +inf allowed too ("no limit"); `zero`: 0 allowed
+    too (a "no limit" a start value can say); `meaning` closes it in parentheses."""
+    described = allowed_words(allowed, unit, whole, infinite, meaning, zero)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return f"must be a number, got {type(value).__name__} {value!r}; allowed: {described}"
     number = as_float(value)
     if not isinstance(number, float):  # a Python int past the largest float (10**400)
         return f"is {short_repr(value)}, too large for a float; allowed: {described}"
-    fits = (infinite and number == math.inf) or allowed.contains(number)
+    fits = (infinite and number == math.inf) or (zero and number == 0.0) \
+        or allowed.contains(number)
     if not fits or (whole and number != int(number)):
         shown = with_unit(short_repr(value), unit) if math.isfinite(number) else repr(value)
         return f"is {shown}; allowed: {described}"
