@@ -507,17 +507,12 @@ def _angular_momentum(run, parameters, ratio):
             / ratio)
 
 
-@pytest.mark.parametrize("method", [
-    "dop853", "exponential",
-    pytest.param("radau", marks=pytest.mark.xfail(strict=True, reason=(
-        "Radau IIA's simplified Newton iteration stops at sqrt(tolerance) in the error's "
-        "scales, so its stages are not the collocation solution that keeps a linear "
-        "invariant: the momentum drifts 2.7e-8 of itself in 0.5 s at 1e-7 "
-        "(docs/integrator.md, Methods)")))])
+@pytest.mark.parametrize("method", ["dop853", "exponential", "radau"])
 def test_balanced_torques_keep_the_angular_momentum(reference_scene, method):
     """With M_load = u·M_motor nothing outside the train changes its angular momentum
     referred to the pinion: every method must keep it over 0.5 s at the default tolerance
-    (DOP853 to 1e-12 of itself, the exact segments to rounding)."""
+    (DOP853 and Radau IIA, its Newton iteration taken to rounding, to 1e-12 of itself, the
+    exact segments to rounding)."""
     geometry = GearTrainModel(reference_scene).geometry
     result = herringbone.simulate(reference_scene, stop_time=0.5, output_interval=1e-3,
                                   method=method)

@@ -12,7 +12,8 @@ Jacobian and `factors` the LU factors of (MU_REAL/h·I − J) and (MU_COMPLEX/h�
 and return (error norm, Newton iterations); the error norm is inf if Newton did not converge
 (then retry with a fresh Jacobian or a smaller h). Within a segment the equations are linear in
 every entry but the pinion angle, which only moves the contact points slowly, so Newton
-converges in one or two iterations on a Jacobian taken at the segment's start.
+converges in a few iterations on a Jacobian taken at the segment's start; it is taken to
+rounding, which keeps the train's angular momentum (docs/integrator.md, Methods).
 """
 from __future__ import annotations
 
@@ -130,8 +131,10 @@ def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance
     3 × size work array. Returns (error norm, Newton iterations); the norm is inf where
     Newton did not converge."""
     size = state.shape[0]
-    newton_tolerance = max(10 * 2.220446049250313e-16 / relative_tolerance,
-                           min(0.03, math.sqrt(relative_tolerance)))
+    # Newton goes on to rounding (scipy's floor in the error's scales), not to scipy's
+    # √tolerance: only the collocation solution itself keeps a linear invariant, and stages
+    # short of it let the angular momentum drift and the contact switches move over a run.
+    newton_tolerance = 10 * 2.220446049250313e-16 / relative_tolerance
     scale = absolute_tolerance + np.abs(state) * relative_tolerance
     increments = np.zeros((3, size))  # Z: the stages' states minus `state`
     transformed = np.zeros((3, size))  # W = TI·Z
