@@ -189,9 +189,10 @@ NAMES = ["phi_motor", "phi_pinion", "psi_pinion", "x_pinion", "phi_wheel", "psi_
 
 
 def use_stand_in_modes(monkeypatch):
-    """Four modes: rigid, torsional, tilt, lateral — unit masses, so shares are v_i²."""
+    """Four modes: rigid (the reference's ratio 3.6), torsional, tilt, lateral — unit masses,
+    so shares are v_i²."""
     shapes = np.zeros((8, 4))
-    shapes[[0, 1, 4, 7], 0] = 1.0
+    shapes[[0, 1, 4, 7], 0] = [1.0, 1.0, 1 / 3.6, 1 / 3.6]
     shapes[:, 1] = [0.9, 0.4, 0.1, 0, 0, 0, 0, 0.1]
     shapes[:, 2] = [0, 0.1, 0.9, 0.2, 0, 0.3, 0, 0]
     shapes[:, 3] = [0, 0, 0, 0.1, 0, 0.1, 1.0, 0]
@@ -226,6 +227,31 @@ def test_scene_report_on_the_real_model():
     assert "rigid rotation" in text and "250.00 Hz" in text
     assert [line.split("Hz")[1].split()[0] for line in mode_lines(text)] == [
         "rigid", "torsional", "torsional", "lateral", "tilt", "lateral", "torsional", "tilt"]
+
+
+def test_a_slow_elastic_mode_is_not_taken_for_the_rigid_rotation():
+    """A soft motor shaft (1e-4 N·m/rad against a motor of 1e3 kg·m²) rings at 8 mHz, under
+    1e-6 of the fastest mode, where rounding of the rigid rotation's zero could lie: the
+    rigid rotation is told by its shape, so the report names one, and the slow mode is the
+    motor against the rest of the train at sqrt(C·(1/I_motor + 1/J))/(2π), J the rest's
+    inertia referred to the pinion."""
+    from herringbone.analysis.campbell import elastic_frequencies
+    from herringbone.model.assembly import GearTrainModel
+
+    scene = REFERENCE.with_parameters(C_shaft_in=1e-4, I_motor=1e3)
+    model = GearTrainModel(scene)
+    inertia = dict(zip(model.coordinates, model.mass))
+    rest = inertia["phi_pinion"] + (inertia["phi_wheel"] + inertia["phi_load"]) \
+        / model.geometry.ratio ** 2
+    expected = math.sqrt(1e-4 * (1 / 1e3 + 1 / rest)) / (2 * math.pi)
+    assert expected < 1e-6 * 13354.5
+    text = scene_report(scene)
+    modes = [line.split("Hz") for line in text.splitlines() if " Hz  " in line]
+    assert [character.split()[0] for _, character in modes[:3]] == \
+        ["rigid", "torsional", "torsional"] and text.count("rigid rotation") == 1
+    assert float(modes[1][0].split()[1]) == pytest.approx(expected, rel=1e-3)
+    frequencies = elastic_frequencies(scene)
+    assert len(frequencies) == 7 and frequencies[0] == pytest.approx(expected, rel=1e-3)
 
 
 def test_scene_report_says_what_its_contact_count_assumes(monkeypatch):

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arguments import speed_sweep_problem
-from ..model.assembly import GearTrainModel, natural_modes
+from ..model.assembly import GearTrainModel, natural_modes, rigid_rotation_mode
 from ..model.parameters import RPM_PER_RAD_S
 from .plots import _pyplot, _save, spread_apart
 from .report import HARMONICS, mode_character, resonance_speeds
@@ -61,11 +61,12 @@ def elastic_modes(scene) -> list[Mode]:
     largest share of the kinetic energy m_i·v_i² of its mass-normalized eigenvector, and that
     share: one name for a mode in both), with the bodies holding SHARE_NAMED of it or more."""
     frequencies, shapes, coordinates = natural_modes(scene)
-    mass = GearTrainModel(scene).mass
-    rigid_below = 1e-6 * max(frequencies.max(), 1.0)
+    model = GearTrainModel(scene)
+    mass = model.mass
+    rigid = rigid_rotation_mode(shapes, mass, model.rigid_rotation)
     modes = []
-    for frequency, shape in zip(frequencies, shapes.T):
-        if frequency <= rigid_below:
+    for index, (frequency, shape) in enumerate(zip(frequencies, shapes.T)):
+        if index == rigid:
             continue
         energy = mass * shape**2 / float(np.sum(mass * shape**2))
         bodies: dict[str, float] = {}
@@ -73,7 +74,7 @@ def elastic_modes(scene) -> list[Mode]:
             body = name.split("_", 1)[1]
             bodies[body] = bodies.get(body, 0.0) + share
         modes.append(Mode(float(frequency),
-                          mode_character(frequency, shape, mass, coordinates, rigid_below),
+                          mode_character(shape, mass, coordinates),
                           tuple(_named(bodies))))
     return modes
 
@@ -98,8 +99,9 @@ def elastic_frequencies(scene) -> np.ndarray:
     >>> elastic_frequencies(herringbone.load_scene("reference")).round(1).tolist()  # Hz
     [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
     """
-    frequencies = natural_modes(scene)[0]
-    return frequencies[frequencies > 1e-6 * max(frequencies.max(), 1.0)]
+    frequencies, shapes, _ = natural_modes(scene)
+    model = GearTrainModel(scene)
+    return np.delete(frequencies, rigid_rotation_mode(shapes, model.mass, model.rigid_rotation))
 
 
 def crossings(scene, low: float, high: float) -> list[Crossing]:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..model.assembly import mass_matrix, natural_modes
+from ..model.assembly import GearTrainModel, mass_matrix, natural_modes, rigid_rotation_mode
 from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
 from ..model.parameters import RPM_PER_RAD_S
@@ -23,11 +23,9 @@ COORDINATE_KINDS = {"phi": "torsional", "psi": "tilt", "x": "lateral"}
 STREAM_NAMES = ("left pre-pole", "left post-pole", "right pre-pole", "right post-pole")
 
 
-def mode_character(frequency_hz, mode_shape, masses, coordinate_names, rigid_below_hz) -> str:
-    """'rigid rotation' below `rigid_below_hz`, else the kind of coordinate (torsional phi_*,
-    tilt psi_*, lateral x_*) holding the largest share of the mode's kinetic energy m_i·v_i²."""
-    if frequency_hz < rigid_below_hz:
-        return "rigid rotation"
+def mode_character(mode_shape, masses, coordinate_names) -> str:
+    """The kind of coordinate (torsional phi_*, tilt psi_*, lateral x_*) holding the largest
+    share of an elastic mode's kinetic energy m_i·v_i², and that share."""
     energy = np.asarray(masses) * np.asarray(mode_shape) ** 2
     shares: dict[str, float] = {}
     for name, e in zip(coordinate_names, energy):
@@ -35,6 +33,13 @@ def mode_character(frequency_hz, mode_shape, masses, coordinate_names, rigid_bel
         shares[kind] = shares.get(kind, 0.0) + float(e / energy.sum())
     kind = max(shares, key=lambda k: shares[k])
     return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
+
+
+def _mode_line(number, frequency_hz, character) -> str:
+    """A line of the natural frequencies: a mode below 0.01 Hz by its significant digits."""
+    shown = f"{frequency_hz:12.2f}" if frequency_hz == 0.0 or frequency_hz >= 0.01 \
+        else f"{frequency_hz:12.3g}"
+    return f"  {number:2d} {shown} Hz  {character}"
 
 
 def resonance_speeds(frequency_hz: float, z_pinion: int) -> dict[int, float]:
@@ -80,17 +85,16 @@ def scene_report(scene) -> str:
               *unbalance_lines(scene), ""]
     frequencies, shapes, names = natural_modes(scene, pinion_angle=None)
     masses = np.diag(mass_matrix(scene))
-    # a numerically zero eigenvalue gives a frequency ~1e-8 of the largest one
-    rigid_below = 1e-6 * max(frequencies.max(), 1.0)
+    rigid = rigid_rotation_mode(shapes, masses, GearTrainModel(scene).rigid_rotation)
     lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m"]
     # the rigid rotation's frequency is rounding of a zero (0.01 Hz beside modes in the MHz)
-    lines += [f"  {i + 1:2d} {f if f >= rigid_below else 0.0:12.2f} Hz  "
-              f"{mode_character(f, shapes[:, i], masses, names, rigid_below)}"
+    lines += [_mode_line(i + 1, 0.0, "rigid rotation") if i == rigid else
+              _mode_line(i + 1, f, mode_character(shapes[:, i], masses, names))
               for i, f in enumerate(frequencies)]
     lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s); "
                   f"speeds above {MAX_RPM:.0f} rpm are not listed",
               "  f_n / Hz    " + "".join(f"{f'k = {k}':<22}" for k in HARMONICS)]
-    for f in frequencies[frequencies >= rigid_below]:
+    for f in np.delete(frequencies, rigid):
         speeds = resonance_speeds(f, g.z_pinion)
         cells = [f"{w * RPM_PER_RAD_S:.0f} ({w:.1f})" if w * RPM_PER_RAD_S <= MAX_RPM else "-"
                  for w in speeds.values()]
