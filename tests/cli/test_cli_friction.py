@@ -634,6 +634,13 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, bui
                                "parameter; allowed: a scene file's [components] sets it")):
         assert main(["info", REFERENCE, "--set", setting]) == 2
         assert expected in one_error_line(capsys, "info")
+    assert main(["build-fmu", REFERENCE, "--set", "max_step=1e-6"]) == 2
+    assert ("--set max_step=1e-6: max_step is a solver setting of the FMU, not a parameter; "
+            "allowed: a host sets it on the FMU") in one_error_line(capsys, "build-fmu")
+    assert main(["run", REFERENCE, "--set", "solver_method=radau"]) == 2
+    assert ("--set solver_method=radau: solver_method is a solver setting of the FMU, not a "
+            "parameter; allowed: a host sets it on the FMU (`herringbone run` takes --tolerance "
+            "and --method)") in one_error_line(capsys, "run")
     assert main(["run", REFERENCE, "--set", "stop_time=0.01"]) == 2
     assert ("--set stop_time: stop_time is of the scene's [experiment], not a parameter; "
             "allowed: --stop-time") in one_error_line(capsys, "run")

@@ -14,6 +14,9 @@ from pathlib import Path
 from typing import cast
 
 from ..arguments import (
+    FMU_MAX_STEP,
+    FMU_SOLVER_METHOD,
+    FMU_SOLVER_TOLERANCE,
     OneLineParser,
     SpeedSweep,
     name_problem,
@@ -159,12 +162,17 @@ def add_settings(parser: argparse.ArgumentParser) -> None:
 
 def _setting(text: str) -> tuple[str, object]:
     """NAME=VALUE as (name, value), the value read as a TOML value (tomllib: 450, 4.5e2,
-    true); argparse's one-line error where it is not one."""
+    true); argparse's one-line error where it is not one, or where NAME is one of the FMU's
+    solver settings (its value may be a word: solver_method=radau)."""
     import tomllib
 
     name, equals, value = text.partition("=")
     if not equals or not name.strip() or not value.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: allowed: NAME=VALUE, e.g. w0_pinion=450")
+    if name.strip() in (FMU_SOLVER_TOLERANCE.name, FMU_MAX_STEP.name, FMU_SOLVER_METHOD.name):
+        raise argparse.ArgumentTypeError(
+            f"{text}: {name.strip()} is a solver setting of the FMU, not a parameter; allowed: "
+            "a host sets it on the FMU (`herringbone run` takes --tolerance and --method)")
     try:
         return name.strip(), tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:
@@ -221,6 +229,7 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
     if name in COMPONENTS:
         return (f"{given}: {name} is a component, not a parameter; allowed: a scene file's "
                 "[components] sets it")
+
     if name in INPUTS and len(scene.inputs.times) > 1:
         return (f"{given}: the scene's torques are a table of {len(scene.inputs.times)} rows; "
                 "allowed: --set of a torque on a scene with constant torques")
