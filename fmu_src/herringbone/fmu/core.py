@@ -51,7 +51,6 @@ from herringbone.integrate.compiled_stepper import (  # noqa: E402
     DEFAULT_TOLERANCE,
     STEP_BUDGET_FLOOR,
     STEP_BUDGET_PER_MAX_STEP,
-    STEP_BUDGET_PER_MODE,
     STIFFNESS_RATIO,
     CompiledStepper,
     StepBudgetExceeded,
@@ -381,7 +380,8 @@ class GearCore:
 
     def _advance(self, current_time, step_size):
         torques = (self.values["M_motor"], self.values["M_load"])
-        budget = step_budget(step_size, self.stepper.fastest_rate, self.built_from["max_step"])
+        budget = step_budget(step_size, self.stepper.fastest_rate, self.built_from["max_step"],
+                             self.stepper.budget_per_mode)
         try:
             self.stepper.run_to(self.run, current_time + step_size, torques, max_steps=budget)
         except StepBudgetExceeded:
@@ -397,7 +397,8 @@ class GearCore:
                   if 0.0 < max_step < math.inf else "")
         return (f"doStep from t = {current_time:g} s by {step_size:g} s failed: it took over "
                 f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
-                f"{STEP_BUDGET_PER_MODE}·h·|λ|max, |λ|max = {self.stepper.fastest_rate:.3g} "
+                f"{self.stepper.budget_per_mode}·h·|λ|max, |λ|max = "
+                f"{self.stepper.fastest_rate:.3g} "
                 f"1/s{forced}) and stopped at t = {self.run.time:.9g} s with the pinion at "
                 f"{speed:.3g} rad/s: the train runs away. Check the torques M_motor = "
                 f"{self.values['M_motor']:g} N.m and M_load = {self.values['M_load']:g} N.m "
