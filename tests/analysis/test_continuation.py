@@ -214,6 +214,32 @@ def test_a_branch_lost_is_begun_again_at_the_next_value_and_flagged_restart(monk
     assert [point.method for point in branch.points] == ["shooting"] * len(branch.points)
 
 
+def test_a_branch_that_turns_back_out_of_the_range_leaves_no_speed_behind(jump_scene):
+    """From 2420 rad/s the jump scene's lower branch folds at 2427.9 rad/s and its unstable
+    middle runs back below 2420, out of the range: the speeds past the fold are begun again,
+    the first flagged "restart", on the upper branch that a time run from the static start
+    lands on (K_v within 1e-5 at 2500 rad/s), and the summary says where the branch was
+    lost. Every requested speed has its orbit; the sweep had stopped at the fold, its K_v
+    at most 2.08 where the upper branch reaches 3.19."""
+    from herringbone.analysis.sweep_report import describe
+
+    speeds = np.linspace(2420.0, 2520.0, 6)
+    table = sweep(jump_scene, speeds=speeds, workers=0, progress=False)
+    requested = table[table["on_grid"]]
+    assert set(speeds) <= set(requested["w0_pinion"][requested["stability"] == "stable"])
+    restart = table[table["event"] == "restart"]
+    assert restart["w0_pinion"].tolist() == [2440.0]
+    at_2500 = requested[(requested["w0_pinion"] == 2500.0) & (requested["stability"] == "stable")]
+    timed = settled_figures(jump_scene.with_parameters(w0_pinion=2500.0),
+                            Protocol(settle_time=0.1, tolerance=1e-10, window_periods=2,
+                                     floquet=False))
+    assert at_2500["K_v"].iloc[0] == pytest.approx(timed["K_v"], rel=1e-5)
+    assert table["K_v"][table["stability"] == "stable"].max() > 3.1
+    summary = describe(jump_scene, table, 0.0).splitlines()
+    assert any(line.startswith("the branch was lost past 2427.9 rad/s: no orbit followed on "
+                               "to 2440 rad/s") for line in summary)
+
+
 def test_a_sharp_fall_of_K_v_gets_points_and_its_jump_is_pinned(reference_scene):
     """`herringbone sweep reference --param beta 0.35 0.6 6 --speed 450`: the branch went
     from 0.3531 (K_v 2.17) to 0.3765 (1.65) in one step, Newton converging easily, over K_v's

@@ -679,10 +679,11 @@ def branch_status(run: Continuation) -> str:
 def follow(run: Continuation, progress: bool = False, doubling: bool = True) -> Branch:
     """The branch from the first requested value at which an orbit converges (Continuation.
     begin_at; the ones before it run by time integration) up past the last, through folds;
-    where the continuation cannot go on, the next requested values are run by time
-    integration until shooting starts again at one of them (from the last orbit, or the time
-    run's state). doubling: switch to the period-2 branch at each period doubling it flags
-    and follow that too (follow_doublings)."""
+    where the continuation cannot go on, or turns back at a fold and leaves the range below,
+    the requested values past its furthest point are run by time integration until shooting
+    starts again at one of them (from the last orbit, or the time run's state). doubling:
+    switch to the period-2 branch at each period doubling it flags and follow that too
+    (follow_doublings)."""
     grid, slack = run.grid, 1e-9 * run.unit
     most = max(MOST_POINTS, MOST_POINTS_PER_SPEED * len(grid))
     with progress_bar(len(grid), f"continuation in {run.axis.name}", progress,
@@ -701,9 +702,10 @@ def follow(run: Continuation, progress: bool = False, doubling: bool = True) -> 
             moved()
             if run.tangent[-1] > 0 and run.points[-1].value >= grid[-1] - slack:
                 break
-            if run.tangent[-1] < 0 and run.target() is None:
-                break  # the branch left the range below its first value
-            if run.advance():
+            # turned back at a fold and out of the range below its first value, the branch
+            # leaves the values past its furthest point to a new start, as a lost one does
+            left_below = run.tangent[-1] < 0 and run.target() is None
+            if not left_below and run.advance():
                 continue
             ahead = grid[grid > max(p.value for p in run.points) + slack]
             z = run.split(run.v)[0]

@@ -173,15 +173,16 @@ def _branch_lines(table) -> list[str]:
 
 
 def _lost_lines(table, name: str) -> list[str]:
-    """Where the branch (rows in its order) was lost: from its last orbit before each
-    "restart" row to that row, where shooting began again; nothing was computed between."""
+    """Where the branch (rows in its order) was lost: from the furthest of its orbits before
+    each "restart" row (where it could not go on, or turned back at a fold) to that row,
+    where shooting began again; nothing was computed between."""
     lines = []
     stability, values = table["stability"].to_numpy(), table[name].to_numpy()
     for row in np.flatnonzero(table["event"].str.contains("restart").to_numpy()):
         orbits = np.flatnonzero(np.isin(stability[:row], ("stable", "unstable")))
         if len(orbits):
-            lost, found = (with_unit(f"{values[k]:.6g}", unit_of(name))
-                           for k in (orbits[-1], row))
+            lost, found = (with_unit(f"{value:.6g}", unit_of(name))
+                           for value in (values[orbits].max(), values[row]))
             lines.append(f"the branch was lost past {lost}: no orbit followed on to {found}, "
                          "where shooting began again (nothing computed between them)")
     return lines
