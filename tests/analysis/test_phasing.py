@@ -254,6 +254,32 @@ def test_a_slow_elastic_mode_is_not_taken_for_the_rigid_rotation():
     assert len(frequencies) == 7 and frequencies[0] == pytest.approx(expected, rel=1e-3)
 
 
+def test_a_mode_too_slow_for_double_precision_says_so():
+    """An eigenvalue ω² is resolved to about machine epsilon times the fastest's: a motor of
+    1e8 kg·m² on a shaft of 1e-6 N·m/rad (0.78 mHz beside 13 kHz) is listed with the share
+    rounding may move it by, and lies within it of the two-inertia frequency; a load of 1e8
+    kg·m² on such a shaft (0.19 mHz) is rounding, and the line says so; at 8 mHz no caveat."""
+    from herringbone.model.assembly import GearTrainModel
+
+    def slow_mode(**values):
+        scene = REFERENCE.with_parameters(**values)
+        return next(line for line in scene_report(scene).splitlines()
+                    if line.startswith("   2 ")), GearTrainModel(scene)
+
+    line, model = slow_mode(C_shaft_in=1e-6, I_motor=1e8)
+    inertia = dict(zip(model.coordinates, model.mass))
+    rest = inertia["phi_pinion"] + (inertia["phi_wheel"] + inertia["phi_load"]) \
+        / model.geometry.ratio ** 2
+    expected = math.sqrt(1e-6 * (1 / 1e8 + 1 / rest)) / (2 * math.pi)
+    share = float(line.split("±")[1].split(" %")[0]) / 100
+    assert line.endswith("% by rounding beside 13354 Hz") and 0.01 < share < 0.1
+    assert abs(float(line.split()[1]) / expected - 1) <= share
+    line, _ = slow_mode(C_shaft_out=1e-6, I_load=1e8)
+    assert line.endswith("rounding beside 13354 Hz, not a frequency: too slow to resolve")
+    line, _ = slow_mode(C_shaft_in=1e-4, I_motor=1e3)
+    assert line.endswith("(100 % of kinetic energy)")
+
+
 def test_scene_report_says_what_its_contact_count_assumes(monkeypatch):
     """The contact-point law is that of every point loaded and sharp edges; the report says
     so, and says where a scene's ramp or contact loss makes a run count otherwise."""

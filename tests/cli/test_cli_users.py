@@ -59,7 +59,8 @@ def test_run_says_when_its_samples_miss_the_fastest_mode(tmp_path, capsys):
     printed = capsys.readouterr().out
     note = summary_line(printed, "The samples, every 100 µs")
     assert printed.index("n_contacts") < printed.index(note)  # after the table
-    assert f"fastest natural mode ({fastest:.0f} Hz) {1e4 / fastest:.2g} a period" in note
+    assert (f"fastest mode, ringing at {fastest:.0f} Hz with its damping (`herringbone info` "
+            f"lists it undamped), {1e4 / fastest:.2g} a period") in note
     assert "the min and max of samples can miss its swings" in note
     assert f"--output-interval {int(1e7 / (8 * fastest)) / 10:g}e-06 or shorter" in note
     assert "`herringbone sweep reference --speeds FROM TO COUNT`" in note

@@ -35,11 +35,23 @@ def mode_character(mode_shape, masses, coordinate_names) -> str:
     return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
 
 
-def _mode_line(number, frequency_hz, character) -> str:
-    """A line of the natural frequencies: a mode below 0.01 Hz by its significant digits."""
+def _mode_line(number, frequency_hz, character, fastest_hz=0.0) -> str:
+    """A line of the natural frequencies: a mode below 0.01 Hz by its significant digits,
+    and where rounding blurs it beside the fastest mode (`fastest_hz`) by more than 0.1 %,
+    by how much."""
     shown = f"{frequency_hz:12.2f}" if frequency_hz == 0.0 or frequency_hz >= 0.01 \
         else f"{frequency_hz:12.3g}"
-    return f"  {number:2d} {shown} Hz  {character}"
+    blur = rounding_share(frequency_hz, fastest_hz) if frequency_hz > 0.0 else 0.0
+    caveat = "" if blur <= 1e-3 else \
+        f"; ±{100 * blur:.2g} % by rounding beside {fastest_hz:.0f} Hz" if blur < 1.0 else \
+        f"; rounding beside {fastest_hz:.0f} Hz, not a frequency: too slow to resolve"
+    return f"  {number:2d} {shown} Hz  {character}{caveat}"
+
+
+def rounding_share(frequency_hz, fastest_hz) -> float:
+    """How far rounding may move a natural frequency, as a share of it: an eigenvalue ω² is
+    resolved to about machine epsilon times the largest, so f to half that over f²."""
+    return 0.5 * float(np.finfo(float).eps) * (fastest_hz / frequency_hz) ** 2
 
 
 def resonance_speeds(frequency_hz: float, z_pinion: int) -> dict[int, float]:
@@ -89,7 +101,8 @@ def scene_report(scene) -> str:
     lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m"]
     # the rigid rotation's frequency is rounding of a zero (0.01 Hz beside modes in the MHz)
     lines += [_mode_line(i + 1, 0.0, "rigid rotation") if i == rigid else
-              _mode_line(i + 1, f, mode_character(shapes[:, i], masses, names))
+              _mode_line(i + 1, f, mode_character(shapes[:, i], masses, names),
+                         frequencies.max())
               for i, f in enumerate(frequencies)]
     lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s); "
                   f"speeds above {MAX_RPM:.0f} rpm are not listed",

@@ -219,9 +219,10 @@ def sampling_note(scene, results: dict) -> list[str]:
     aliases = ", and a mean of them aliases it (below 2 a period)" if per_period < 2.0 else ""
     return [f"The samples, every {interval * 1e6:.3g} µs, follow motion up to "
             f"{1.0 / (RESOLVING_SAMPLES * interval):.0f} Hz ({RESOLVING_SAMPLES} a period) but "
-            f"give the train's fastest natural mode ({fastest:.0f} Hz) {per_period:.2g} a "
-            "period: the min and max of samples can miss its swings between them, reading "
-            f"F_mesh's peak and dip (K_v) short{aliases}; for the extremes give --output-interval "
+            f"give the train's fastest mode, ringing at {fastest:.0f} Hz with its damping "
+            f"(`herringbone info` lists it undamped), {per_period:.2g} a period: the min and "
+            "max of samples can miss its swings between them, reading F_mesh's peak and dip "
+            f"(K_v) short{aliases}; for the extremes give --output-interval "
             f"{finer:g} or shorter, or for the steady state's true peaks `herringbone sweep "
             f"{named_as_typed(scene)} --speeds FROM TO COUNT` about w0_pinion = {speed:g} "
             "rad/s"]
