@@ -641,6 +641,11 @@ def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, bui
     assert ("--set solver_method=radau: solver_method is a solver setting of the FMU, not a "
             "parameter; allowed: a host sets it on the FMU (`herringbone run` takes --tolerance "
             "and --method)") in one_error_line(capsys, "run")
+    assert main(["run", REFERENCE, "--set", "tolerance=1e-9"]) == 2
+    assert ("--set tolerance=1e-9: tolerance is the integrator's, not a parameter; allowed: "
+            "--tolerance where the command takes it") in one_error_line(capsys, "run")
+    assert main(["info", REFERENCE, "--set", "method=radau"]) == 2
+    assert "--set method=radau: method is the integrator's" in one_error_line(capsys, "info")
     assert main(["run", REFERENCE, "--set", "stop_time=0.01"]) == 2
     assert ("--set stop_time: stop_time is of the scene's [experiment], not a parameter; "
             "allowed: --stop-time") in one_error_line(capsys, "run")

@@ -21,6 +21,9 @@ BAD_SCENES = [
     ('[parameters]\ncontact_loss = 1\n', "contact_loss", "true or false"),
     ('[parameters]\nmodule = 0.004\n', "module", "unknown parameter"),
     ('[parameters]\nM_motor = 500\n', "M_motor", "[inputs]"),
+    ('[parameters]\nbearings = false\n', "bearings",
+     "unknown parameter 'bearings': bearings is a component; allowed: a scene's [components] "
+     "sets it"),
     ('[parameters]\nzeta_mesh = nan\n', "zeta_mesh", "allowed: [0, 10]"),
     ('[parameters]\nw0_pinion = inf\n', "w0_pinion", "[-100000, 100000] rad/s"),
     ('[components]\nbearings = false\n[parameters]\nc_brg_wheel_left = 1e9\n',
@@ -134,6 +137,9 @@ def test_a_value_of_with_parameters_or_with_inputs_is_not_blamed_on_the_file(ref
              (lambda: reference_scene.with_parameters(c_pont=1e8),
               "with_parameters: unknown parameter 'c_pont'; did you mean 'c_point'?",
               "parameters"),
+             (lambda: reference_scene.with_parameters(motor=False),
+              "with_parameters: unknown parameter 'motor': motor is a component; allowed: a "
+              "scene's [components] sets it", "parameters"),
              (lambda: reference_scene.with_inputs(M_motor=float("nan")),
               "with_inputs: M_motor is nan; allowed: any finite number, in N.m", "inputs"),
              (lambda: reference_scene.with_inputs(table=[[0.1, 500.0, 1800.0]]),

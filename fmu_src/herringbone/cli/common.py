@@ -162,8 +162,9 @@ def add_settings(parser: argparse.ArgumentParser) -> None:
 
 def _setting(text: str) -> tuple[str, object]:
     """NAME=VALUE as (name, value), the value read as a TOML value (tomllib: 450, 4.5e2,
-    true); argparse's one-line error where it is not one, or where NAME is one of the FMU's
-    solver settings (its value may be a word: solver_method=radau)."""
+    true); argparse's one-line error where it is not one, or where NAME is the integrator's
+    (tolerance, method) or one of the FMU's solver settings (a value may be a word there:
+    method=radau)."""
     import tomllib
 
     name, equals, value = text.partition("=")
@@ -173,6 +174,10 @@ def _setting(text: str) -> tuple[str, object]:
         raise argparse.ArgumentTypeError(
             f"{text}: {name.strip()} is a solver setting of the FMU, not a parameter; allowed: "
             "a host sets it on the FMU (`herringbone run` takes --tolerance and --method)")
+    if name.strip() in ("tolerance", "method"):
+        raise argparse.ArgumentTypeError(
+            f"{text}: {name.strip()} is the integrator's, not a parameter; allowed: "
+            f"--{name.strip()} where the command takes it")
     try:
         return name.strip(), tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:
@@ -226,6 +231,7 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
     if name in ("stop_time", "output_interval"):
         return (f"--set {name}: {name} is of the scene's [experiment], not a parameter; "
                 f"allowed: --{name.replace('_', '-')} where the command takes it")
+
     if name in COMPONENTS:
         return (f"{given}: {name} is a component, not a parameter; allowed: a scene file's "
                 "[components] sets it")

@@ -331,6 +331,8 @@ def _check_parameters(given, components, source, call=None):
     for key, value in given.items():
         if key not in PARAMETERS:
             hint = (" (inputs belong in [inputs])" if key in INPUTS
+                    else f": {key} is a component; allowed: a scene's [components] sets it"
+                    if key in COMPONENTS
                     else f" ([parameters.{key}] is a table; allowed: parameters as keys under "
                          "[parameters], no tables in it)" if isinstance(value, dict)
                     else did_you_mean(key, PARAMETERS))
