@@ -397,7 +397,7 @@ class GearCore:
                   if 0.0 < max_step < math.inf else "")
         return (f"doStep from t = {current_time:g} s by {step_size:g} s failed: it took over "
                 f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
-                f"{self.stepper.budget_per_mode}·h·|λ|max, |λ|max = "
+                f"{self.stepper.budget_per_mode:.0f}·h·|λ|max, |λ|max = "
                 f"{self.stepper.fastest_rate:.3g} "
                 f"1/s{forced}) and stopped at t = {self.run.time:.9g} s with the pinion at "
                 f"{speed:.3g} rad/s: the train runs away. Check the torques M_motor = "

@@ -191,9 +191,11 @@ STEP_BUDGET_FLOOR = 10_000
 STEP_BUDGET_PER_MODE = 100
 # Radau IIA (order 5) follows a lightly damped mode in more steps than DOP853, the more the
 # tighter the tolerance: over 0.01 s of the shipped scenes at most 24 steps per h·|λ|max at
-# 1e-7, 135 at 1e-10 and 177 at 1e-12 (undamped; DOP853 5.4 at most), so its bound is ten
-# times DOP853's.
-RADAU_STEP_BUDGET_PER_MODE = 1_000
+# 1e-7, 135 at 1e-10 and 177 at 1e-12 (undamped; DOP853 5.4 at most). Below the default
+# tolerance its bound grows as tolerance^(-1/4), four times that need at 1e-7 and 1e-10 and
+# ten at 1e-12 (1 778); at the default it stays DOP853's, since each of its steps costs more
+# and a runaway under it holds the host the longer (docs/hosts.md has the times).
+RADAU_BUDGET_EXPONENT = 0.25
 # and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
 # compiled loop counts in 64 bits)
 STEP_BUDGET_PER_MAX_STEP = 2
@@ -365,10 +367,13 @@ class CompiledStepper:
             return None
 
     @property
-    def budget_per_mode(self) -> int:
-        """The steps per h·|λ|max a run of this stepper's method may take before it counts
-        as a runaway (step_budget)."""
-        return RADAU_STEP_BUDGET_PER_MODE if self.method == "radau" else STEP_BUDGET_PER_MODE
+    def budget_per_mode(self) -> float:
+        """The steps per h·|λ|max a run of this stepper's method and tolerance may take
+        before it counts as a runaway (step_budget)."""
+        if self.method != "radau" or self.tolerance >= DEFAULT_TOLERANCE:
+            return float(STEP_BUDGET_PER_MODE)
+        return STEP_BUDGET_PER_MODE * (DEFAULT_TOLERANCE / self.tolerance) \
+            ** RADAU_BUDGET_EXPONENT
 
     def start(self, position: Position) -> Run:
         """A run from a position (which it does not change)."""
@@ -498,7 +503,7 @@ class CompiledStepper:
                 raise StepBudgetExceeded(
                     f"stopped at t = {run.time:.9g} s, short of t = {call_end:.9g} s, after "
                     f"{budget} internal steps (the bound: {STEP_BUDGET_FLOOR} + "
-                    f"{self.budget_per_mode}·h·|λ|max, |λ|max = {self.fastest_rate:.3g} 1/s): "
+                    f"{self.budget_per_mode:.0f}·h·|λ|max, |λ|max = {self.fastest_rate:.3g} 1/s): "
                     f"the train runs away; check the torques M_motor = {torques[0]:g} and "
                     f"M_load = {torques[1]:g} N.m") from None
             if on_progress is not None:
