@@ -231,11 +231,9 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
     if name in ("stop_time", "output_interval"):
         return (f"--set {name}: {name} is of the scene's [experiment], not a parameter; "
                 f"allowed: --{name.replace('_', '-')} where the command takes it")
-
     if name in COMPONENTS:
         return (f"{given}: {name} is a component, not a parameter; allowed: a scene file's "
                 "[components] sets it")
-
     if name in INPUTS and len(scene.inputs.times) > 1:
         return (f"{given}: the scene's torques are a table of {len(scene.inputs.times)} rows; "
                 "allowed: --set of a torque on a scene with constant torques")

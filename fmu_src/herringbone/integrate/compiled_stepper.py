@@ -189,6 +189,10 @@ SAMPLES_PER_CALL = 64
 # run stops after about 0.04 s + 0.35 ms per h·|λ|max of wall time (20 000 steps: 0.07 s).
 STEP_BUDGET_FLOOR = 10_000
 STEP_BUDGET_PER_MODE = 100
+# and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
+# compiled loop counts in 64 bits)
+STEP_BUDGET_PER_MAX_STEP = 2
+MOST_STEPS = 2**62
 # Radau IIA (order 5) follows a lightly damped mode in more steps than DOP853, the more the
 # tighter the tolerance: over 0.01 s of the shipped scenes at most 24 steps per h·|λ|max at
 # 1e-7, 135 at 1e-10 and 177 at 1e-12 (undamped; DOP853 5.4 at most). Below the default
@@ -196,10 +200,6 @@ STEP_BUDGET_PER_MODE = 100
 # ten at 1e-12 (1 778); at the default it stays DOP853's, since each of its steps costs more
 # and a runaway under it holds the host the longer (docs/hosts.md has the times).
 RADAU_BUDGET_EXPONENT = 0.25
-# and, with max_step set, twice the steps it forces (h/max_step); a budget at most this (the
-# compiled loop counts in 64 bits)
-STEP_BUDGET_PER_MAX_STEP = 2
-MOST_STEPS = 2**62
 
 
 def step_budget(span, fastest_rate, max_step, per_mode=STEP_BUDGET_PER_MODE) -> int:
