@@ -14,21 +14,18 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
+from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy as np  # noqa: E402
+from helpers import momentum_terms  # noqa: E402
 
 import herringbone  # noqa: E402
 from herringbone.model.assembly import GearTrainModel  # noqa: E402
-
-
-def momentum(run, parameters, ratio):
-    """The angular momentum referred to the pinion (kg·m²/s) at each sample of `run`."""
-    return (parameters["I_motor"] * run["w_motor"] + parameters["I_pinion"] * run["w_pinion"]
-            + (parameters["I_wheel"] * run["w_wheel"] + parameters["I_load"] * run["w_load"])
-            / ratio)
 
 
 def per_second_error(run, truth, scale, seconds):
@@ -58,7 +55,7 @@ def main(argv=None) -> None:
                                          output_interval=1e-3, method=method,
                                          tolerance=tolerance)
             cpu = time.process_time() - started
-            kept = momentum(short, scene.parameters, model.geometry.ratio)
+            kept = np.sum(momentum_terms(scene, short), axis=0)
             long = herringbone.simulate(scene, stop_time=args.long_time, output_interval=1e-3,
                                         method=method, tolerance=tolerance)
             errors = per_second_error(long, truth, model.force_scale(), args.long_time)

@@ -52,6 +52,22 @@ def force_error(a, b, scene) -> float:
     return max(force_errors(a, b, scene).values())
 
 
+def momentum_terms(scene, outputs) -> list[np.ndarray]:
+    """Each body's share of the train's angular momentum referred to the pinion (kg·m²/s) at
+    every sample of `outputs`: I_p·ω_p, I_w·ω_w/u, and where the scene has them I_m·ω_m and
+    I_l·ω_l/u. The mesh force turns the pinion by −F·Rp and the wheel by F·Rw = u·F·Rp, so
+    their sum changes by the torques alone, M_motor − M_load/u."""
+    p = scene.parameters
+    ratio = p["z_wheel"] / p["z_pinion"]
+    terms = [p["I_pinion"] * np.asarray(outputs["w_pinion"]),
+             p["I_wheel"] * np.asarray(outputs["w_wheel"]) / ratio]
+    if scene.has("motor"):
+        terms.append(p["I_motor"] * np.asarray(outputs["w_motor"]))
+    if scene.has("load"):
+        terms.append(p["I_load"] * np.asarray(outputs["w_load"]) / ratio)
+    return terms
+
+
 def compiled_run(scene, tolerance, method):
     """herringbone.simulate's outputs of `scene` by the compiled `method` at `tolerance`
     ({name: samples}); DOP853 at 1e-11 is the converged run the methods are checked against."""

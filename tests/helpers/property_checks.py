@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from helpers import REGRESSION, force_error, force_errors
+from helpers import REGRESSION, force_error, force_errors, momentum_terms
 from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
 from herringbone.integrate.contract import IntegrationError, simulate_with
 from herringbone.integrate.global_error import ReferenceAccuracyWarning, can_judge
@@ -303,13 +303,8 @@ def momentum_follows_torques(run: RecordedRun, label: str) -> None:
     their sum, which can cancel (a free pair driven apart by equal torques keeps L near zero
     while each body gains N·m·s)."""
     scene, r = run.model.scene, run.outputs
-    p = scene.parameters
-    ratio = p["z_wheel"] / p["z_pinion"]
-    bodies = [p["I_pinion"] * r["w_pinion"], p["I_wheel"] * r["w_wheel"] / ratio]
-    if scene.has("motor"):
-        bodies.append(p["I_motor"] * r["w_motor"])
-    if scene.has("load"):
-        bodies.append(p["I_load"] * r["w_load"] / ratio)
+    ratio = scene.parameters["z_wheel"] / scene.parameters["z_pinion"]
+    bodies = momentum_terms(scene, r)
     momentum = np.sum(bodies, axis=0)
     motor_impulse, load_impulse = torque_impulses(scene, r["time"])
     change = motor_impulse - load_impulse / ratio

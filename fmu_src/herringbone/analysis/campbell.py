@@ -99,9 +99,7 @@ def elastic_frequencies(scene) -> np.ndarray:
     >>> elastic_frequencies(herringbone.load_scene("reference")).round(1).tolist()  # Hz
     [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
     """
-    frequencies, shapes, _ = natural_modes(scene)
-    model = GearTrainModel(scene)
-    return np.delete(frequencies, rigid_rotation_mode(shapes, model.mass, model.rigid_rotation))
+    return np.array([mode.frequency for mode in elastic_modes(scene)])
 
 
 def crossings(scene, low: float, high: float) -> list[Crossing]:

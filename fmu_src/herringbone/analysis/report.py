@@ -41,11 +41,13 @@ def _mode_line(number, frequency_hz, character, fastest_hz=0.0) -> str:
     by how much."""
     shown = f"{frequency_hz:12.2f}" if frequency_hz == 0.0 or frequency_hz >= 0.01 \
         else f"{frequency_hz:12.3g}"
+    line = f"  {number:2d} {shown} Hz  {character}"
     blur = rounding_share(frequency_hz, fastest_hz) if frequency_hz > 0.0 else 0.0
-    caveat = "" if blur <= 1e-3 else \
-        f"; ±{100 * blur:.2g} % by rounding beside {fastest_hz:.0f} Hz" if blur < 1.0 else \
-        f"; rounding beside {fastest_hz:.0f} Hz, not a frequency: too slow to resolve"
-    return f"  {number:2d} {shown} Hz  {character}{caveat}"
+    if blur >= 1.0:
+        return f"{line}; rounding beside {fastest_hz:.0f} Hz, not a frequency: too slow to resolve"
+    if blur > 1e-3:
+        return f"{line}; ±{100 * blur:.2g} % by rounding beside {fastest_hz:.0f} Hz"
+    return line
 
 
 def rounding_share(frequency_hz, fastest_hz) -> float:

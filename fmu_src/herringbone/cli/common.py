@@ -160,6 +160,16 @@ def add_settings(parser: argparse.ArgumentParser) -> None:
                              "or false); repeatable: --set w0_pinion=450 --set M_motor=800")
 
 
+# names --set refuses before their value is read (a value may be a word: method=radau): what
+# each is, and where it is set instead
+_SET_ELSEWHERE = {
+    **dict.fromkeys((FMU_SOLVER_TOLERANCE.name, FMU_MAX_STEP.name, FMU_SOLVER_METHOD.name),
+                    "a solver setting of the FMU, not a parameter; allowed: a host sets it on "
+                    "the FMU (`herringbone run` takes --tolerance and --method)"),
+    **{name: f"the integrator's, not a parameter; allowed: --{name} where the command takes it"
+       for name in ("tolerance", "method")}}
+
+
 def _setting(text: str) -> tuple[str, object]:
     """NAME=VALUE as (name, value), the value read as a TOML value (tomllib: 450, 4.5e2,
     true); argparse's one-line error where it is not one, or where NAME is the integrator's
@@ -170,14 +180,9 @@ def _setting(text: str) -> tuple[str, object]:
     name, equals, value = text.partition("=")
     if not equals or not name.strip() or not value.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: allowed: NAME=VALUE, e.g. w0_pinion=450")
-    if name.strip() in (FMU_SOLVER_TOLERANCE.name, FMU_MAX_STEP.name, FMU_SOLVER_METHOD.name):
-        raise argparse.ArgumentTypeError(
-            f"{text}: {name.strip()} is a solver setting of the FMU, not a parameter; allowed: "
-            "a host sets it on the FMU (`herringbone run` takes --tolerance and --method)")
-    if name.strip() in ("tolerance", "method"):
-        raise argparse.ArgumentTypeError(
-            f"{text}: {name.strip()} is the integrator's, not a parameter; allowed: "
-            f"--{name.strip()} where the command takes it")
+    if name.strip() in _SET_ELSEWHERE:
+        raise argparse.ArgumentTypeError(f"{text}: {name.strip()} is "
+                                         f"{_SET_ELSEWHERE[name.strip()]}")
     try:
         return name.strip(), tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:

@@ -25,6 +25,7 @@ Methods (`method`):
 """
 from __future__ import annotations
 
+import functools
 import math
 import os
 import time
@@ -366,7 +367,7 @@ class CompiledStepper:
             self.method = runge_kutta_method(modes)
             return None
 
-    @property
+    @functools.cached_property
     def budget_per_mode(self) -> float:
         """The steps per h·|λ|max a run of this stepper's method and tolerance may take
         before it counts as a runaway (step_budget)."""
