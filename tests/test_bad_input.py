@@ -567,6 +567,24 @@ def test_api_raises_one_scene_error_naming_the_culprit(case, tmp_path):
     assert not problems, "\n".join(problems)
 
 
+# Scene.with_inputs' keywords that a scene file cannot give it: a misspelt one, a parameter, and
+# constants beside a table (the table would win without a word)
+WITH_INPUTS = [
+    ("misspelt", {"M_motr": 1.0}, ("unknown key 'M_motr'", "M_motor, M_load, table",
+                                   "did you mean 'M_motor'")),
+    ("parameter", {"beta": 0.3}, ("'beta'", "[parameters]")),
+    ("constants-and-table", {"M_motor": 1.0, "table": [[0.0, 1.0, 2.0]]},
+     ("constants (M_motor, M_load) or a table, not both",)),
+]
+
+
+@pytest.mark.parametrize("given, words", [pytest.param(g, w, id=i) for i, g, w in WITH_INPUTS])
+def test_with_inputs_refuses_a_keyword_it_cannot_take_by_name(given, words):
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({}).with_inputs(**given)
+    assert_one_clear_message(str(raised.value), ("with_inputs",) + words, "Scene.with_inputs")
+
+
 # --- the FMU ------------------------------------------------------------------------------------
 
 class Gear(Instance):

@@ -137,10 +137,11 @@ class Scene:
             raise SceneError(error.problem, self.source, error.table, error.key,
                              "with_parameters") from None
 
-    def with_inputs(self, M_motor=None, M_load=None, table=None) -> Scene:
+    def with_inputs(self, M_motor=None, M_load=None, table=None, **unknown) -> Scene:
         """A copy with other input torques: constants (N·m; one left out keeps the scene's
         first), or a `table` of rows [time (s), M_motor, M_load (N·m)], each row's torques held
-        from its time on; validated like a scene file's [inputs].
+        from its time on, not both; validated like a scene file's [inputs], a keyword it does
+        not know refused by name as a key of that table is (SceneError).
 
         Examples
         --------
@@ -150,9 +151,10 @@ class Scene:
         >>> stepped.inputs.at(0.005), stepped.inputs.at(0.02)  # (M_motor, M_load), N·m
         ((500.0, 1800.0), (1000.0, 3600.0))
         """
-        data = {"table": table} if table is not None else {
-            "M_motor": self.inputs.M_motor[0] if M_motor is None else M_motor,
-            "M_load": self.inputs.M_load[0] if M_load is None else M_load}
+        given = {"M_motor": M_motor, "M_load": M_load, "table": table, **unknown}
+        data = {key: value for key, value in given.items() if value is not None}
+        if data.keys() <= {"M_motor", "M_load"}:
+            data = {"M_motor": self.inputs.M_motor[0], "M_load": self.inputs.M_load[0], **data}
         return replace(self, inputs=_inputs(data, self.source, call="with_inputs"))
 
 
@@ -532,6 +534,11 @@ def _inputs(table, source, call=None):
     def error(problem, key):
         return SceneError(problem, source, "inputs", key, call)
 
+    for key in table:
+        if key not in INPUTS and key != "table":
+            where = " (parameters belong in [parameters])" if key in PARAMETERS else ""
+            raise error(f"unknown key '{key}'{where}; allowed: M_motor, M_load, table"
+                        f"{'' if where else did_you_mean(key, [*INPUTS, 'table'])}", key)
     if "table" in table:
         if set(table) != {"table"}:
             raise error("give either constants (M_motor, M_load) or a table, not both", "table")
@@ -556,9 +563,6 @@ def _inputs(table, source, call=None):
                              tuple(float(r[2]) for r in rows))
     values = {}
     for key, value in table.items():
-        if key not in INPUTS:
-            hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
-            raise error(f"unknown key '{key}'{hint}; allowed: M_motor, M_load, table", key)
         problem = check_value(INPUTS[key], value)
         if problem:
             raise error(f"{key} {problem}", key)
