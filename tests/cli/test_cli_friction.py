@@ -368,13 +368,17 @@ def test_help_answers_without_loading_the_integrators(command):
     assert loaded == "[]", f"herringbone {' '.join(command)} --help loaded {loaded}"
 
 
-def interrupted(arguments, folder, ready: str, group: bool = False):
-    """`herringbone ARGUMENTS` run in `folder` and sent SIGINT once its stderr shows `ready`
-    and a second more has passed: to the process alone, or to its whole process group (Dask's
-    workers too) where `group`, as Ctrl-C at a terminal does. Returns (exit code, stderr)."""
+def interrupted(arguments, folder, ready: str, group: bool = False, sent=None,
+                delay: float = 1.0):
+    """`herringbone ARGUMENTS` run in `folder` and sent SIGINT (or the signal `sent`) once its
+    stderr shows `ready` and `delay` s more have passed: to the process alone, or to its whole
+    process group (Dask's workers too) where `group`, as Ctrl-C at a terminal does. Returns
+    (exit code, stderr)."""
     import os
     import signal
     import time
+
+    sent = signal.SIGINT if sent is None else sent
 
     def default_interrupt():  # a job started in the background, as CI's may be, inherits
         signal.signal(signal.SIGINT, signal.SIG_DFL)  # SIGINT ignored, as a shell sets it
@@ -389,11 +393,11 @@ def interrupted(arguments, folder, ready: str, group: bool = False):
         if not chunk:  # the command ended before it showed `ready`
             break
         seen += chunk
-    time.sleep(1.0)
+    time.sleep(delay)
     if group:
-        os.killpg(process.pid, signal.SIGINT)
+        os.killpg(process.pid, sent)
     else:
-        process.send_signal(signal.SIGINT)
+        process.send_signal(sent)
     rest = process.communicate(timeout=120)[1]
     return process.returncode, (seen + rest).decode()
 
@@ -404,6 +408,24 @@ def test_ctrl_c_stops_a_run_in_one_line_and_leaves_the_file_it_would_replace(tmp
                                 "out.csv"], tmp_path, "run reference:")
     assert code == 130, stderr
     assert stderr.splitlines()[-1] == ("herringbone run: interrupted; files not finished are "
+                                       "left as they were")
+    assert "Traceback" not in stderr
+    assert (tmp_path / "out.csv").read_text() == "the last run's table\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+
+
+def test_sigterm_while_the_table_is_written_stops_in_one_line_and_leaves_no_half_file(
+        tmp_path):
+    """`timeout`, a batch scheduler and CI end a command by SIGTERM, whose default action
+    left the 200 001 rows' staging file behind (half a table, 48 MB here)."""
+    import signal
+
+    (tmp_path / "out.csv").write_text("the last run's table\n")
+    code, stderr = interrupted(["run", "reference", "--stop-time", "2", "--output-interval",
+                                "1e-5", "-o", "out.csv"], tmp_path, "writing 200001 rows",
+                               sent=signal.SIGTERM, delay=0.3)
+    assert code == 143, stderr
+    assert stderr.splitlines()[-1] == ("herringbone run: terminated; files not finished are "
                                        "left as they were")
     assert "Traceback" not in stderr
     assert (tmp_path / "out.csv").read_text() == "the last run's table\n"

@@ -9,6 +9,8 @@ any work) and `execute(args, parser)` (the work; returns the exit code).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
 from pathlib import Path
 from typing import cast
@@ -44,21 +46,30 @@ class CommandError(Exception):
 # (RuntimeError), a missing optional dependency, a file that cannot be written
 EXPECTED_ERRORS = (CommandError, SceneError, ValueError, RuntimeError, ImportError, OSError)
 INTERRUPTED = 130  # the exit code of a command stopped by Ctrl-C: 128 + SIGINT
+TERMINATED = 143  # and by SIGTERM (`timeout`, a batch scheduler, `kill`): 128 + SIGTERM
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, so that it stops as Ctrl-C stops it: the default
+    action ends the process on the spot and leaves a file being written as half a table."""
 
 
 def execute(module, args, parser: argparse.ArgumentParser) -> int:
     """Run a command module's `execute`; an expected error becomes one line on stderr,
     `PROG: message`, and exit code 2; an interrupt (Ctrl-C) one line, `PROG: interrupted`,
-    and exit code 130 (128 + SIGINT, as a shell reports it), the files it had not finished
-    left as they were (files.replace_file)."""
+    and exit code 130 (128 + SIGINT, as a shell reports it), SIGTERM `PROG: terminated` and
+    143, the files it had not finished left as they were (files.replace_file)."""
     try:
-        return module.execute(args, parser)
+        with _terminate_as_interrupt():
+            return module.execute(args, parser)
     except BaseException as error:
         compiles_said()
         if interrupted(error):
-            print(f"{parser.prog}: interrupted; files not finished are left as they were",
+            stop, code = (("terminated", TERMINATED) if interrupted(error, Terminated)
+                          else ("interrupted", INTERRUPTED))
+            print(f"{parser.prog}: {stop}; files not finished are left as they were",
                   file=sys.stderr)
-            return INTERRUPTED
+            return code
         if isinstance(error, BrokenPipeError):
             return reader_gone()
         if not isinstance(error, EXPECTED_ERRORS):
@@ -93,14 +104,34 @@ def reader_gone() -> int:
     return READER_GONE
 
 
-def interrupted(error: BaseException | None) -> bool:
-    """Whether `error` is a KeyboardInterrupt or was raised by one: numba hands an interrupt
-    that comes inside a compiled function's call on as a SystemError caused by it."""
+def interrupted(error: BaseException | None, kind: type = KeyboardInterrupt) -> bool:
+    """Whether `error` is a KeyboardInterrupt (or the `kind` of it given) or was raised by
+    one: numba hands an interrupt that comes inside a compiled function's call on as a
+    SystemError caused by it."""
     while error is not None:
-        if isinstance(error, KeyboardInterrupt):
+        if isinstance(error, kind):
             return True
         error = error.__cause__ or error.__context__
     return False
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """SIGTERM raises Terminated while the block runs (the handler it had is put back after);
+    nothing changes where the command does not run in the main thread, the only one a
+    signal's handler may be set from."""
+    def terminate(signal_number, frame):
+        raise Terminated
+
+    try:
+        previous = signal.signal(signal.SIGTERM, terminate)
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def one_line(error: BaseException) -> str:
