@@ -368,6 +368,24 @@ def test_a_sweep_of_no_scene_is_a_scene_error(no_sweep_work):
         sweep("reference", speeds=[300.0, 400.0])
 
 
+def test_a_tooth_count_sweep_keeps_the_motor_torque_and_the_load_follows_the_ratio(
+        reference_scene):
+    """z_pinion changes u = z_wheel/z_pinion at every point, so no one M_load balances them
+    all: on a balanced scene the load torque follows, M_load = u·M_motor, and each point runs
+    steadily with the motor's 500 N·m on the pinion's pitch radius."""
+    from herringbone.analysis.sweep import Point, scene_at
+
+    at = scene_at(reference_scene, Point(0, (("z_pinion", 11),)))
+    assert at.inputs.at(0.0) == pytest.approx((500.0, 500.0 * 36 / 11), rel=1e-15)
+    table = sweep(reference_scene, params={"z_pinion": [10, 11, 12]}, method="time",
+                  workers=0, progress=False)
+    radii = [GearTrainModel(reference_scene.with_parameters(z_pinion=z)).geometry.radius_pinion
+             for z in (10, 11, 12)]
+    assert table.static_mesh_force_N.tolist() == pytest.approx([500.0 / r for r in radii],
+                                                               rel=1e-12)
+    assert table.window_drift.max() < 1e-4  # settled: the train neither speeds up nor slows
+
+
 def test_a_sweep_whose_points_have_no_steady_running_is_refused_before_any_work(
         reference_scene, no_sweep_work):
     """Torques that do not balance (the train runs away from the speed its row names),
@@ -379,7 +397,7 @@ def test_a_sweep_whose_points_have_no_steady_running_is_refused_before_any_work(
     unbalanced = reference_scene.with_inputs(M_motor=500.0, M_load=100.0)
     for method in (None, "time"):
         with pytest.raises(ValueError, match=r"M_load = 100 N·m does not balance M_motor = "
-                                             r"500 N·m .*allowed: M_load = u·M_motor = 1800$"):
+                                             r"500 N·m .*allowed: M_load = u·M_motor = 1800 N·m$"):
             sweep(unbalanced, speeds=[300.0, 400.0], method=method, workers=0)
     with pytest.raises(ValueError, match=r"at M_motor = 250, M_load = 1800: M_load = 1800 "
                                          r"N·m does not balance M_motor = 250 N·m"):

@@ -143,12 +143,12 @@ def test_a_point_that_cannot_run_is_refused_before_any_worker_starts(arguments, 
 
 
 def test_a_refused_point_names_a_shipped_scene_as_typed(capsys, no_work):
-    """A tooth count changes the ratio, so the scene's torques stop balancing at the point:
-    refused naming the scene as typed (`reference`), not its file in site-packages."""
-    assert main(["sweep", "reference", "--param", "z_pinion", "10", "20", "3", "--speed",
-                 "500"]) == 2
+    """A grid of both torques leaves the balance at some of its points: refused naming the
+    scene as typed (`reference`), not its file in site-packages."""
+    assert main(["sweep", "reference", "--param", "M_motor", "250", "500", "2", "--param",
+                 "M_load", "900", "1800", "2"]) == 2
     error = one_error_line(capsys)
-    assert error.startswith("herringbone sweep: reference at w0_pinion = 500, z_pinion = 15: "
+    assert error.startswith("herringbone sweep: reference at M_motor = 250, M_load = 1800: "
                             "M_load = 1800 N·m does not balance"), error
 
 

@@ -147,8 +147,9 @@ def check_balanced(scene) -> tuple[float, float]:
     motor, load = (float(t) for t in scene.inputs.at(0.0))
     unbalanced = unbalance(scene)
     if unbalanced is not None:
+        balanced = gear_ratio(scene) * motor
         raise ShootingError(f"{unbalanced}: the train accelerates and has no periodic steady "
-                            f"state; allowed: M_load = u·M_motor = {gear_ratio(scene) * motor:g}")
+                            f"state; allowed: M_load = u·M_motor = {balanced:g} N·m")
     return motor, load
 
 

@@ -99,19 +99,28 @@ def scene_at(scene, point: Point):
     """The scene with the point's values; a parameter out of its range raises SceneError
     (a ValueError) naming it and what is allowed. One torque swept on a scene whose torques
     balance sets the transmitted torque: the other follows (steady_state.balanced_torques),
-    as a continuation in it does, so that the train runs steadily at every point."""
+    as a continuation in it does, so that the train runs steadily at every point; a tooth
+    count swept on such a scene changes the ratio u, and the load torque follows it,
+    M_load = u·M_motor, the motor's torque kept."""
     from .steady_state import ShootingError, balanced_torques, check_balanced
 
     params = {k: v for k, v in point.values if k not in INPUTS}
     torques = {k: v for k, v in point.values if k in INPUTS}
-    if len(torques) == 1:
+    follows = len(torques) == 1 or not torques and RATIO_SETTERS & params.keys()
+    if follows:
         try:
             check_balanced(scene)
-            torques = balanced_torques(scene, *next(iter(torques.items())))
         except ShootingError:
-            pass  # unbalanced already: the swept torque alone changes
+            follows = False  # unbalanced already: what is swept alone changes
     changed = scene.with_parameters(**params) if params else scene
+    if follows:
+        torques = balanced_torques(changed, *(next(iter(torques.items())) if torques
+                                              else ("M_motor", changed.inputs.at(0.0)[0])))
     return changed.with_inputs(**torques) if torques else changed
+
+
+# the parameters that set the gear ratio u, which a balanced scene's load torque follows
+RATIO_SETTERS = frozenset({"z_pinion", "z_wheel"})
 
 
 def run_point(scene, point: Point, protocol: Protocol, fmu=None):
@@ -194,7 +203,8 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         Pinion speeds w0_pinion, rad/s, each once; `[450.0]` with `params`: at that speed.
     params : dict or None
         {parameter name (or "M_motor", "M_load"): values, in its unit, each once}; with
-        `speeds`, at most two quantities (a grid). One torque swept: the other follows.
+        `speeds`, at most two quantities (a grid). One torque swept: the other follows; a
+        tooth count swept: M_load follows the ratio, M_motor kept.
         Each point needs constant torques that balance (M_load = u·M_motor), M_motor > 0.
     protocol : Protocol
         How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
