@@ -194,7 +194,7 @@ def test_run_defaults_to_the_compiled_integrator_and_its_numbers(tmp_path, capsy
                  "--no-progress", "-o", str(csv)]) == 0
     printed = capsys.readouterr().out
     assert "on the compiled integrator" in printed
-    assert re.search(r"^dte\s+um\s", printed, re.MULTILINE)  # dte shown in µm, with its unit
+    assert re.search(r"^dte\s+µm\s", printed, re.MULTILINE)  # dte shown in µm, with its unit
     assert re.search(r"^F_mesh\s+N\s", printed, re.MULTILINE)
     header = csv.read_text().splitlines()[0].split(",")
     assert header[:2] == ["time [s]", "k_mesh [N/m]"] and "dte [m]" in header

@@ -14,7 +14,7 @@ from ..files import replace_file
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of
 
 # outputs shown in the summary in a unit more readable than SI: name -> (unit, factor)
-SHOWN_IN = {"dte": ("um", 1e6)}
+SHOWN_IN = {"dte": ("µm", 1e6)}
 
 
 def write_csv(results: dict, path: Path) -> None:
