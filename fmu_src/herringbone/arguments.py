@@ -326,16 +326,38 @@ def speed_sweep_problem(low: float, high: float, count: float) -> str | None:
     if not low < high:
         return f"FROM {low:g} is not below TO {high:g}"
     if SPEED_COUNT.problem(count) is not None:
-        return f"COUNT {count:g} is not a whole number >= 2"
+        return (f"COUNT {count:g} is not a whole number" if count != int(count)
+                else f"COUNT {count:g} is fewer than 2 speeds")
     return None
 
 
 def number(text: str) -> float:
-    """argparse `type=` for a plain number: float(text), or ArgumentTypeError "TEXT: …"."""
+    """argparse `type=` for a plain number: float(text), or ArgumentTypeError "TEXT: …",
+    which says how to give a number written with its unit (`1500rpm`)."""
     try:
         return float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text}: not a number") from None
+        raise argparse.ArgumentTypeError(f"{text}: not a number{unit_hint(text)}") from None
+
+
+def unit_hint(text: str, unit: str | None = None) -> str:
+    """"; allowed: …" for `text` that is a number followed by a unit ("1500rpm", "4 mm"),
+    for a value whose unit is `unit` (None: an option's, which its --help gives; "" or "1":
+    none); "" for other text. rpm, the unit a speed is most often written in, gets --rpm or
+    its value in rad/s."""
+    given = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*?)\s*",
+                         text)
+    if given is None:
+        return ""
+    value, written = float(given[1]), given[2]
+    if unit is None:
+        return ("; allowed: the number alone, with --rpm where the command takes rpm"
+                if written.lower() == "rpm" else
+                "; allowed: the number alone, in the unit --help gives")
+    if written.lower() == "rpm" and unit == "rad/s":
+        return (f"; allowed: a number in rad/s ({value:g} rpm is "
+                f"{value / RPM_PER_RAD_S:.6g} rad/s)")
+    return f"; allowed: the number alone{'' if unit in ('', '1') else f', in {unit}'}"
 
 
 def output_path_problem(path: Path) -> str | None:
@@ -490,6 +512,17 @@ class OneLineParser(argparse.ArgumentParser):
             if choice:
                 given, allowed = choice[1].strip("'"), re.findall(r"'([^']*)'", choice[2])
                 rest = f"{choice[1]}: allowed: {choice[2]}{did_you_mean(given, allowed)}"
+            elif re.fullmatch(r"expected (one|\d+) arguments?", rest):
+                rest = f"{rest}; allowed: {option.split('/')[-1]} {self._values_of(option)}"
             message = f"{option.split('/')[-1]} {rest}"
         print(f"{self.prog}: {message}; see `{self.help_command}`", file=sys.stderr)
         sys.exit(2)
+
+    def _values_of(self, option: str) -> str:
+        """The values `option` (as argparse names it: "--speeds" or "-o/--output") takes, as
+        its metavar names them ("FROM TO COUNT")."""
+        for action in self._actions:
+            if "/".join(action.option_strings) == option or option in action.option_strings:
+                metavar = action.metavar or action.dest.upper()
+                return " ".join(metavar) if isinstance(metavar, tuple) else str(metavar)
+        return "VALUE"

@@ -143,7 +143,8 @@ def test_a_value_of_with_parameters_or_with_inputs_is_not_blamed_on_the_file(ref
              (lambda: reference_scene.with_inputs(M_motor=float("nan")),
               "with_inputs: M_motor is nan; allowed: any finite number, in N.m", "inputs"),
              (lambda: reference_scene.with_inputs(table=[[0.1, 500.0, 1800.0]]),
-              "with_inputs: table must start at time 0, its first row is at 0.1", "inputs")]
+              "with_inputs: table row 0 is at time 0.1 s; allowed: a table that starts at "
+              "time 0 s", "inputs")]
     for provoke, expected, table in cases:
         with pytest.raises(SceneError) as raised:
             provoke()

@@ -27,6 +27,7 @@ from ..arguments import (
     output_file_problem,
     output_folder,
     speed_sweep_problem,
+    unit_hint,
 )
 from ..model.parameters import PINION_SPEED as W0_PINION_RANGE
 from ..model.parameters import RPM_PER_RAD_S
@@ -217,8 +218,11 @@ def _setting(text: str) -> tuple[str, object]:
     try:
         return name.strip(), tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:
-        raise argparse.ArgumentTypeError(f"{text!r}: the value {value.strip()!r} is not a "
-                                         "number, true or false") from None
+        from ..model.parameters import unit_of
+
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: the value {value.strip()!r} is not a number, true or false"
+            f"{unit_hint(value, unit_of(name.strip()))}") from None
 
 
 def scene_of(args, parser: argparse.ArgumentParser):

@@ -51,7 +51,8 @@ class Range:
 
 POSITIVE = Range(0.0, None, low_open=True)
 NON_NEGATIVE = Range(0.0, None)
-FRACTION = Range(0.0, 1.0, high_open=True)
+FRACTION = Range(0.0, 1.0, high_open=True)  # of the axial pitch p_x (FRACTION_MEANING)
+FRACTION_MEANING = "a fraction of the axial pitch p_x"
 FINITE = Range()
 # a tooth count: a ring gear of a thousand teeth is beyond any gearbox this model describes,
 # and 1e20 teeth were taken and failed at the first step ("step size fell below the time's
@@ -279,7 +280,8 @@ def check_value(parameter: Parameter, value) -> str | None:
     if parameter.kind is bool:
         return None if is_flag(value) \
             else f"must be true or false, got {typed_repr(value)}"
-    return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int)
+    return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int,
+                          meaning=FRACTION_MEANING if parameter.allowed is FRACTION else "")
 
 
 def values_problem(name: str, values) -> str | None:

@@ -192,7 +192,8 @@ def load_scene(path) -> Scene:
     if not path.is_file():
         names = (f"{did_you_mean(str(given), scene_files())}; shipped scenes: "
                  f"{', '.join(sorted(scene_files()))} (`herringbone scenes`)"
-                 if is_scene_name(given) else "")
+                 if is_scene_name(given) else "" if path.is_absolute()
+                 else f" in {os.getcwd()}")
         raise SceneError(f"no such scene file{names}", str(path))
     text = ""
     try:
@@ -316,7 +317,8 @@ def _components(table, source):
     components = {}
     for key, value in table.items():
         if key not in COMPONENTS:
-            raise SceneError(f"unknown component '{key}'; allowed: {', '.join(COMPONENTS)}",
+            raise SceneError(f"unknown component '{key}'; allowed: {', '.join(COMPONENTS)}"
+                             f"{did_you_mean(key, COMPONENTS)}",
                              source, "components", key)
         if not is_flag(value):
             raise SceneError(f"{key} must be true or false, got {short_repr(value)}", source,
@@ -512,7 +514,9 @@ def _experiment(table, source):
         if key not in TABLES["experiment"]:
             hint = " (parameters belong in [parameters])" if key in PARAMETERS else ""
             raise SceneError(f"unknown key '{key}'{hint}; allowed: "
-                             f"{', '.join(TABLES['experiment'])}", source, "experiment", key)
+                             f"{', '.join(TABLES['experiment'])}"
+                             f"{'' if hint else did_you_mean(key, TABLES['experiment'])}",
+                             source, "experiment", key)
         problem = number_problem(value, POSITIVE, "s")
         if problem is not None:
             raise SceneError(f"{key} {problem}", source, "experiment", key)
@@ -555,10 +559,12 @@ def _inputs(table, source, call=None):
                             "[time, M_motor, M_load]", "table")
         times = [float(row[0]) for row in rows]
         if times[0] != 0.0:
-            raise error(f"table must start at time 0, its first row is at {times[0]:g}",
-                        "table")
-        if any(b <= a for a, b in zip(times, times[1:])):
-            raise error("table times must increase strictly", "table")
+            raise error(f"table row 0 is at time {times[0]:g} s; allowed: a table that "
+                        "starts at time 0 s", "table")
+        for row, (before, time) in enumerate(zip(times, times[1:]), start=1):
+            if time <= before:
+                raise error(f"table row {row} is at time {time:g} s, not after row {row - 1}'s "
+                            f"{before:g} s; allowed: times that increase strictly", "table")
         return InputSchedule(tuple(times), tuple(float(r[1]) for r in rows),
                              tuple(float(r[2]) for r in rows))
     values = {}
