@@ -282,8 +282,8 @@ def test_run_tells_its_start_from_its_stepping(tmp_path, capsys):
     loaded: 0.2 s on the project's machine), which a rate over the whole would charge to the
     stepping (11 s per simulated second for 20 ms of the reference scene, whose stepping
     takes 0.07): `run` prints the start apart, and the rate of the stepping alone; the two
-    add up to the wall time. Where the start is not known (the FMU's run, the scipy
-    reference's) the rate says that it includes it."""
+    add up to the wall time. Where the start is not known (the scipy reference's run) the
+    rate says that it includes it."""
     from herringbone.analysis.run_report import summary
 
     assert main(["run", "reference", "--stop-time", "2e-3", "--output-interval", "1e-4",
@@ -300,6 +300,24 @@ def test_run_tells_its_start_from_its_stepping(tmp_path, capsys):
     results = herringbone.simulate(scene, stop_time=2e-3, output_interval=1e-4)
     assert "0.50 s of wall time, start included (250.00 s per simulated second)" in summary(
         scene, results, 0.5, "its FMU")
+
+
+def test_build_fmu_simulate_tells_the_fmus_start_from_its_stepping(tmp_path, capsys,
+                                                                     monkeypatch):
+    """Through fmpy the start (the FMU unpacked, instantiated and set up) took 0.12 s of a
+    0.19 s run of 0.1 s, and a rate over the whole read 1.16 s per simulated second where the
+    stepping's is a third of it: the start is apart, ending at the first step's end."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["build-fmu", "reference", "--simulate", "--no-progress"]) == 0
+    line = next(text for text in capsys.readouterr().out.splitlines()
+                if text.startswith("simulated "))
+    found = re.search(r"in ([\d.]+) s of wall time: ([\d.]+) s to start \(the FMU unpacked, "
+                      r"instantiated and set up, its first step\), ([\d.e+-]+) s stepping "
+                      r"\(([\d.e+-]+) s per simulated second\)", line)
+    assert found, line
+    wall, start, stepping, rate = map(float, found.groups())
+    assert start + stepping == pytest.approx(wall, abs=0.01)
+    assert rate == pytest.approx(stepping / 0.1, rel=1e-2)  # the scene's stop time
 
 
 def test_the_console_script_runs_the_package(tmp_path):

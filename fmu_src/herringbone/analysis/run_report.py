@@ -15,6 +15,8 @@ from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of
 
 # outputs shown in the summary in a unit more readable than SI: name -> (unit, factor)
 SHOWN_IN = {"dte": ("µm", 1e6)}
+# what a run does before its first step, as the summary says it
+START_WORDS = "the model's tables, the compiled code loaded"
 
 
 def write_csv(results: dict, path: Path) -> None:
@@ -35,11 +37,12 @@ def write_csv(results: dict, path: Path) -> None:
 
 
 def summary(scene, results: dict, wall_time: float, integrator: str = "",
-            start_time: float | None = None) -> str:
+            start_time: float | None = None, start: str = START_WORDS) -> str:
     """A few lines on a finished run: its span, the static mesh force, a table of each output
     (with its unit) at the start, its least and largest sample and at the end, and the time
     it took (`integrator`: what ran it, in words; `start_time`: the part of `wall_time`, s,
-    before the first step, None where it is not known)."""
+    before the stepping, None where it is not known; `start`: what that part did, in
+    words)."""
     from ..model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)
@@ -47,7 +50,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     by = f" on {integrator}" if integrator else ""
     lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
              f"({', '.join(model.coordinates)})",
-             f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time)}",
+             f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time, start)}",
              *_start_lines(scene, model, results),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
@@ -120,17 +123,17 @@ def _without_contact(mesh) -> list[str]:
     return [note[0].upper() + note[1:]] if note else []
 
 
-def _wall_time(stop: float, wall_time: float, start_time: float | None) -> str:
-    """How long a run of `stop` simulated s took, in words: the start (the model's tables,
-    the compiled code loaded: a fixed cost that a short run's rate would hide the stepping
-    under) apart from the stepping and its rate, where the start is known."""
+def _wall_time(stop: float, wall_time: float, start_time: float | None,
+               start: str = START_WORDS) -> str:
+    """How long a run of `stop` simulated s took, in words: the start (`start` says what it
+    did: a fixed cost that a short run's rate would hide the stepping under) apart from the
+    stepping and its rate, where the start is known."""
     if start_time is None:
         return (f"{wall_time:.2f} s of wall time, start included "
                 f"({wall_time / stop:.2f} s per simulated second)")
     stepping = wall_time - start_time
-    return (f"{wall_time:.2f} s of wall time: {start_time:.2f} s to start (the model's tables, "
-            f"the compiled code loaded), {stepping:.3g} s stepping "
-            f"({stepping / stop:.3g} s per simulated second)")
+    return (f"{wall_time:.2f} s of wall time: {start_time:.2f} s to start ({start}), "
+            f"{stepping:.3g} s stepping ({stepping / stop:.3g} s per simulated second)")
 
 
 # samples a period of the train's fastest mode (sweep_point.fastest_ringing) that a run's

@@ -54,9 +54,10 @@ def scene_inputs(scene, stop_time: float) -> np.ndarray:
 
 
 def simulate_scene_fmu(fmu_path, scene, stop_time=None, output_interval=None,
-                       start_values=None) -> dict[str, np.ndarray]:
+                       start_values=None, step_finished=None) -> dict[str, np.ndarray]:
     """Simulate a gear FMU with fmpy under the scene's experiment and inputs; the
-    communication step is the output interval. Returns {"time": …, output: …}."""
+    communication step is the output interval; `step_finished(time, recorder)` is fmpy's,
+    called after each step (it returns True to go on). Returns {"time": …, output: …}."""
     import fmpy
 
     stop_time = stop_time or scene.experiment.stop_time
@@ -64,7 +65,8 @@ def simulate_scene_fmu(fmu_path, scene, stop_time=None, output_interval=None,
     result = fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time,
                                output_interval=output_interval,
                                input=scene_inputs(scene, stop_time),
-                               start_values=start_values or {})
+                               start_values=start_values or {},
+                               step_finished=step_finished)
     if result["time"][-1] < stop_time - 1e-9 * output_interval:
         raise RuntimeError(f"{fmu_path}: the FMU stopped at t = {result['time'][-1]:g} s "
                            "(run with fmpy's debug_logging to see why)")
