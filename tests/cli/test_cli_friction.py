@@ -649,6 +649,23 @@ def test_a_command_whose_reader_has_gone_ends_quietly():
     assert command.wait(timeout=60) == 141 and error == b""
 
 
+def test_a_changed_scenes_files_are_named_by_its_changes(tmp_path, monkeypatch, capsys):
+    """`run reference --set w0_pinion=450` wrote results/reference.csv, replacing the scene's
+    own run that a user meant to compare it with: its files carry its changes in their
+    names, as build-fmu's FMUs do, and the scene's own are left as they were."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "reference.csv").write_text("the scene's own run\n")
+    assert main(["run", "reference", "--set", "w0_pinion=450", "--stop-time", "0.002",
+                 "--no-progress"]) == 0
+    assert main(["campbell", "reference", "--set", "w0_pinion=450", "--speeds", "100", "500",
+                 "5"]) == 0
+    capsys.readouterr()
+    assert (tmp_path / "results" / "reference.csv").read_text() == "the scene's own run\n"
+    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == [
+        "reference+w0_pinion=450.csv", "reference+w0_pinion=450_campbell.png", "reference.csv"]
+
+
 def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, built_fmus):
     """--set NAME=VALUE runs the scene with a parameter or input torque changed, says so, and
     is checked as a scene file's value is (one line, exit 2, the setting named)."""

@@ -22,13 +22,16 @@ from .sweep_plots import (
 from .sweep_point import SETTLED_DRIFT
 
 
-def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[Path]:
+def write_outputs(scene, table, series, folder: Path, time_sweeps=None,
+                  name: str | None = None) -> list[Path]:
     """CSV, then the plots that fit the sweep's axes; returns the paths written. `series`:
     each point's window (None for a branch: no waterfall); `time_sweeps`: {"up": table,
-    "down": table} of chained time sweeps drawn over a branch's resonance curve."""
+    "down": table} of chained time sweeps drawn over a branch's resonance curve; `name`: what
+    the files and titles call the scene (None: its name)."""
     folder.mkdir(parents=True, exist_ok=True)
     names = swept_columns(table)
-    stem = folder / f"{scene.name}_sweep_{'_'.join(names)}"
+    name = scene.name if name is None else name
+    stem = folder / f"{name}_sweep_{'_'.join(names)}"
     csv = Path(f"{stem}.csv")
     # the swept columns with their units; the others name theirs (speed_rpm, F_mesh_max_N)
     named = table.rename(columns={name: name_with_unit(name) for name in names})
@@ -38,15 +41,15 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None) -> list[
     if names == [SPEED]:
         curve, waterfall = Path(f"{stem}_resonance.png"), Path(f"{stem}_waterfall.png")
         plot_resonance_curve(table, curve, natural, z,
-                             f"{scene.name}: dynamic factor against speed", sweeps=time_sweeps)
+                             f"{name}: dynamic factor against speed", sweeps=time_sweeps)
         written.append(curve)
         if series is not None:
             plot_waterfall(table, series, waterfall, natural, z,
-                           f"{scene.name}: dte spectra over the sweep (waterfall)")
+                           f"{name}: dte spectra over the sweep (waterfall)")
             written.append(waterfall)
     else:
         picture = Path(f"{stem}.png")
-        plot_parameter_sweep(table, names, picture, f"{scene.name}: K_v over "
+        plot_parameter_sweep(table, names, picture, f"{name}: K_v over "
                              f"{' and '.join(names)}{fixed_speed(table)}")
         written.append(picture)
     return written

@@ -19,6 +19,7 @@ from .common import (
     add_progress,
     add_scene,
     add_settings,
+    changed_name,
     fail,
     say,
     scene_of,
@@ -99,7 +100,7 @@ def execute(args, parser) -> int:
             print(path)
         return 0
     scene = scene_of(args, parser)  # a bad scene or setting is reported before any build
-    results = Path(str(SIMULATED).replace("<scene>", scene.name))
+    results = Path(str(SIMULATED).replace("<scene>", changed_name(scene, args)))
     if args.simulate and output_file_problem(results) is not None:
         fail(parser, f"--simulate writes {results}: {output_file_problem(results)}; run it "
                      "from a folder you can write in")
@@ -110,9 +111,8 @@ def execute(args, parser) -> int:
             source.write_text(scene_text(scene, args.settings), encoding="utf-8")
         if args.ssp is not None:
             return ssp_archive(args, parser, scene, source)
-        output = args.output or args.dist / default_fmu_name(
-            scene.name + "".join(f"+{name}={toml_value(value)}"
-                                 for name, value in args.settings), args.fmi)
+        output = args.output or args.dist / default_fmu_name(changed_name(scene, args),
+                                                             args.fmi)
         problem = output_file_problem(output, (".fmu",))
         if problem is not None:
             fail(parser, f"cannot write {output}: {problem}; give -o FILE.fmu in a folder you "

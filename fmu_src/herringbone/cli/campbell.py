@@ -11,6 +11,7 @@ from .common import (
     add_scene,
     add_settings,
     add_speeds,
+    changed_name,
     default_output,
     scene_of,
     speeds_of,
@@ -40,11 +41,12 @@ def execute(args, parser) -> int:
     speeds = sweep.speeds()
     low, high = float(speeds[0]), float(speeds[-1])
     scene = scene_of(args, parser)
-    output = default_output(parser, args.output, Path("results") / f"{scene.name}_campbell.png",
+    name = changed_name(scene, args)
+    output = default_output(parser, args.output, Path("results") / f"{name}_campbell.png",
                             PICTURES)
     require("matplotlib", "the Campbell diagram")
     output.parent.mkdir(parents=True, exist_ok=True)
-    found = plot_campbell(scene, low, high, output, f"{scene.name}: Campbell diagram")
+    found = plot_campbell(scene, low, high, output, f"{name}: Campbell diagram")
     print(f"crossings k·f_mesh = f_n between {low * RPM_PER_RAD_S:.0f} and "
           f"{high * RPM_PER_RAD_S:.0f} rpm ({low:g}-{high:g} rad/s):")
     for c in found:

@@ -192,6 +192,14 @@ def add_settings(parser: argparse.ArgumentParser) -> None:
                              "or false); repeatable: --set w0_pinion=450 --set M_motor=800")
 
 
+def changed_name(scene, args) -> str:
+    """The scene's name with the command's --set changes, "reference+w0_pinion=450": what its
+    files are named by, so that a changed scene's results replace none of the scene's own
+    (build-fmu's FMUs are named so too)."""
+    return scene.name + "".join(f"+{name}={toml_value(value)}"
+                                for name, value in getattr(args, "settings", []))
+
+
 # names --set refuses before their value is read (a value may be a word: method=radau): what
 # each is, and where it is set instead
 _SET_ELSEWHERE = {

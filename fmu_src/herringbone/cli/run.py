@@ -33,6 +33,7 @@ from .common import (
     add_progress,
     add_scene,
     add_settings,
+    changed_name,
     default_output,
     fail,
     progress_of,
@@ -84,7 +85,8 @@ def declare(parser) -> None:
                              f"with --reference the error over the run {reference.describe()} "
                              f"(default {REFERENCE_DEFAULT_TOLERANCE:g})")
     add_output(parser, "the outputs, one column per output with its unit; an existing file is "
-               "replaced", "results/<scene>.csv", SUFFIXES)
+               "replaced", "results/<scene>.csv, <scene> with +NAME=VALUE for each --set",
+               SUFFIXES)
     parser.add_argument("--plot", action="store_true",
                         help="also write PNGs beside the CSV: time histories and amplitude "
                              "spectra with mesh harmonics and natural frequencies")
@@ -131,7 +133,8 @@ def execute(args, parser) -> int:
                      "--reference (the compiled integrator's methods)")
     scene = scene_of(args, parser)
     stop_time, interval = span_of(args, parser, scene)
-    output = default_output(parser, args.output, Path("results") / f"{scene.name}.csv",
+    output = default_output(parser, args.output,
+                            Path("results") / f"{changed_name(scene, args)}.csv",
                             SUFFIXES)
     if args.plot:
         require("matplotlib", "--plot")

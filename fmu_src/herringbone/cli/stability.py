@@ -13,6 +13,7 @@ from .common import (
     add_scene,
     add_settings,
     add_speeds,
+    changed_name,
     default_output,
     progress_of,
     scene_of,
@@ -44,15 +45,16 @@ def execute(args, parser) -> int:
     sweep = speeds_of(args, parser)
     assert sweep is not None  # the command has default speeds
     scene = scene_of(args, parser)
-    output = default_output(parser, args.output,
-                            Path("results") / f"{scene.name}_stability.png", PICTURES)
+    name = changed_name(scene, args)
+    output = default_output(parser, args.output, Path("results") / f"{name}_stability.png",
+                            PICTURES)
     require("matplotlib", "the stability chart")
     speeds = sweep.speeds()
     with progress_bar(len(speeds), f"stability {scene.name}", progress_of(args),
                       unit="speed") as bar:
         chart = stability_chart(scene, speeds, on_progress=bar.update)
     output.parent.mkdir(parents=True, exist_ok=True)
-    plot_stability_chart(chart, output, title=f"{scene.name}: parametric stability")
+    plot_stability_chart(chart, output, title=f"{name}: parametric stability")
     print("\n".join(summary(chart)))
     print(f"chart written to {output}")
     return 0

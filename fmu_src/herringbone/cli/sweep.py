@@ -33,6 +33,7 @@ from .common import (
     add_scene,
     add_settings,
     add_speeds,
+    changed_name,
     default_output,
     fail,
     progress_of,
@@ -182,7 +183,8 @@ def execute(args, parser) -> int:
             workers=None if args.workers is None else int(args.workers),
             scheduler=args.scheduler, fmu=args.through_fmu, progress=progress)
     wall = time.perf_counter() - started
-    written = write_outputs(scene, table, series, folder, time_sweeps)
+    written = write_outputs(scene, table, series, folder, time_sweeps,
+                            changed_name(scene, args))
     print(describe(scene, table, wall, through_fmu=args.through_fmu is not None,
                    time_sweeps=time_sweeps))
     for path in written:
