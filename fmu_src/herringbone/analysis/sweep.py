@@ -106,7 +106,7 @@ def scene_at(scene, point: Point):
 
     params = {k: v for k, v in point.values if k not in INPUTS}
     torques = {k: v for k, v in point.values if k in INPUTS}
-    follows = len(torques) == 1 or not torques and RATIO_SETTERS & params.keys()
+    follows = len(torques) == 1 or not torques and bool(RATIO_SETTERS & params.keys())
     if follows:
         try:
             check_balanced(scene)
