@@ -481,33 +481,30 @@ def chart_curve(chart: StabilityChart) -> tuple[np.ndarray, np.ndarray]:
 
 
 def plot_stability_chart(chart: StabilityChart, path, title=None):
-    """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rpm; mesh
-    frequency in Hz on the top axis; chart_curve), with the line 0 (growth above, decay
-    below) and the unstable bands shaded."""
+    """Write a PNG of the largest Floquet exponent (1/s) against pinion speed (rad/s, the unit
+    the command takes and prints the bands in; rpm on an axis below it, mesh frequency in Hz
+    on the top one; chart_curve), with the line 0 (growth above, decay below) and the
+    unstable bands shaded."""
     from .plots import _legend_beside, _pyplot, _save
 
     plt = _pyplot()
-    rpm = RPM_PER_RAD_S
-    hertz_per_rpm = chart.mesh_teeth / 60.0
-    figure, axes = plt.subplots(figsize=(11, 4.5))
+    hertz_per_rad_s = chart.mesh_teeth / (2.0 * np.pi)
+    figure, axes = plt.subplots(figsize=(11, 5))
     speeds, exponent = chart_curve(chart)
-    axes.plot(speeds * rpm, exponent, color="C0", lw=1.2,
+    axes.plot(speeds, exponent, color="C0", lw=1.2,
               label="largest Floquet exponent ln|λ|max / T")
     axes.axhline(0.0, color="k", lw=0.8, ls="--", label="0: neither growth nor decay")
     for number, (low, high) in enumerate(chart.unstable_bands):
-        axes.axvspan(low * rpm, high * rpm, color="C3", alpha=0.25,
+        axes.axvspan(low, high, color="C3", alpha=0.25,
                      label="unstable band (disturbances grow)" if number == 0 else None)
-    axes.set_xlabel("pinion speed, rpm")
+    axes.set_xlabel("pinion speed, rad/s")
     axes.set_ylabel("largest Floquet exponent, 1/s\n(< 0: slowest decay rate)")
-
-    def to_hertz(n):  # rpm on the bottom axis -> mesh frequency on the top one
-        return np.asarray(n) * hertz_per_rpm
-
-    def to_rpm(f):
-        return np.asarray(f) / hertz_per_rpm
-
-    top = axes.secondary_xaxis("top", functions=(to_hertz, to_rpm))
+    top = axes.secondary_xaxis("top", functions=(lambda w: np.asarray(w) * hertz_per_rad_s,
+                                                 lambda f: np.asarray(f) / hertz_per_rad_s))
     top.set_xlabel("mesh frequency, Hz")
+    below = axes.secondary_xaxis(-0.2, functions=(lambda w: np.asarray(w) * RPM_PER_RAD_S,
+                                                  lambda n: np.asarray(n) / RPM_PER_RAD_S))
+    below.set_xlabel("pinion speed, rpm")
     axes.set_title(title or "Parametric stability of the linear mesh (Floquet exponents)")
     _legend_beside(axes)  # off the curve and the bands, wherever they lie
     axes.grid(True, alpha=0.3)
