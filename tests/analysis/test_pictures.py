@@ -269,7 +269,7 @@ def test_a_branchs_pictures_dot_every_orbit_computed(monkeypatch, tmp_path):
                           "stability": ["stable"] * 3 + ["unstable"] * 2, "event": "",
                           "contact_lost_share": 0.0})
     sweep_plots.plot_parameter_sweep(table, ["beta"], tmp_path / "p.png", "beta")
-    sweep_plots.plot_resonance_curve(table, tmp_path / "r.png", [], 10, "speed")
+    sweep_plots.plot_resonance_curve(table, tmp_path / "r.png", [], "speed")
     panels = [drawn[0].axes[0], *drawn[1].axes[:2]]
     for panel in panels:
         dotted = [line for line in panel.get_lines()
@@ -455,9 +455,9 @@ def test_a_lead_errors_sweep_draws_the_more_loaded_halfs_factor(monkeypatch, tmp
     drawn = drawn_sweep(monkeypatch)
     branch = lead_error_branch()
     timed = branch.assign(stability="time").drop(columns="event").assign(dte_rms_um=3.0)
-    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], 10, "branch")
+    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], "branch")
     sweep_plots.plot_resonance_curve(timed.drop(columns="stability"), tmp_path / "t.png", [],
-                                     10, "time")
+                                     "time")
     sweep_plots.plot_parameter_sweep(branch.assign(dbeta_left=np.linspace(0, 2e-4, 5)),
                                      ["dbeta_left"], tmp_path / "p.png", "parameter")
     for figure, label in zip(drawn, ["K_v_half (more loaded half), stable orbits",
@@ -471,7 +471,7 @@ def test_a_lead_errors_sweep_draws_the_more_loaded_halfs_factor(monkeypatch, tmp
 
     assert HALF_FACTOR_SPREAD == 0.01
     alike = branch.assign(K_v_half=branch["K_v"] * 1.005)  # within HALF_FACTOR_SPREAD
-    sweep_plots.plot_resonance_curve(alike, tmp_path / "a.png", [], 10, "alike")
+    sweep_plots.plot_resonance_curve(alike, tmp_path / "a.png", [], "alike")
     assert not [line for line in drawn[-1].axes[0].get_lines()
                 if str(line.get_label()).startswith("K_v_half")]
 
@@ -485,7 +485,7 @@ def test_a_speed_sweeps_resonance_curve_marks_contact_loss(monkeypatch, tmp_path
 
     drawn = drawn_sweep(monkeypatch)
     branch = lead_error_branch()
-    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], 10, "branch")
+    sweep_plots.plot_resonance_curve(branch, tmp_path / "r.png", [], "branch")
     for panel, column in zip(drawn[0].axes[:2], ("K_v", "dte_p2p_um")):
         (marked,) = [line for line in panel.get_lines()
                      if line.get_label() == sweep_plots.CONTACT_LOST]
@@ -505,16 +505,20 @@ def test_resonance_labels_stand_apart_above_the_curve_joined_to_their_lines(monk
     from matplotlib.text import Text
 
     from herringbone.analysis import sweep_plots
+    from herringbone.analysis.excitation import Resonance
 
     drawn = drawn_sweep(monkeypatch)
     natural = [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
-    sweep_plots.plot_resonance_curve(lead_error_branch(), tmp_path / "r.png", natural, 10,
+    found = sorted((Resonance(2 * np.pi * f / (k * 10), k, f, 0.1) for f in natural
+                    for k in (1, 2, 3) if 100.0 <= 2 * np.pi * f / (k * 10) <= 1000.0),
+                   key=lambda r: r.speed)
+    sweep_plots.plot_resonance_curve(lead_error_branch(), tmp_path / "r.png", found,
                                      "reference")
     figure = drawn[0]
     panel = figure.axes[0]
     renderer = figure.canvas.get_renderer()
     boxes = [Text.get_window_extent(text, renderer) for text in panel.texts]  # no leader
-    resonances = sweep_plots.resonances_between(natural, 10, 100.0, 1000.0)
+    resonances = [(r.speed, r.order, r.frequency) for r in found]
     assert len(boxes) == len(resonances) == 9
     top = panel.get_window_extent(renderer).y1
     assert min(box.y0 for box in boxes) > top  # above the panel, off the data

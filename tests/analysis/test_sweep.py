@@ -463,10 +463,14 @@ def test_campbell_crossings_are_the_resonance_speeds_of_info(tmp_path, capsys):
     output = tmp_path / "campbell.png"
     assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "400", "500",
                      "2", "-o", str(output)]) == 0
-    lines = [line for line in capsys.readouterr().out.splitlines() if "k = " in line]
+    crossings, ringing = capsys.readouterr().out.split("those that ring")
+    lines = [line for line in crossings.splitlines() if "k = " in line]
     # info: 683.71 Hz at k = 1 429.6 rad/s, 2059.40 Hz k = 3 431.3, 1497.33 Hz k = 2 470.4
     assert [line.split("(")[1].split("rad/s")[0].strip() for line in lines] == ["429.6", "431.3",
                                                                           "470.4"]
+    # of which the first rings (10 % of the static force), and the 6th harmonic on 4397 Hz
+    assert [line.split("(")[1].split("rad/s")[0].strip() for line in ringing.splitlines()
+            if "k = " in line] == ["429.6", "460.5"]
     assert output.stat().st_size > 10_000
     assert cli.main(["campbell", str(MODELS / "reference.toml"), "--speeds", "500", "400",
                      "2"]) == 2
@@ -536,7 +540,7 @@ def test_resonance_curve_draws_a_branch_by_stability(tmp_path):
     plt.close(figure)
     up = table.iloc[:3].assign(stability="time")
     path = tmp_path / "curve.png"
-    plot_resonance_curve(table, path, [], 10, "branch", sweeps={"up": up})
+    plot_resonance_curve(table, path, [], "branch", sweeps={"up": up})
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -675,10 +679,13 @@ def test_resonance_marks_list_their_orders_in_order_and_keep_their_labels_apart(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from herringbone.analysis.excitation import Resonance
     from herringbone.analysis.sweep_plots import LABEL_GAP, mark_resonances
 
     figure, axes = plt.subplots(2, 1)
-    mark_resonances(axes, [683.7, 1497.3, 2059.4, 4397.2], 10, 100.0, 1000.0)
+    found = [Resonance(2 * math.pi * f / (k * 10), k, f, 0.1)
+             for f in (683.7, 1497.3, 2059.4, 4397.2) for k in (1, 2, 3)]
+    mark_resonances(axes, sorted(found, key=lambda r: r.speed), 100.0, 1000.0)
     labels = [line.get_label() for line in axes[0].get_lines()
               if not line.get_label().startswith("_")]
     assert labels == [f"k·f_mesh = f_n, k = {k}" for k in (1, 2, 3)]

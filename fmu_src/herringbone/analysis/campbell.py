@@ -17,6 +17,7 @@ import numpy as np
 from ..arguments import speed_sweep_problem
 from ..model.assembly import GearTrainModel, natural_modes, rigid_rotation_mode
 from ..model.parameters import RPM_PER_RAD_S
+from .excitation import HARMONICS_CONSIDERED, STRENGTH_LISTED, resonances
 from .plots import _pyplot, _save, spread_apart
 from .report import HARMONICS, mode_character, resonance_speeds
 
@@ -160,7 +161,7 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
     rpm = np.linspace(low, high, 200) * RPM_PER_RAD_S
     top = max(HARMONICS[-1] * z * rpm[-1] / 60.0, modes[0].frequency) * 1.1
     shown = [m for m in modes if m.frequency <= top]
-    figure, axes = plt.subplots(figsize=(11, 6))
+    figure, axes = plt.subplots(figsize=(11, 7))
     for number, mode in enumerate(shown):
         axes.axhline(mode.frequency, color="C0", lw=1.0,
                      label="natural frequency f_n" if number == 0 else None)
@@ -170,6 +171,10 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
                   label=f"mesh order k = {k}: k·z·n/60")
     axes.plot([c.speed * RPM_PER_RAD_S for c in found], [c.frequency for c in found], "o",
               mfc="none", color="k", label="crossings (resonance speeds)")
+    ringing = [r for r in resonances(scene, low, high) if r.frequency <= top]
+    axes.plot([r.speed * RPM_PER_RAD_S for r in ringing], [r.frequency for r in ringing], "o",
+              ms=4, color="C3", label=f"resonances that ring, k up to {HARMONICS_CONSIDERED} "
+                                     f"(excitation.resonances, {STRENGTH_LISTED:.0%} or more)")
     axes.set_xlim(rpm[0], rpm[-1])
     axes.set_ylim(0, top)
     axes.set_xlabel("pinion speed n, rpm")
@@ -177,7 +182,8 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
     upper = axes.secondary_xaxis("top", functions=(lambda n: n / RPM_PER_RAD_S,
                                                    lambda w: w * RPM_PER_RAD_S))
     upper.set_xlabel("pinion speed, rad/s")
-    axes.legend(loc="upper left", fontsize=8, framealpha=1.0)
+    # below the axes: inside, it stood over the crossings and the resonances of the upper modes
+    axes.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8)
     axes.grid(True, alpha=0.3)
     axes.set_title(title)
     _save(figure, path)

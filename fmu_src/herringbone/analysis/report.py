@@ -106,8 +106,9 @@ def scene_report(scene) -> str:
               _mode_line(i + 1, f, mode_character(shapes[:, i], masses, names),
                          frequencies.max())
               for i, f in enumerate(frequencies)]
-    lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s); "
-                  f"speeds above {MAX_RPM:.0f} rpm are not listed",
+    lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s), k up to "
+                  f"{HARMONICS[-1]} (higher harmonics ring too: below); speeds above "
+                  f"{MAX_RPM:.0f} rpm are not listed",
               "  f_n / Hz    " + "".join(f"{f'k = {k}':<22}" for k in HARMONICS)]
     for f in np.delete(frequencies, rigid):
         speeds = resonance_speeds(f, g.z_pinion)
@@ -115,4 +116,22 @@ def scene_report(scene) -> str:
                  for w in speeds.values()]
         if any(cell != "-" for cell in cells):
             lines.append(f"  {f:10.2f}  " + "".join(f"{cell:<22}" for cell in cells))
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _ringing_lines(scene, frequencies, shapes, masses, names)) + "\n"
+
+
+RINGING_LISTED = 8  # the strongest resonances `info` lists
+
+
+def _ringing_lines(scene, frequencies, shapes, masses, names) -> list[str]:
+    """The strongest resonances below MAX_RPM (excitation.strongest), each with its mode."""
+    from .excitation import HARMONICS_CONSIDERED, resonance_lines, strongest
+
+    def name_of(frequency_hz):
+        nearest = int(np.argmin(np.abs(frequencies - frequency_hz)))
+        return mode_character(shapes[:, nearest], masses, names).split(" (")[0] + " mode"
+
+    found = strongest(scene, MAX_RPM / RPM_PER_RAD_S, RINGING_LISTED)
+    return ["", "Resonances that ring, strongest first: the mesh force's k-th harmonic there, "
+                f"a share of the static mesh force (k up to {HARMONICS_CONSIDERED}; a "
+                "first-order estimate, herringbone.analysis.excitation)",
+            *(resonance_lines(found, name_of) if found else ["  none of 2 % or more"])]

@@ -203,9 +203,8 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         Pinion speeds w0_pinion, rad/s, each once; `[450.0]` with `params`: at that speed.
     params : dict or None
         {parameter name (or "M_motor", "M_load"): values, in its unit, each once}; with
-        `speeds`, at most two quantities (a grid). One torque swept: the other follows; a
-        tooth count swept: M_load follows the ratio, M_motor kept.
-        Each point needs constant torques that balance (M_load = u·M_motor), M_motor > 0.
+        `speeds`, at most two quantities (a grid). One torque swept, the other follows; a
+        tooth count, M_load: each point needs M_load = u·M_motor, M_motor > 0.
     protocol : Protocol
         How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
     method : {"shooting", "time"} or None

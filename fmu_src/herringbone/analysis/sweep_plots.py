@@ -7,14 +7,8 @@ import numpy as np
 
 from ..model.parameters import RPM_PER_RAD_S, unit_of
 from .plots import _pyplot, _save, amplitude_spectrum, spread_apart
-from .report import HARMONICS, resonance_speeds
+from .report import HARMONICS
 from .sweep_point import SETTLED_DRIFT
-
-
-def resonances_between(frequencies, z_pinion, low, high):
-    """[(speed rad/s, k, f_n Hz)] with k·f_mesh = f_n for speeds in [low, high]."""
-    return sorted((speed, k, f) for f in frequencies if f > 0
-                  for k, speed in resonance_speeds(f, z_pinion).items() if low <= speed <= high)
 
 
 def is_branch(table) -> bool:
@@ -137,12 +131,12 @@ def draw_k_v(axes, table, along: str, branch: bool) -> None:
     mark_contact_loss(axes, table, along, "K_v")
 
 
-def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> None:
+def plot_resonance_curve(table, path, resonances, title, sweeps=None) -> None:
     """K_v (top; K_v_half beside it where the halves differ: draw_k_v) and dte peak-to-peak
-    (bottom) against pinion speed, rpm (rad/s on top), each resonance k·f_mesh = f_n in the
-    range marked and labelled (mark_resonances), a square at each point where a helix half
-    lost contact. A branch table (sweep's method "shooting") is drawn as `draw_branch` says;
-    `sweeps`: time sweeps drawn over it."""
+    (bottom) against pinion speed, rpm (rad/s on top), the `resonances`
+    (excitation.Resonance) marked and labelled (mark_resonances), a square at each point
+    where a helix half lost contact. A branch table (sweep's method "shooting") is drawn as
+    `draw_branch` says; `sweeps`: time sweeps drawn over it."""
     plt = _pyplot()
     branch = is_branch(table)
     if not branch:
@@ -161,8 +155,7 @@ def plot_resonance_curve(table, path, natural, z_pinion, title, sweeps=None) -> 
     axes[0].set_ylabel("dynamic factor K_v")
     axes[1].set_ylabel("dte, µm")
     axes[1].set_xlabel("pinion speed, rpm")
-    mark_resonances(axes, natural, z_pinion, table["w0_pinion"].min(),
-                    table["w0_pinion"].max())
+    mark_resonances(axes, resonances, table["w0_pinion"].min(), table["w0_pinion"].max())
     top = axes[0].secondary_xaxis(LABEL_STRIP, functions=(lambda n: n / RPM_PER_RAD_S,
                                                           lambda w: w * RPM_PER_RAD_S))
     top.set_xlabel("pinion speed, rad/s")
@@ -185,13 +178,13 @@ LABEL_FOOT = 1.04
 LABEL_STRIP = 1.24
 
 
-def mark_resonances(axes, natural, z_pinion, low, high) -> None:
-    """Each resonance k·f_mesh = f_n between the speeds low and high (rad/s): a dashed line
-    on every panel, one legend entry per order k in the order of k, and f_n written above
-    the first panel (LABEL_FOOT), labels moved apart where lines lie close (a label's width
-    on the panel as drawn, at least LABEL_GAP of the speeds), each joined to its line by a
-    leader."""
-    resonances = resonances_between(natural, z_pinion, low, high)
+def mark_resonances(axes, found, low, high) -> None:
+    """Each resonance k·f_mesh = f_n of `found` (excitation.Resonance, by speed) between the
+    speeds low and high (rad/s): a dashed line on every panel, one legend entry per order k
+    in the order of k, and f_n written above the first panel (LABEL_FOOT), labels moved
+    apart where lines lie close (a label's width on the panel as drawn, at least LABEL_GAP of
+    the speeds), each joined to its line by a leader."""
+    resonances = [(r.speed, r.order, r.frequency) for r in found if low <= r.speed <= high]
     for k in sorted({k for _, k, _ in resonances}):
         for panel in axes:  # the legend's entries, in the order of k
             panel.plot([], [], color=f"C{3 + k}", lw=0.8, ls="--",

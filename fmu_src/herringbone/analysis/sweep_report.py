@@ -17,7 +17,6 @@ from .sweep_plots import (
     plot_parameter_sweep,
     plot_resonance_curve,
     plot_waterfall,
-    resonances_between,
 )
 from .sweep_point import SETTLED_DRIFT
 
@@ -40,7 +39,7 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None,
     natural, z = elastic_frequencies(scene), scene.parameters["z_pinion"]
     if names == [SPEED]:
         curve, waterfall = Path(f"{stem}_resonance.png"), Path(f"{stem}_waterfall.png")
-        plot_resonance_curve(table, curve, natural, z,
+        plot_resonance_curve(table, curve, ringing(scene, table),
                              f"{name}: dynamic factor against speed", sweeps=time_sweeps)
         written.append(curve)
         if series is not None:
@@ -79,16 +78,23 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
                      "recorded samples, which read the ringing's peaks after each contact "
                      "switch low (without --through-fmu they resolve it)")
     if SPEED in swept_columns(table) and len(swept_columns(table)) == 1:
-        low, high = table[SPEED].min(), table[SPEED].max()
-        marks = resonances_between(elastic_frequencies(scene), scene.parameters["z_pinion"],
-                                   low, high)
-        lines += [f"resonance k·f_mesh = f_n at {s * RPM_PER_RAD_S:.0f} rpm ({s:.1f} rad/s): "
-                  f"k = {k}, f_n = {f:.1f} Hz" for s, k, f in marks]
+        lines += [f"resonance k·f_mesh = f_n at {r.speed * RPM_PER_RAD_S:.0f} rpm "
+                  f"({r.speed:.1f} rad/s): k = {r.order}, f_n = {r.frequency:.1f} Hz, its "
+                  f"harmonic {100 * r.strength:.1f} % of the static force"
+                  for r in ringing(scene, table)]
     if (table["contact_lost_share"] > 0).any():
         lost = int((table["contact_lost_share"] > 0).sum())
         lines.append(f"a helix half out of contact at {lost} point{'s' if lost != 1 else ''} "
                      "(contact_lost_share > 0)")
     return "\n".join(lines)
+
+
+def ringing(scene, table):
+    """The resonances in the sweep's speeds that ring (excitation.resonances: the mesh force's
+    harmonic there 2 % of the static force or more, k up to 12), by speed."""
+    from .excitation import resonances
+
+    return resonances(scene, table[SPEED].min(), table[SPEED].max())
 
 
 def _unsettled_lines(table, which: str) -> list[str]:

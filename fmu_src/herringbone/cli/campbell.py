@@ -35,6 +35,7 @@ def declare(parser) -> None:
 def execute(args, parser) -> int:
     """Draw the diagram and list the crossings."""
     from ..analysis.campbell import plot_campbell
+    from ..analysis.excitation import HARMONICS_CONSIDERED, resonance_lines, resonances
 
     sweep = speeds_of(args, parser)
     assert sweep is not None  # the command has default speeds
@@ -54,5 +55,10 @@ def execute(args, parser) -> int:
               f"f_n = {c.frequency:9.2f} Hz")
     if not found:
         print("  none")
+    ringing = resonances(scene, low, high)
+    print(f"of these and the higher harmonics (k up to {HARMONICS_CONSIDERED}), those that "
+          "ring: the mesh force's k-th harmonic there, a share of the static force (a "
+          "first-order estimate):")
+    print("\n".join(resonance_lines(ringing) or ["  none of 2 % or more"]))
     print(f"diagram written to {output}")
     return 0
