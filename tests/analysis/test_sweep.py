@@ -786,9 +786,10 @@ def test_a_lead_error_loads_one_half_beyond_what_k_v_says(reference_scene):
     assert orbit["load_share_left"] == pytest.approx(0.673, abs=1e-3)
     assert orbit["K_v_half"] == pytest.approx(1.737, abs=1e-3)
     assert orbit["K_v"] == pytest.approx(1.408, abs=1e-3)
-    assert ("K_v_half from 1.7372 to 1.7372 (stable orbits): the more loaded helix half, its "
-            "peak over half the static force; the left half carries 67.3 % of the load "
-            "(load_share_left)") in describe(scene, branch, 1.0).splitlines()
+    assert ("K_v_half from 1.7372 to 1.7372 (stable orbits), largest at w0_pinion = 300 rad/s "
+            "(2865 rpm): the more loaded helix half, its peak over half the static force (what "
+            "a tooth bears, where K_v, of the two halves' sum, may fall); the left half carries "
+            "67.3 % of the load (load_share_left)") in describe(scene, branch, 1.0).splitlines()
 
 
 def test_a_train_too_lightly_damped_for_the_derived_settle_is_refused_before_any_work():

@@ -449,7 +449,7 @@ def chained_time_sweep(scene, speeds, protocol: Protocol = Protocol(), progress:
     return pd.DataFrame(rows)
 
 
-def resonation_summary(table) -> str:
-    """Where the largest K_v of a table lies, as 'name = value unit, …'
-    ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
-    return point_label(table.loc[table["K_v"].idxmax()], swept_columns(table))
+def resonation_summary(table, column: str = "K_v") -> str:
+    """Where the largest K_v (or the `column` given) of a table lies, as 'name = value unit,
+    …' ("w0_pinion = 485.714 rad/s (4638 rpm)")."""
+    return point_label(table.loc[table[column].idxmax()], swept_columns(table))

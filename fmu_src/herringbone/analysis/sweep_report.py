@@ -136,9 +136,10 @@ def _half_lines(table, where: str) -> list[str]:
     half, share = table["K_v_half"], 100.0 * table["load_share_left"]
     shares = (f"{share.min():.1f}" if f"{share.min():.1f}" == f"{share.max():.1f}"
               else f"{share.min():.1f}-{share.max():.1f}")
-    return [f"K_v_half from {half.min():.4f} to {half.max():.4f}{where}: the more loaded helix "
-            f"half, its peak over half the static force; the left half carries "
-            f"{shares} % of the load (load_share_left)"]
+    return [f"K_v_half from {half.min():.4f} to {half.max():.4f}{where}, largest at "
+            f"{resonation_summary(table, 'K_v_half')}: the more loaded helix half, its peak over "
+            f"half the static force (what a tooth bears, where K_v, of the two halves' sum, may "
+            f"fall); the left half carries {shares} % of the load (load_share_left)"]
 
 
 def by_shooting(table) -> bool:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import signal
 import sys
 from pathlib import Path
@@ -196,8 +197,24 @@ def changed_name(scene, args) -> str:
     """The scene's name with the command's --set changes, "reference+w0_pinion=450": what its
     files are named by, so that a changed scene's results replace none of the scene's own
     (build-fmu's FMUs are named so too)."""
-    return scene.name + "".join(f"+{name}={toml_value(value)}"
+    return scene.name + "".join(f"+{name}={_short_value(value)}"
                                 for name, value in getattr(args, "settings", []))
+
+
+def _short_value(value) -> str:
+    """A value as a file name gives it: as a scene file writes it (toml_value), but a number
+    that it writes long in the short form that means the same float (1e9, not
+    1000000000.0; 1e-5, not 1e-05)."""
+    text = toml_value(value)
+    if not isinstance(value, float) or not math.isfinite(value) or (
+            "e" not in text and len(text) <= 8):
+        return text
+    mantissa, _, exponent = f"{value:.17e}".partition("e")
+    for digits in range(17):
+        short = f"{float(mantissa):.{digits}f}".rstrip("0").rstrip(".") + f"e{int(exponent)}"
+        if float(short) == value:
+            return short if len(short) < len(text) else text
+    return text
 
 
 # names --set refuses before their value is read (a value may be a word: method=radau): what

@@ -146,8 +146,10 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in [
     _p("contact_loss", True, "", "teeth can separate (a point carries no tensile force)", bool,
        allowed=FINITE),
     _p("zeta_mesh", 0.05, "1", "mesh damping ratio", allowed=DAMPING_RATIO),
-    _p("dbeta_left", 0.0, "rad", "helix (lead) error of the left half", allowed=LEAD_ERROR),
-    _p("dbeta_right", 0.0, "rad", "helix (lead) error of the right half", allowed=LEAD_ERROR),
+    _p("dbeta_left", 0.0, "rad", "lead error of the left half: deviation per axial travel, "
+       "f_Hb/b", allowed=LEAD_ERROR),
+    _p("dbeta_right", 0.0, "rad", "lead error of the right half: deviation per axial travel, "
+       "f_Hb/b", allowed=LEAD_ERROR),
     # inertias (section 1)
     _p("I_pinion", 2.18927e-4, "kg.m2", "polar moment of inertia of the pinion",
        allowed=INERTIA),
