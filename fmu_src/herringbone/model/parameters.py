@@ -348,8 +348,9 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in [
     Output("F_mesh", "N", "mesh force: sum of the contact point forces", slot="F_MESH"),
     Output("F_mesh_left", "N", "mesh force of the left half", slot="F_MESH_LEFT"),
     Output("F_mesh_right", "N", "mesh force of the right half", slot="F_MESH_RIGHT"),
-    *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing "
-             "(pinion bearings sum to -F_mesh, wheel bearings to +F_mesh)",
+    *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing along the "
+             "mesh force, the model's one plane (pinion bearings sum to -F_mesh, wheel "
+             "bearings to +F_mesh)",
              component="bearings")
       for gear in ("pinion", "wheel") for side in ("left", "right")],
     Output("w_motor", "rad/s", "motor speed", component="motor", rate_of="phi_motor"),
