@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import herringbone
-from herringbone.analysis.excitation import resonances, strongest
+from herringbone.analysis.excitation import resonance_lines, resonances, strongest
 from herringbone.model.assembly import GearTrainModel
 
 SETTLE = 4.0  # s: the 113 Hz motor-load mode (ζ 0.0029) decays by e^-8 over it
@@ -75,3 +75,6 @@ def test_strengths_are_shares_of_the_static_force_whatever_the_torque(reference_
         assert ours.strength == pytest.approx(theirs.strength, rel=1e-9)
     undamped = herringbone.load_scene("undamped")
     assert all(math.isinf(r.strength) for r in strongest(undamped, 3000.0, 3))
+    # contact_loss's light torque: its 113 Hz resonance would pull the teeth, and says so
+    (line,) = resonance_lines(strongest(herringbone.load_scene("contact_loss"), 3000.0, 1))
+    assert line.endswith("135.2 % (the teeth part: the estimate holds no more)"), line

@@ -165,4 +165,6 @@ def resonance_lines(found: list[Resonance], name_of=None) -> list[str]:
             f"f_n = {r.frequency:9.2f} Hz  "
             + (f"{100 * r.strength:5.1f} %" if math.isfinite(r.strength)
                else "unbounded: an undamped mode")
+            # a harmonic beyond the static force would pull the teeth: they part first
+            + (" (the teeth part: the estimate holds no more)" if r.strength >= 1.0 else "")
             + (f"  {name_of(r.frequency)}" if name_of else "") for r in found]
