@@ -12,9 +12,10 @@ from ..suggest import did_you_mean
 NAME = "benchmark"
 SCRIPTS = {"error-vs-runtime": "error_vs_runtime", "extreme-scenes": "extreme_scenes"}
 DEFAULT = "error-vs-runtime"  # what `herringbone benchmark` runs without a name
-HELP = (f"[{' | '.join(SCRIPTS)}] [OPTIONS]: run benchmarks/error_vs_runtime.py (the default) "
-        "or benchmarks/extreme_scenes.py of the source checkout; `herringbone benchmark "
-        "--help` lists the options")
+HELP = (f"measure the integrators: error against run time (the default) or the extreme scenes, "
+        f"[{' | '.join(SCRIPTS)}] [OPTIONS], by benchmarks/error_vs_runtime.py or "
+        "benchmarks/extreme_scenes.py of the source checkout; `herringbone benchmark --help` "
+        "lists the options")
 PROG = f"herringbone {NAME}"
 NOT_INSTALLED = ("the benchmarks are not part of the installed package: they are scripts in the "
                  "benchmarks/ folder of the herringbone repository; clone the repository, "
