@@ -625,6 +625,15 @@ def test_the_summary_of_a_branch_on_which_no_orbit_converged_names_them(referenc
     written = write_outputs(reference_scene, table, None, tmp_path)
     assert [path.name for path in written] == ["reference_sweep_w0_pinion.csv",
                                                "reference_sweep_w0_pinion_resonance.png"]
+    # the chained time sweeps were only drawn: their figures are kept beside the table
+    up, down = table.assign(K_v=[1.3, 1.5, 1.7]), table.iloc[::-1]
+    written = write_outputs(reference_scene, table, None, tmp_path, {"up": up, "down": down})
+    assert [path.name for path in written[:3]] == ["reference_sweep_w0_pinion.csv",
+                                                   "reference_sweep_w0_pinion_time_up.csv",
+                                                   "reference_sweep_w0_pinion_time_down.csv"]
+    kept = pd.read_csv(written[1])
+    assert kept["w0_pinion [rad/s]"].tolist() == [300.0, 450.0, 600.0]
+    assert kept["K_v"].tolist() == [1.3, 1.5, 1.7]
 
 
 def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(

@@ -31,11 +31,10 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None,
     names = swept_columns(table)
     name = scene.name if name is None else name
     stem = folder / f"{name}_sweep_{'_'.join(names)}"
-    csv = Path(f"{stem}.csv")
-    # the swept columns with their units; the others name theirs (speed_rpm, F_mesh_max_N)
-    named = table.rename(columns={name: name_with_unit(name) for name in names})
-    replace_file(csv, lambda staging: named.to_csv(staging, index=False, float_format="%.10g"))
-    written = [csv]
+    written = [_write_table(Path(f"{stem}.csv"), table, names)]
+    # the chained time sweeps beside the branch: drawn on its curve, and their figures kept
+    written += [_write_table(Path(f"{stem}_time_{direction}.csv"), swept, names)
+                for direction, swept in (time_sweeps or {}).items()]
     natural, z = elastic_frequencies(scene), scene.parameters["z_pinion"]
     if names == [SPEED]:
         curve, waterfall = Path(f"{stem}_resonance.png"), Path(f"{stem}_waterfall.png")
@@ -52,6 +51,14 @@ def write_outputs(scene, table, series, folder: Path, time_sweeps=None,
                              f"{' and '.join(names)}{fixed_speed(table)}")
         written.append(picture)
     return written
+
+
+def _write_table(path: Path, table, names) -> Path:
+    """The table as CSV at `path`, the swept columns (`names`) with their units (the others
+    name theirs: speed_rpm, F_mesh_max_N); returns the path."""
+    named = table.rename(columns={column: name_with_unit(column) for column in names})
+    replace_file(path, lambda staging: named.to_csv(staging, index=False, float_format="%.10g"))
+    return path
 
 
 def fixed_speed(table) -> str:

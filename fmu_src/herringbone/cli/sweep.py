@@ -103,8 +103,9 @@ def declare(parser) -> None:
                              "its transient (the default elsewhere, a grid of two among them)")
     parser.add_argument("--time-sweeps", action="store_true",
                         help="with shooting: also sweep up and down by time integration, each "
-                             "point from the last one's end state, and draw both over the "
-                             "branch (where the response is multi-valued they jump at folds)")
+                             "point from the last one's end state, draw both over the branch "
+                             "(where the response is multi-valued they jump at folds) and "
+                             "write each as <table>_time_up.csv and _time_down.csv")
     parser.add_argument("--no-period-doubling", action="store_true",
                         help="with shooting: flag period doublings on the branch but do not "
                              "switch to and follow the period-2 branch from each (followed by "
