@@ -492,6 +492,11 @@ def test_a_speed_sweeps_resonance_curve_marks_contact_loss(monkeypatch, tmp_path
         assert list(marked.get_xdata()) == list(branch["speed_rpm"][2:4])
         assert list(marked.get_ydata()) == list(branch[column][2:4])
         assert marked.get_marker() == "s" and marked.get_markerfacecolor() == "none"
+        # beneath the branch and its folds, which large red squares over them hid
+        others = [line for line in panel.get_lines() if line is not marked and
+                  line.get_label() and not line.get_label().startswith("_")]
+        assert others and all(marked.get_zorder() < line.get_zorder() for line in others)
+        assert marked.get_color() != "C3"  # the folds' colour
 
 
 def test_resonance_labels_stand_apart_above_the_curve_joined_to_their_lines(monkeypatch,

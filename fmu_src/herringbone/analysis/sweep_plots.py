@@ -77,7 +77,7 @@ def draw_one_branch(axes, table, columns, along: str, kind_label: str) -> None:
         folds = table["event"].str.contains("fold").to_numpy()
         if folds.any():
             panel.plot(abscissa[folds], values[folds], "x", color="C3", ms=9, mew=2,
-                       label=_once(panel, "fold (jump)"))
+                       label=_once(panel, "fold (jump)"), zorder=4)
 
 
 def _once(panel, label: str) -> str | None:
@@ -233,18 +233,20 @@ def plot_parameter_sweep(table, axes_names, path, title) -> None:
 
 
 CONTACT_LOST = "a helix half out of contact (contact_lost_share > 0)"
+CONTACT_LOST_COLOUR = "0.55"  # grey: beside the folds' red and the time sweeps' colours
 
 
-def mark_contact_loss(axes, table, x: str, y: str, colour: str = "C3") -> bool:
-    """An open square at each point of `table` where a helix half lost contact in its window
-    or orbit (contact_lost_share > 0), at its columns (x, y); whether there was one. Without
-    it the picture showed nothing of the loss the summary reported."""
+def mark_contact_loss(axes, table, x: str, y: str, colour: str = CONTACT_LOST_COLOUR) -> bool:
+    """A small open square under the curve at each point of `table` where a helix half lost
+    contact in its window or orbit (contact_lost_share > 0), at its columns (x, y); whether
+    there was one. Without it the picture showed nothing of the loss the summary reported;
+    drawn large, red and over the curve, it hid jump_resonance's unstable branch and folds."""
     if "contact_lost_share" not in table:
         return False
     lost = (table["contact_lost_share"] > 0).to_numpy()
     if lost.any():
-        axes.plot(table[x].to_numpy()[lost], table[y].to_numpy()[lost], "s", ms=8,
-                  mfc="none", mew=1.2, color=colour, ls="none", label=CONTACT_LOST)
+        axes.plot(table[x].to_numpy()[lost], table[y].to_numpy()[lost], "s", ms=6,
+                  mfc="none", mew=0.7, color=colour, ls="none", label=CONTACT_LOST, zorder=1.5)
     return bool(lost.any())
 
 
