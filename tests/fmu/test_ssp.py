@@ -133,7 +133,8 @@ def test_unknown_parameter_is_refused_by_name(drivetrain, tmp_path):
     pytest.param({"gear": {"solver_tolerance": 5.0}},
                  "gear.solver_tolerance is 5.0; allowed: [1e-12, 0.01] (error per step relative "
                  "to the static mesh force)", id="gear-declared-max"),
-    pytest.param({"gear": {"eps_q": 1.0}}, "gear.eps_q is 1.0; allowed: [0, 1)",
+    pytest.param({"gear": {"eps_q": 1.0}},
+                 "gear.eps_q is 1.0; allowed: [0, 1) (a fraction of the axial pitch p_x)",
                  id="gear-exclusive-bound"),
     pytest.param({"gear": {"m_pinion": 0.0}}, "gear.m_pinion is 0.0 kg; allowed: [1e-09, 1e+07] "
                  "kg", id="gear-declared-min"),
