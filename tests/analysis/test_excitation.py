@@ -35,29 +35,36 @@ def _at(found, order, frequency):
     return match
 
 
-@pytest.mark.parametrize("order, frequency", [(1, 112.86), (1, 683.71), (5, 683.71),
-                                              (6, 4397.17), (5, 10418.63)])
+@pytest.mark.parametrize("order, frequency, low, high", [
+    (1, 112.86, 0.65, 1.0), (1, 683.71, 0.65, 1.0), (5, 683.71, 0.65, 1.0),
+    (6, 4397.17, 0.65, 1.0), (5, 10418.63, 0.25, 5.0), (10, 10418.63, 0.25, 5.0)])
 def test_a_resonances_strength_is_the_harmonic_a_settled_run_rings_with(reference_scene, order,
-                                                                         frequency):
-    """At each resonance the run's k-th harmonic of F_mesh is 0.72 to 0.80 of the estimate
-    (which leaves out what the stiffness' change does to the vibration itself): the
-    estimate reads high by a quarter to a third, and not by more."""
+                                                                         frequency, low, high):
+    """At each resonance of a mode whose stiffness the mesh varies little, the run's k-th
+    harmonic of F_mesh is 0.74 to 0.85 of the estimate (which leaves out what the stiffness'
+    change does to the vibration itself): it reads high by a quarter to a third, and not by
+    more. The 10419 Hz mesh mode's, whose stiffness swings 40 %, is marked rough, and rings
+    at 0.32 to 0.80 of it here (0.3 to 4.9 over its resonances below 1400 rad/s)."""
     found = resonances(reference_scene, 10.0, 2000.0)
     resonance = _at(found, order, frequency)
+    assert resonance.rough == (frequency > 10000.0)
     harmonics, _ = settled_harmonics(reference_scene, resonance.speed)
-    assert 0.65 * resonance.strength < harmonics[order] < 1.0 * resonance.strength, (
+    assert low * resonance.strength < harmonics[order] < high * resonance.strength, (
         resonance, harmonics[order])
 
 
-def test_the_peak_near_468_rad_s_is_the_pinions_lateral_mode_not_the_wheels(reference_scene):
+def test_the_peak_near_468_rad_s_is_the_pinions_modes_not_the_wheels(reference_scene):
     """docs/sweeps.md credited the reference's K_v peak near 468 rad/s to the 2nd harmonic on
     the 1497 Hz wheel-lateral mode (470.4 rad/s), which the harmonics below k = 4 made the
-    only candidate. The estimate puts that one at 0.3 % of the static force, unlisted, and
-    the 6th on the 4397 Hz pinion-lateral mode (460.5 rad/s) at 3.2 %; with stiffer pinion
-    bearings that mode moves to 5749 Hz and the strongest resonance between 380 and 760 rad/s
-    is its 5th harmonic at 722.5 rad/s, where a run's K_v stands above its neighbours'."""
+    only candidate. The estimate puts that one at 0.3 % of the static force, unlisted; the
+    6th on the 4397 Hz pinion-lateral mode (460.5 rad/s) at 3.2 %, and the 14th on the 10419
+    Hz mesh mode (rough: its stiffness swings 40 % with the mesh). With stiffer pinion
+    bearings the lateral mode moves to 5749 Hz and the strongest resonance between 380 and
+    760 rad/s is its 5th harmonic at 722.5 rad/s, where a run's K_v stands above its
+    neighbours'."""
     near = resonances(reference_scene, 440.0, 500.0)
-    assert [(r.order, round(r.frequency)) for r in near] == [(6, 4397)]
+    assert [(r.order, round(r.frequency), r.rough) for r in near] == [(6, 4397, False),
+                                                                      (14, 10419, True)]
     assert resonances(reference_scene, 470.0, 471.0, least=0.0)[0].strength < 0.005
     stiff = reference_scene.with_parameters(c_brg_pinion_left=1e9, c_brg_pinion_right=1e9)
     top = max(resonances(stiff, 380.0, 760.0), key=lambda r: r.strength)
@@ -77,4 +84,4 @@ def test_strengths_are_shares_of_the_static_force_whatever_the_torque(reference_
     assert all(math.isinf(r.strength) for r in strongest(undamped, 3000.0, 3))
     # contact_loss's light torque: its 113 Hz resonance would pull the teeth, and says so
     (line,) = resonance_lines(strongest(herringbone.load_scene("contact_loss"), 3000.0, 1))
-    assert line.endswith("135.2 % (the teeth part: the estimate holds no more)"), line
+    assert "135.2 % (the teeth part: the estimate holds no more)" in line, line

@@ -514,7 +514,7 @@ def test_resonance_labels_stand_apart_above_the_curve_joined_to_their_lines(monk
 
     drawn = drawn_sweep(monkeypatch)
     natural = [112.9, 683.7, 1497.3, 2059.4, 4397.2, 10418.6, 13354.5]
-    found = sorted((Resonance(2 * np.pi * f / (k * 10), k, f, 0.1) for f in natural
+    found = sorted((Resonance(2 * np.pi * f / (k * 10), k, f, 0.1, 0.05, 0.0) for f in natural
                     for k in (1, 2, 3) if 100.0 <= 2 * np.pi * f / (k * 10) <= 1000.0),
                    key=lambda r: r.speed)
     sweep_plots.plot_resonance_curve(lead_error_branch(), tmp_path / "r.png", found,

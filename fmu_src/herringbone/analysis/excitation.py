@@ -10,11 +10,14 @@ mode answers with the amplitude 2|φ_iᵀ·p̂_k|/(2ζ_i·ω_i²), and the mesh 
 it (r̄ = Σ c·g over the points, averaged: the mesh force's row). That amplitude of the mesh
 force's k-th harmonic, over the static mesh force, is the resonance's *strength*.
 
-It leaves out what the stiffness' change does to the vibration itself (a term of second order),
-contact lost, and the modes' coupling through damping. On the reference scene the runs settled
-at six resonance speeds ring at 0.74 to 0.85 of it (docs/sweeps.md, "Which resonances ring";
-tests/analysis/test_excitation.py): 0.100 for the 684 Hz mode at k = 1 where the run's first
-harmonic is 0.077, 0.032 for the 4397 Hz mode at k = 6 (0.023).
+It leaves out what the stiffness' change does to the vibration itself, contact lost, and the
+modes' coupling through damping. Where a mode's own stiffness swings little with the mesh,
+runs of the reference scene settled at its resonances ring at 0.74 to 0.85 of it (0.100 for
+the 684 Hz mode at k = 1, where the run's first harmonic is 0.077); where it swings by more
+than ROUGH_SWING, the left-out term is of the estimate's order and the estimate is marked
+rough (the reference's 10419 Hz mesh mode, 40 %: runs at 0.3 to 4.9 times it).
+docs/sweeps.md, "Which resonances ring", has the table; tests/analysis/test_excitation.py
+runs part of it.
 
 With sharp face edges a point takes its load at once and the excitation falls off slowly with
 k (the reference's: 6.1, 2.2, 2.1, 5.1, 5.7, 4.0 % of the static force for k = 1 to 6), so
@@ -32,13 +35,17 @@ from ..model.assembly import GearTrainModel, rigid_rotation_mode
 
 # the mesh harmonics whose resonances are weighed (a choice, not a bound: `harmonics=`): the
 # reference's sharp-edged mesh pushes with 1 to 6 % of its static force at k = 1 to 10, 0.04
-# to 0.8 % at 11 to 14 and 1.3 % again at 15 and 16
-HARMONICS_CONSIDERED = 12
+# to 0.8 % at 11 to 14 and 1.3 % again at 15 and 16, where its 10419 Hz mesh mode rings at
+# 9 to 13 % from 410 to 470 rad/s, the largest harmonics of the mesh force there
+HARMONICS_CONSIDERED = 16
 # the least strength a resonance is listed with: its harmonic of the mesh force at 2 % of the
 # static force (the reference scene's quasi-static harmonics are 2 to 6 %)
 STRENGTH_LISTED = 0.02
 # Gauss-Legendre nodes on each contact interval: its terms are cubic in φp, times e^{ikθ}
 QUADRATURE_NODES = 24
+# a mode whose stiffness swings by more than this share over a mesh period gets a rough
+# estimate (Resonance.swing): the reference's modes swing by 0.3 to 3 %, its mesh mode by 40 %
+ROUGH_SWING = 0.1
 
 
 @dataclass(frozen=True)
@@ -49,6 +56,16 @@ class Resonance:
     order: int  # k: k·f_mesh = f_n
     frequency: float  # f_n, Hz
     strength: float  # the mesh force's k-th harmonic there, over the static mesh force
+    damping: float  # the mode's damping ratio ζ: the resonance spans about ±ζ of its speed
+    # how far the mode's own stiffness swings over a mesh period, a share of its mean: where
+    # it is over ROUGH_SWING the term the estimate leaves out is of its order, and the
+    # estimate is rough (the reference's 10419 Hz mesh mode: 0.3 to 4.9 times the runs)
+    swing: float
+
+    @property
+    def rough(self) -> bool:
+        """Whether the estimate is rough: the mesh's variation acts on the mode itself."""
+        return self.swing > ROUGH_SWING
 
 
 @dataclass(frozen=True)
@@ -118,16 +135,20 @@ def resonances(scene, low: float, high: float, least: float = STRENGTH_LISTED,
     --------
     >>> import herringbone
     >>> from herringbone.analysis.excitation import resonances
-    >>> [(round(r.speed, 1), r.order, round(r.frequency), round(r.strength, 3))
-    ...  for r in resonances(herringbone.load_scene("reference"), 400.0, 560.0)]
-    [(429.6, 1, 684, 0.1), (460.5, 6, 4397, 0.032), (552.6, 5, 4397, 0.045)]
+    >>> for r in resonances(herringbone.load_scene("reference"), 420.0, 470.0):
+    ...     print(round(r.speed, 1), r.order, round(r.frequency), round(r.strength, 3), r.rough)
+    429.6 1 684 0.1 False
+    436.4 15 10419 0.127 True
+    460.5 6 4397 0.032 False
+    467.6 14 10419 0.074 True
     """
     model = GearTrainModel(scene)
     push = excitation(model, harmonics)
     frequencies, shapes, damping = _modes(model)
+    swings = _stiffness_swings(model, frequencies, shapes)
     z = scene.parameters["z_pinion"]
     found = []
-    for omega, shape, zeta in zip(frequencies, shapes.T, damping):
+    for omega, shape, zeta, swing in zip(frequencies, shapes.T, damping, swings):
         # an undamped mode's resonance grows without bound: inf, listed whatever `least` is
         answer = (abs(push.mesh_row @ shape) / (zeta * omega**2 * push.static_force)
                   if zeta > 0.0 else math.inf)
@@ -135,8 +156,18 @@ def resonances(scene, low: float, high: float, least: float = STRENGTH_LISTED,
             speed = omega / (k * z)
             strength = answer * abs(shape @ push.force[k])
             if low <= speed <= high and strength >= least:
-                found.append(Resonance(speed, k, omega / (2.0 * math.pi), float(strength)))
+                found.append(Resonance(speed, k, omega / (2.0 * math.pi), float(strength),
+                                       float(zeta), float(swing)))
     return sorted(found, key=lambda r: r.speed)
+
+
+def _stiffness_swings(model: GearTrainModel, omega: np.ndarray, shapes: np.ndarray):
+    """For each mode (ω rad/s, its mass-normalized shape a column of `shapes`), how far its
+    stiffness φᵀ·K(φp)·φ swings over a mesh period (at the period's quadrature nodes), a
+    share of its mean ω²."""
+    modal = np.array([np.einsum("ji,jk,ki->i", shapes, model.stiffness_matrix(y, contact_set),
+                                shapes) for y, contact_set, _ in model.mesh_period_nodes()])
+    return (modal.max(axis=0) - modal.min(axis=0)) / omega**2
 
 
 def _modes(model: GearTrainModel):
@@ -163,9 +194,11 @@ def resonance_lines(found: list[Resonance], name_of=None) -> list[str]:
     from ..model.parameters import RPM_PER_RAD_S
 
     return [f"  {r.speed * RPM_PER_RAD_S:8.0f} rpm ({r.speed:8.1f} rad/s)  k = {r.order:<2d}  "
-            f"f_n = {r.frequency:9.2f} Hz  "
+            f"f_n = {r.frequency:9.2f} Hz  zeta {r.damping:.3f}  "
             + (f"{100 * r.strength:5.1f} %" if math.isfinite(r.strength)
                else "unbounded: an undamped mode")
             # a harmonic beyond the static force would pull the teeth: they part first
             + (" (the teeth part: the estimate holds no more)" if r.strength >= 1.0 else "")
+            + (f" (rough: the mode's stiffness swings {100 * r.swing:.0f} % with the mesh)"
+               if r.rough else "")
             + (f"  {name_of(r.frequency)}" if name_of else "") for r in found]

@@ -98,7 +98,7 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
 
 def ringing(scene, table):
     """The resonances in the sweep's speeds that ring (excitation.resonances: the mesh force's
-    harmonic there 2 % of the static force or more, k up to 12), by speed."""
+    harmonic there 2 % of the static force or more, k up to 16), by speed."""
     from .excitation import resonances
 
     return resonances(scene, table[SPEED].min(), table[SPEED].max())
