@@ -172,9 +172,13 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
     axes.plot([c.speed * RPM_PER_RAD_S for c in found], [c.frequency for c in found], "o",
               mfc="none", color="k", label="crossings (resonance speeds)")
     ringing = [r for r in resonances(scene, low, high) if r.frequency <= top]
-    axes.plot([r.speed * RPM_PER_RAD_S for r in ringing], [r.frequency for r in ringing], "o",
-              ms=4, color="C3", label=f"resonances that ring, k up to {HARMONICS_CONSIDERED} "
-                                     f"(excitation.resonances, {STRENGTH_LISTED:.0%} or more)")
+    for rough, words in ((False, f"resonances that ring, k up to {HARMONICS_CONSIDERED} "
+                                 f"(excitation.resonances, {STRENGTH_LISTED:.0%} or more)"),
+                         (True, "the same, a rough estimate (the mode's stiffness swings "
+                                "with the mesh)")):
+        shown = [r for r in ringing if r.rough == rough]
+        axes.plot([r.speed * RPM_PER_RAD_S for r in shown], [r.frequency for r in shown], "o",
+                  ms=4, color="C3", mfc="none" if rough else "C3", label=words)
     axes.set_xlim(rpm[0], rpm[-1])
     axes.set_ylim(0, top)
     axes.set_xlabel("pinion speed n, rpm")
