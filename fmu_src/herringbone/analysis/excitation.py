@@ -189,8 +189,9 @@ def strongest(scene, high: float, count: int) -> list[Resonance]:
 
 
 def resonance_lines(found: list[Resonance], name_of=None) -> list[str]:
-    """One line a resonance, "  4397 rpm (460.5 rad/s)  k = 6  f_n = 4397.17 Hz  3.2 %";
-    `name_of(f_n)`, where given, names the mode after it."""
+    """One line a resonance, "  4397 rpm (460.5 rad/s)  k = 6  f_n = 4397.17 Hz  zeta 0.080
+    3.2 %", said rough where it is (Resonance.rough); `name_of(f_n)`, where given, names the
+    mode after it."""
     from ..model.parameters import RPM_PER_RAD_S
 
     return [f"  {r.speed * RPM_PER_RAD_S:8.0f} rpm ({r.speed:8.1f} rad/s)  k = {r.order:<2d}  "
