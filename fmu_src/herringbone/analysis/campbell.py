@@ -176,9 +176,9 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
                                  f"(excitation.resonances, {STRENGTH_LISTED:.0%} or more)"),
                          (True, "the same, a rough estimate (the mode's stiffness swings "
                                 "with the mesh)")):
-        shown = [r for r in ringing if r.rough == rough]
-        axes.plot([r.speed * RPM_PER_RAD_S for r in shown], [r.frequency for r in shown], "o",
-                  ms=4, color="C3", mfc="none" if rough else "C3", label=words)
+        marked = [r for r in ringing if r.rough == rough]
+        axes.plot([r.speed * RPM_PER_RAD_S for r in marked], [r.frequency for r in marked],
+                  "o", ms=4, color="C3", mfc="none" if rough else "C3", label=words)
     axes.set_xlim(rpm[0], rpm[-1])
     axes.set_ylim(0, top)
     axes.set_xlabel("pinion speed n, rpm")
