@@ -420,16 +420,22 @@ def interrupted(arguments, folder, ready: str, group: bool = False, sent=None,
     return process.returncode, (seen + rest).decode()
 
 
+def assert_stopped_in_one_line(code, stderr, folder, expected: int, stop: str):
+    """The run stopped with exit code `expected` and one last line saying `stop`, no
+    traceback, and the folder's out.csv as it was, nothing beside it."""
+    assert code == expected, stderr
+    assert stderr.splitlines()[-1] == (f"herringbone run: {stop}; files not finished are "
+                                       "left as they were")
+    assert "Traceback" not in stderr
+    assert (folder / "out.csv").read_text() == "the last run's table\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["out.csv"]
+
+
 def test_ctrl_c_stops_a_run_in_one_line_and_leaves_the_file_it_would_replace(tmp_path):
     (tmp_path / "out.csv").write_text("the last run's table\n")
     code, stderr = interrupted(["run", "reference", "--reference", "--stop-time", "1", "-o",
                                 "out.csv"], tmp_path, "run reference:")
-    assert code == 130, stderr
-    assert stderr.splitlines()[-1] == ("herringbone run: interrupted; files not finished are "
-                                       "left as they were")
-    assert "Traceback" not in stderr
-    assert (tmp_path / "out.csv").read_text() == "the last run's table\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+    assert_stopped_in_one_line(code, stderr, tmp_path, 130, "interrupted")
 
 
 def test_sigterm_while_the_table_is_written_stops_in_one_line_and_leaves_no_half_file(
@@ -442,12 +448,7 @@ def test_sigterm_while_the_table_is_written_stops_in_one_line_and_leaves_no_half
     code, stderr = interrupted(["run", "reference", "--stop-time", "2", "--output-interval",
                                 "1e-5", "-o", "out.csv"], tmp_path, "writing 200001 rows",
                                sent=signal.SIGTERM, delay=0.3)
-    assert code == 143, stderr
-    assert stderr.splitlines()[-1] == ("herringbone run: terminated; files not finished are "
-                                       "left as they were")
-    assert "Traceback" not in stderr
-    assert (tmp_path / "out.csv").read_text() == "the last run's table\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+    assert_stopped_in_one_line(code, stderr, tmp_path, 143, "terminated")
 
 
 def test_ctrl_c_stops_a_sweep_on_workers_in_one_line_not_a_traceback_from_each(tmp_path):
