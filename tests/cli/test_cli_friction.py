@@ -650,6 +650,21 @@ def test_a_command_whose_reader_has_gone_ends_quietly():
     assert command.wait(timeout=60) == 141 and error == b""
 
 
+def test_every_command_that_takes_a_scene_takes_no_progress(capsys):
+    """A script passing --no-progress to each command got exit 2 from `info` and `campbell`,
+    which show no bar: every command that takes a SCENE accepts it."""
+    from herringbone.cli import parser
+
+    _, commands = parser()
+    taking = [name for name, command in commands.items()
+              if any(action.dest == "scene" for action in command._actions)]
+    assert {"run", "info", "stability", "sweep", "campbell", "build-fmu"} <= set(taking)
+    for name in taking:
+        assert "--no-progress" in commands[name]._option_string_actions, name
+    assert main(["info", "reference", "--no-progress"]) == 0
+    assert capsys.readouterr().out.startswith("Scene reference")
+
+
 def test_a_changed_scenes_files_are_named_by_its_changes(tmp_path, monkeypatch, capsys):
     """`run reference --set w0_pinion=450` wrote results/reference.csv, replacing the scene's
     own run that a user meant to compare it with: its files carry its changes in their

@@ -7,7 +7,9 @@ from pathlib import Path
 from ..model.parameters import RPM_PER_RAD_S
 from ..optional import require
 from .common import (
+    NO_BAR,
     add_output,
+    add_progress,
     add_scene,
     add_settings,
     add_speeds,
@@ -30,6 +32,7 @@ def declare(parser) -> None:
                "exact: FROM and TO matter, COUNT only takes the common form)")
     add_output(parser, "the diagram; an existing file is replaced",
                "results/<scene>_campbell.png", PICTURES)
+    add_progress(parser, NO_BAR)
 
 
 def execute(args, parser) -> int:

@@ -401,6 +401,11 @@ def default_output(parser: argparse.ArgumentParser, given: Path | None, default:
     return default
 
 
+# what --no-progress does on a command that shows no bar: a script may pass it to every
+# command that takes a SCENE
+NO_BAR = "accepted, as every command that takes a SCENE accepts it: this one shows no bar"
+
+
 def add_progress(parser: argparse.ArgumentParser, what: str = "no progress bar on stderr"
                  ) -> None:
     """--no-progress: no progress bar on stderr (`what` it leaves out, where not a bar)."""

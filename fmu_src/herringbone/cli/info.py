@@ -1,7 +1,7 @@
 """`herringbone info SCENE`: geometry, mesh phasing, natural modes and resonance speeds."""
 from __future__ import annotations
 
-from .common import add_scene, add_settings, scene_of
+from .common import NO_BAR, add_progress, add_scene, add_settings, scene_of
 
 NAME = "info"
 HELP = "geometry, mesh phasing, natural modes and resonance speeds of a scene"
@@ -11,6 +11,7 @@ def declare(parser) -> None:
     """The arguments of `info`."""
     add_scene(parser)
     add_settings(parser)
+    add_progress(parser, NO_BAR)
 
 
 def execute(args, parser) -> int:
