@@ -677,11 +677,14 @@ def test_a_changed_scenes_files_are_named_by_its_changes(tmp_path, monkeypatch, 
     # a number in the short form that means it, as it was typed: 1e9, not 1000000000.0
     assert main(["campbell", "reference", "--set", "c_brg_pinion_left=1e9", "--speeds", "100",
                  "500", "5"]) == 0
+    # and the scipy reference's run beside the compiled one's, which it is compared with
+    assert main(["run", "reference", "--reference", "--stop-time", "0.002",
+                 "--no-progress"]) == 0
     capsys.readouterr()
     assert (tmp_path / "results" / "reference.csv").read_text() == "the scene's own run\n"
     assert sorted(p.name for p in (tmp_path / "results").iterdir()) == [
         "reference+c_brg_pinion_left=1e9_campbell.png", "reference+w0_pinion=450.csv",
-        "reference.csv"]
+        "reference.csv", "reference_scipy.csv"]
 
 
 def test_set_changes_a_parameter_or_torque_for_one_command(tmp_path, capsys, built_fmus):

@@ -85,7 +85,8 @@ def declare(parser) -> None:
                              f"with --reference the error over the run {reference.describe()} "
                              f"(default {REFERENCE_DEFAULT_TOLERANCE:g})")
     add_output(parser, "the outputs, one column per output with its unit; an existing file is "
-               "replaced", "results/<scene>.csv, <scene> with +NAME=VALUE for each --set",
+               "replaced", "results/<scene>.csv, <scene> with +NAME=VALUE for each --set; "
+               "with --reference results/<scene>_scipy.csv",
                SUFFIXES)
     parser.add_argument("--plot", action="store_true",
                         help="also write PNGs beside the CSV: time histories and amplitude "
@@ -133,8 +134,10 @@ def execute(args, parser) -> int:
                      "--reference (the compiled integrator's methods)")
     scene = scene_of(args, parser)
     stop_time, interval = span_of(args, parser, scene)
+    # the scipy reference's run beside the compiled one's, not in its place: they are compared
+    ran_by = "_scipy" if args.reference else ""
     output = default_output(parser, args.output,
-                            Path("results") / f"{changed_name(scene, args)}.csv",
+                            Path("results") / f"{changed_name(scene, args)}{ran_by}.csv",
                             SUFFIXES)
     if args.plot:
         require("matplotlib", "--plot")
