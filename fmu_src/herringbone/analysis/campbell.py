@@ -17,7 +17,7 @@ import numpy as np
 from ..arguments import speed_sweep_problem
 from ..model.assembly import GearTrainModel, natural_modes, rigid_rotation_mode
 from ..model.parameters import RPM_PER_RAD_S
-from .excitation import HARMONICS_CONSIDERED, STRENGTH_LISTED, resonances
+from .excitation import HARMONICS_CONSIDERED, STRENGTH_LISTED, Resonance, resonances
 from .plots import _pyplot, _save, spread_apart
 from .report import HARMONICS, mode_character, resonance_speeds
 
@@ -150,9 +150,11 @@ def _label_modes(axes, modes, top):
                       arrowprops={"arrowstyle": "-", "color": "C0", "lw": 0.6})
 
 
-def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Crossing]:
+def plot_campbell(scene, low: float, high: float, path, title: str,
+                  ringing: list[Resonance] | None = None) -> list[Crossing]:
     """Write the diagram (rpm below, rad/s above; Hz up; each mode named by its type beside
-    it) and return its crossings."""
+    it; the resonances that ring, `ringing`, None: excitation.resonances over the span) and
+    return its crossings."""
     check_speed_range(low, high)
     plt = _pyplot()
     z = scene.parameters["z_pinion"]
@@ -171,7 +173,8 @@ def plot_campbell(scene, low: float, high: float, path, title: str) -> list[Cros
                   label=f"mesh order k = {k}: k·z·n/60")
     axes.plot([c.speed * RPM_PER_RAD_S for c in found], [c.frequency for c in found], "o",
               mfc="none", color="k", label="crossings (resonance speeds)")
-    ringing = [r for r in resonances(scene, low, high) if r.frequency <= top]
+    ringing = [r for r in (resonances(scene, low, high) if ringing is None else ringing)
+               if r.frequency <= top]
     for rough, words in ((False, f"resonances that ring, k up to {HARMONICS_CONSIDERED} "
                                  f"(excitation.resonances, {STRENGTH_LISTED:.0%} or more)"),
                          (True, "the same, a rough estimate (the mode's stiffness swings "

@@ -29,9 +29,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
-from ..model.assembly import GearTrainModel, rigid_rotation_mode
+from ..model.assembly import GearTrainModel, natural_modes, rigid_rotation_mode
 
 # the mesh harmonics whose resonances are weighed (a choice, not a bound: `harmonics=`): the
 # reference's sharp-edged mesh pushes with 1 to 6 % of its static force at k = 1 to 10, 0.04
@@ -81,8 +80,7 @@ def excitation(model: GearTrainModel, harmonics: int = HARMONICS_CONSIDERED) -> 
     """The contact points' force at the mean static deflection, harmonic by harmonic over one
     mesh period (quadrature on each contact interval, where it is a polynomial in φp)."""
     deflection = _mean_static_deflection(model)
-    pitch = sum(model.mesh.contact_set(0, i).length
-                for i in range(len(model.mesh.switch_phases)))
+    pitch = _angular_pitch(model)
     nodes, weights = np.polynomial.legendre.leggauss(QUADRATURE_NODES)
     orders = np.arange(harmonics + 1)
     force = np.zeros((harmonics + 1, model.size), complex)
@@ -93,8 +91,7 @@ def excitation(model: GearTrainModel, harmonics: int = HARMONICS_CONSIDERED) -> 
             y = np.zeros(model.size)
             y[model.pinion] = 0.5 * (node + 1.0) * contact_set.length
             stiffness, lever_arm, lead_error = model.contact_geometry(y, contact_set)
-            rows = (model.contact_row_base[None, :]
-                    + lever_arm[:, None] * model.contact_row_tilt[None, :])
+            rows = model.contact_rows(lever_arm)
             pushed = rows.T @ (stiffness * (rows @ deflection + lead_error))
             share = 0.5 * weight * contact_set.length / pitch
             phase = 2.0 * math.pi * (contact_set.pinion_angle + y[model.pinion]) / pitch
@@ -108,8 +105,7 @@ def _mean_static_deflection(model: GearTrainModel) -> np.ndarray:
     """The deflection under the motor torque balanced by the load's (M_load = u·M_motor) and
     the points' mean lead error, every point loaded, the stiffness averaged over a mesh period;
     the least-squares one along the rigid rotation, which no element feels."""
-    torque = model.scene.inputs.M_motor[0]
-    force = torque * (model.motor_torque_row - model.geometry.ratio * model.load_torque_row)
+    force = model.balanced_torque_force(model.scene.inputs.M_motor[0])
     return np.linalg.lstsq(model.mean_stiffness_matrix(), force - _mean_lead_force(model),
                            rcond=None)[0]
 
@@ -119,11 +115,13 @@ def _mean_lead_force(model: GearTrainModel) -> np.ndarray:
     total = np.zeros(model.size)
     for y, contact_set, share in model.mesh_period_nodes():
         stiffness, lever_arm, lead_error = model.contact_geometry(y, contact_set)
-        rows = (model.contact_row_base[None, :]
-                + lever_arm[:, None] * model.contact_row_tilt[None, :])
-        total += share * (rows.T @ (stiffness * lead_error))
-    pitch = sum(share for _, _, share in model.mesh_period_nodes())
-    return total / pitch
+        total += share * (model.contact_rows(lever_arm).T @ (stiffness * lead_error))
+    return total / _angular_pitch(model)
+
+
+def _angular_pitch(model: GearTrainModel) -> float:
+    """The mesh period in pinion angle, rad: what mesh_period_nodes' shares add up to."""
+    return 2.0 * math.pi / model.geometry.z_pinion
 
 
 def resonances(scene, low: float, high: float, least: float = STRENGTH_LISTED,
@@ -173,10 +171,10 @@ def _stiffness_swings(model: GearTrainModel, omega: np.ndarray, shapes: np.ndarr
 def _modes(model: GearTrainModel):
     """The elastic modes at the mean stiffness: (ω rad/s, mass-normalized shapes as columns,
     damping ratios φᵀ·C̄·φ/(2ω)), the rigid rotation left out."""
-    eigenvalues, shapes = scipy.linalg.eigh(model.mean_stiffness_matrix(), np.diag(model.mass))
+    frequencies, shapes, _ = natural_modes(model.scene)
     rigid = rigid_rotation_mode(shapes, model.mass, model.rigid_rotation)
-    keep = [i for i in range(len(eigenvalues)) if i != rigid and eigenvalues[i] > 0.0]
-    omega = np.sqrt(eigenvalues[keep])
+    keep = [i for i in range(len(frequencies)) if i != rigid and frequencies[i] > 0.0]
+    omega = 2.0 * math.pi * frequencies[keep]
     shapes = shapes[:, keep]
     damping = np.einsum("ji,jk,ki->i", shapes, model.mean_damping_matrix(), shapes) / (2 * omega)
     return omega, shapes, damping

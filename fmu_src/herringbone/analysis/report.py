@@ -14,6 +14,7 @@ from ..model.assembly import GearTrainModel, mass_matrix, natural_modes, rigid_r
 from ..model.geometry import GearGeometry
 from ..model.mesh import Mesh
 from ..model.parameters import RPM_PER_RAD_S
+from .excitation import HARMONICS_CONSIDERED, resonance_lines, strongest
 from .phasing import scene_phasing, without_contact_note
 from .steady_state import unbalance_lines
 
@@ -124,8 +125,6 @@ RINGING_LISTED = 8  # the strongest resonances `info` lists
 
 def _ringing_lines(scene, frequencies, shapes, masses, names) -> list[str]:
     """The strongest resonances below MAX_RPM (excitation.strongest), each with its mode."""
-    from .excitation import HARMONICS_CONSIDERED, resonance_lines, strongest
-
     def name_of(frequency_hz):
         nearest = int(np.argmin(np.abs(frequencies - frequency_hz)))
         return mode_character(shapes[:, nearest], masses, names).split(" (")[0] + " mode"

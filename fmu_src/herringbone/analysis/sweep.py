@@ -106,16 +106,18 @@ def scene_at(scene, point: Point):
 
     params = {k: v for k, v in point.values if k not in INPUTS}
     torques = {k: v for k, v in point.values if k in INPUTS}
-    follows = len(torques) == 1 or not torques and bool(RATIO_SETTERS & params.keys())
-    if follows:
-        try:
+    # the torque the other one follows: the swept one, or for a tooth count the motor's
+    held = (next(iter(torques.items())) if len(torques) == 1 else
+            ("M_motor", scene.inputs.at(0.0)[0]) if not torques and RATIO_SETTERS & params.keys()
+            else None)
+    try:
+        if held is not None:
             check_balanced(scene)
-        except ShootingError:
-            follows = False  # unbalanced already: what is swept alone changes
+    except ShootingError:
+        held = None  # unbalanced already: what is swept alone changes
     changed = scene.with_parameters(**params) if params else scene
-    if follows:
-        torques = balanced_torques(changed, *(next(iter(torques.items())) if torques
-                                              else ("M_motor", changed.inputs.at(0.0)[0])))
+    if held is not None:
+        torques = balanced_torques(changed, *held)
     return changed.with_inputs(**torques) if torques else changed
 
 

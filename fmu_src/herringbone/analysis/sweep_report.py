@@ -10,6 +10,7 @@ import numpy as np
 from ..files import replace_file
 from ..model.parameters import RPM_PER_RAD_S, name_with_unit, unit_of, with_unit
 from .campbell import elastic_frequencies
+from .excitation import resonances
 from .sweep import SPEED, point_label, resonation_summary, swept_columns
 from .sweep_plots import (
     halves_differ,
@@ -99,8 +100,6 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
 def ringing(scene, table):
     """The resonances in the sweep's speeds that ring (excitation.resonances: the mesh force's
     harmonic there 2 % of the static force or more, k up to 16), by speed."""
-    from .excitation import resonances
-
     return resonances(scene, table[SPEED].min(), table[SPEED].max())
 
 

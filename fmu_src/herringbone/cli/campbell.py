@@ -50,7 +50,8 @@ def execute(args, parser) -> int:
                             PICTURES)
     require("matplotlib", "the Campbell diagram")
     output.parent.mkdir(parents=True, exist_ok=True)
-    found = plot_campbell(scene, low, high, output, f"{name}: Campbell diagram")
+    ringing = resonances(scene, low, high)
+    found = plot_campbell(scene, low, high, output, f"{name}: Campbell diagram", ringing)
     print(f"crossings k·f_mesh = f_n between {low * RPM_PER_RAD_S:.0f} and "
           f"{high * RPM_PER_RAD_S:.0f} rpm ({low:g}-{high:g} rad/s):")
     for c in found:
@@ -58,7 +59,6 @@ def execute(args, parser) -> int:
               f"f_n = {c.frequency:9.2f} Hz")
     if not found:
         print("  none")
-    ringing = resonances(scene, low, high)
     print(f"of these and the higher harmonics (k up to {HARMONICS_CONSIDERED}), those that "
           "ring: the mesh force's k-th harmonic there, a share of the static force (a "
           "first-order estimate):")

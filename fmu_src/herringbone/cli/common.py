@@ -203,18 +203,17 @@ def changed_name(scene, args) -> str:
 
 def _short_value(value) -> str:
     """A value as a file name gives it: as a scene file writes it (toml_value), but a number
-    that it writes long in the short form that means the same float (1e9, not
+    that it writes long in the shortest form that means the same float (1e9, not
     1000000000.0; 1e-5, not 1e-05)."""
+    import numpy as np
+
     text = toml_value(value)
     if not isinstance(value, float) or not math.isfinite(value) or (
             "e" not in text and len(text) <= 8):
         return text
-    mantissa, _, exponent = f"{value:.17e}".partition("e")
-    for digits in range(17):
-        short = f"{float(mantissa):.{digits}f}".rstrip("0").rstrip(".") + f"e{int(exponent)}"
-        if float(short) == value:
-            return short if len(short) < len(text) else text
-    return text
+    short = np.format_float_scientific(value, unique=True, trim="-", exp_digits=1)
+    short = short.replace("e+", "e")
+    return short if len(short) < len(text) else text
 
 
 # names --set refuses before their value is read (a value may be a word: method=radau): what

@@ -276,15 +276,24 @@ class GearTrainModel:
 
     # --- stiffness, statics, modes ------------------------------------------------------
 
+    def contact_rows(self, lever_arm, relative=False) -> np.ndarray:
+        """Each contact point's row g = g_base + ζ·g_tilt (docs/model.md section 5), one a
+        point of the lever arms ζ given, over q (`relative`: over the relative coordinates)."""
+        base, tilt = ((self._contact_base_relative, self._contact_tilt_relative) if relative
+                      else (self.contact_row_base, self.contact_row_tilt))
+        return base[None, :] + lever_arm[:, None] * tilt[None, :]
+
+    def balanced_torque_force(self, motor_torque: float) -> np.ndarray:
+        """The generalized force of the motor torque (N·m) balanced by M_load = u·M_motor."""
+        return motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
+
     def stiffness_matrix(self, y, contact_set, loaded=None, relative=False) -> np.ndarray:
         """K = Σ c·g·gᵀ of shafts, bearings and (loaded) contact points at the state's angle."""
         stiffness, lever_arm, _ = self.contact_geometry(y, contact_set)
         if loaded is not None:
             stiffness = stiffness * loaded
-        base, tilt, rows = ((self._contact_base_relative, self._contact_tilt_relative,
-                             self._element_rows_relative) if relative else
-                            (self.contact_row_base, self.contact_row_tilt, self.element_rows))
-        contact_rows = base[None, :] + lever_arm[:, None] * tilt[None, :]
+        rows = self._element_rows_relative if relative else self.element_rows
+        contact_rows = self.contact_rows(lever_arm, relative)
         return (self._element_matrix(self.element_stiffness, rows)
                 + (contact_rows.T * stiffness) @ contact_rows)
 
@@ -307,10 +316,8 @@ class GearTrainModel:
             deflection[self.pinion] = y[self.pinion]
             return deflection
         stiffness, lever_arm, lead_error = self.contact_geometry(y, contact_set)
-        force = motor_torque * (self.motor_torque_row - self.geometry.ratio * self.load_torque_row)
-        contact_rows = (self._contact_base_relative[None, :]
-                        + lever_arm[:, None] * self._contact_tilt_relative[None, :])
-        force = force - contact_rows.T @ (stiffness * lead_error)
+        force = (self.balanced_torque_force(motor_torque)
+                 - self.contact_rows(lever_arm, relative=True).T @ (stiffness * lead_error))
         elastic = [i for i in range(self.size) if i != self.pinion]
         stiffness_matrix = self.stiffness_matrix(y, contact_set, relative=True)
         deflection = np.zeros(self.size)
