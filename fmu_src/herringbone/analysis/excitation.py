@@ -154,8 +154,8 @@ def resonances(scene, low: float, high: float, least: float = STRENGTH_LISTED,
             speed = omega / (k * z)
             strength = answer * abs(shape @ push.force[k])
             if low <= speed <= high and strength >= least:
-                found.append(Resonance(speed, k, omega / (2.0 * math.pi), float(strength),
-                                       float(zeta), float(swing)))
+                found.append(Resonance(float(speed), k, float(omega / (2.0 * math.pi)),
+                                       float(strength), float(zeta), float(swing)))
     return sorted(found, key=lambda r: r.speed)
 
 
