@@ -230,8 +230,8 @@ def build_fmus(folder: Path) -> dict[str, str]:
 
 
 def c_host_command(fmus: dict[str, str], folder: Path) -> list[str]:
-    """Compile tests/c_host/c_host.c (once) and unzip the reference FMU for it; the command
-    that runs it through tests/c_host/run.sh."""
+    """Compile tests/fmu/c_host/c_host.c (once) and unzip the reference FMU for it; the command
+    that runs it through tests/fmu/c_host/run.sh."""
     import fmpy
 
     executable = folder / "c_host"

@@ -264,6 +264,21 @@ def test_readme_links_lead_to_files_of_the_repository():
     assert [t for t in local if not (ROOT / t).exists()] == []
 
 
+# A file of the checkout as a page names it: under one of the repository's top folders, to
+# its last letter or digit (a sentence's full stop is not part of it)
+CHECKOUT_PATH = re.compile(r"(?<![\w./-])(?:tests|benchmarks|examples|models|docs|fmu_src|\.ci)"
+                           r"/[\w./-]*\w")
+
+
+def test_every_file_a_page_names_is_in_the_repository():
+    """A reader follows a page's paths in the checkout (the hosts page's C host, the
+    benchmarks, the scenes): each must be there."""
+    named = {path for page in DOCUMENTS
+             for path in CHECKOUT_PATH.findall(page.read_text(encoding="utf-8"))}
+    assert len(named) >= 50
+    assert sorted(path for path in named if not (ROOT / path).exists()) == []
+
+
 # The pages whose Python examples a reader pastes as they stand: how many of each page's
 # blocks (```python), run in order in one namespace, as the page builds them up.
 # The hosts page's example runs the FMU that `build-fmu` writes (scene_fmu builds it here).
