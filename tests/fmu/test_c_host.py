@@ -1,5 +1,6 @@
-"""The gear FMU in a host that is not Python: tests/fmu/c_host/c_host.c, compiled with the system's C
-compiler against the FMI headers fmpy ships, run by tests/fmu/c_host/run.sh (README's recipe)."""
+"""The gear FMU in a host that is not Python: tests/fmu/c_host/c_host.c, compiled with the
+system's C compiler against the FMI headers fmpy ships, run by tests/fmu/c_host/run.sh (the
+recipe of docs/hosts.md)."""
 import os
 import re
 import shutil
