@@ -107,3 +107,25 @@ def test_a_missing_dependency_is_named_and_the_host_lives(c_host, unzipped, tmp_
     assert run.returncode == NO_INSTANCE, run.stderr[-2000:]  # not a crash
     assert re.search(r"herringbone FMU: [a-z, ]*numba cannot be imported by the Python", run.stderr)
     assert "set PYTHONPATH to the site-packages folder" in run.stderr
+
+
+def test_every_form_of_the_resource_location_is_taken(c_host, unzipped, tmp_path):
+    """FMI 2.0 passes the resources folder as a file URI (RFC 3986, RFC 8089), percent-encoded;
+    pythonfmu 0.7 alone decodes only %20 and crashed the host on any other escape and on
+    file:/path (fmu/resource_path.c). The FMU unpacked under a folder with a letter, a # and a %
+    that a URI escapes, each form of its location gives fmpy's outputs."""
+    folder = tmp_path / "über #100%"
+    shutil.copytree(unzipped[1], folder)
+    resources = folder / "resources"
+    encoded = resources.as_uri()  # file:///…/%C3%BCber%20%23100%25/resources
+    assert "%C3%BC" in encoded and "%23" in encoded and "%25" in encoded
+    locations = [encoded, encoded.replace("file:///", "file://localhost/"),
+                 encoded.replace("file:///", "file:/"), str(resources)]
+    moved = (unzipped[0], folder, *unzipped[2:])
+    expected = fmpy_outputs(unzipped[0])
+    for location in locations:
+        run = run_host(c_host, moved, C_HOST_RESOURCES=location)
+        assert run.returncode == 0, f"{location}: {run.returncode} {run.stderr[-2000:]}"
+        rows = np.array([[float.fromhex(x) for x in line.split()]
+                         for line in run.stdout.splitlines()])
+        assert np.array_equal(rows, expected), location

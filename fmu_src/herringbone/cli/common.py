@@ -13,6 +13,7 @@ import contextlib
 import math
 import signal
 import sys
+import warnings
 from pathlib import Path
 from typing import cast
 
@@ -62,7 +63,7 @@ def execute(module, args, parser: argparse.ArgumentParser) -> int:
     and exit code 130 (128 + SIGINT, as a shell reports it), SIGTERM `PROG: terminated` and
     143, the files it had not finished left as they were (files.replace_file)."""
     try:
-        with _terminate_as_interrupt():
+        with _terminate_as_interrupt(), _warnings_said(parser.prog):
             return module.execute(args, parser)
     except BaseException as error:
         compiles_said()
@@ -115,6 +116,21 @@ def interrupted(error: BaseException | None, kind: type = KeyboardInterrupt) -> 
             return True
         error = error.__cause__ or error.__context__
     return False
+
+
+@contextlib.contextmanager
+def _warnings_said(prog: str):
+    """A warning of the library (a ReferenceAccuracyWarning, a ResourcePathWarning) as one line
+    on stderr, `PROG: warning: message`, where Python would show its file, line and source."""
+    def say_warning(message, category, filename, lineno, file=None, line=None):
+        print(f"{prog}: warning: {message}", file=sys.stderr, flush=True)
+
+    shown = warnings.showwarning
+    warnings.showwarning = say_warning
+    try:
+        yield
+    finally:
+        warnings.showwarning = shown
 
 
 @contextlib.contextmanager

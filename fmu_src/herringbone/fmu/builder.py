@@ -26,6 +26,7 @@ from .. import shipped
 from ..arguments import FMU_SCENE_FILE
 from ..files import replace_file
 from . import carried as carried_package
+from .resource_path import with_resource_path
 
 GEAR_PACKAGE = carried_package.PACKAGE  # herringbone
 GEAR_SLAVE = GEAR_PACKAGE / "fmu" / "slave.py"
@@ -73,11 +74,12 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     `pythonfmu_references`. `handle_state` declares
     canGetAndSetFMUstate; `serialize_state` declares canSerializeFMUstate (the slave's state
     must then be JSON data, or the slave must override pythonfmu's `_fmu_state_to_bytes`);
-    `no_feedthrough`: see `fix_model_description`.  The
-    model description is then fixed by `fix_model_description`.  `output` (its parent
-    directories are created) is replaced only once the FMU is complete and valid.  Needs
-    pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns `output`.  Raises
-    RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
+    `no_feedthrough`: see `fix_model_description`.  An FMI 2.0 FMU gets its own library in
+    front of pythonfmu's (`resource_path.with_resource_path`: a ResourcePathWarning where no C
+    compiler is found). The model description is then fixed by `fix_model_description`.
+    `output` (its parent directories are created) is replaced only once the FMU is complete and
+    valid.  Needs pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns
+    `output`.  Raises RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
     """
     slave_script, output = Path(slave_script).resolve(), Path(output).resolve()
     with tempfile.TemporaryDirectory(prefix="build_fmu_") as tmp:
@@ -106,6 +108,8 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
         built = sorted(Path(tmp).glob("*.fmu"))
         if run.returncode != 0 or len(built) != 1:
             raise RuntimeError(f"{builder} build of {slave_script} failed:\n{run.stderr}")
+        if fmi_version == 2:
+            with_resource_path(built[0])
         fix_model_description(fmu_path=built[0], no_feedthrough=no_feedthrough)
         problems = validate(fmu_path=built[0])
         if problems:

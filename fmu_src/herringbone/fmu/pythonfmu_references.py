@@ -52,6 +52,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+# pythonfmu's library in an FMI 2.0 FMU of this package is named so, beside the FMU's own,
+# which calls it (fmu/resource_path.c)
+PYTHONFMU_LIBRARY_PREFIX = "pythonfmu-"
+
 _incref = ctypes.pythonapi.Py_IncRef
 _incref.argtypes = (ctypes.py_object,)
 _incref.restype = None
@@ -74,6 +78,8 @@ def tear_down_state_first(resources: str | os.PathLike | None) -> bool:
         return False
     binaries = Path(resources).parent / "binaries"
     libraries = sorted([*binaries.glob("linux64/*.so"), *binaries.glob("x86_64-linux/*.so")])
+    # an FMI 2.0 FMU of this package: pythonfmu's library behind the FMU's own (resource_path)
+    libraries = [p for p in libraries if p.name.startswith(PYTHONFMU_LIBRARY_PREFIX)] or libraries
     if len(libraries) != 1:
         return False
     try:
