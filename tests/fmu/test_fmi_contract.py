@@ -146,6 +146,21 @@ def test_an_input_discard_clears_once_the_input_is_valid_and_is_logged_once(gear
     assert len(instance.messages) == 2
 
 
+def test_a_torque_not_valid_at_initialization_holds_the_start_back_until_it_is(gear):
+    """The start (the static deflection under M_motor) waits for a valid torque: a host that
+    sets one after a refused doStep goes on from the start time as if it had set it first."""
+    clean = run_steps(gear(), 4)
+    instance = gear(start_values={"M_motor": float("nan")})
+    assert np.isnan(list(instance.get(["F_mesh"]).values())).all()  # no start to show
+    with pytest.raises(FMICallException) as error:
+        instance.slave.doStep(instance.time, STEP)
+    assert error.value.status == DISCARD
+    (said,) = errors(instance, "input M_motor is nan; allowed: any finite number, in N.m")
+    instance.set(M_motor=500.0)
+    assert np.array_equal(run_steps(instance, 4), clean)
+    assert len(instance.messages) == 1, instance.messages
+
+
 @pytest.mark.parametrize("size", [math.nan, math.inf, -STEP, 0.0])
 def test_a_step_size_that_is_not_finite_and_positive_is_refused_and_the_run_goes_on(gear, size):
     """As the Reference FMUs do: a doStep by a step size that is not > 0 is refused (FMI 2.0:
@@ -376,6 +391,36 @@ def test_a_state_not_of_this_fmus_layout_is_refused_with_a_message_not_a_fatal(g
     else:
         assert "not one of this FMU" in message
         assert np.array_equal(run_steps(instance, 2), clean[2:])
+
+
+FOREIGN_STATE = b'{"not": "a state of this FMU"}'
+
+
+def test_a_foreign_state_raises_where_the_host_hears_no_log(fmu, tmp_path):
+    """fmpy's FMU2Slave without logging: a refused state is an exception (fmi2Fatal), not an
+    fmi2OK a master would take for a rollback; the instance keeps its own and goes on."""
+    program = f"""
+import sys, fmpy
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+d = fmpy.read_model_description(sys.argv[1])
+s = FMU2Slave(guid=d.guid, unzipDirectory=fmpy.extract(sys.argv[1]),
+              modelIdentifier=d.coSimulation.modelIdentifier, instanceName="gear")
+s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode()
+s.exitInitializationMode(); s.doStep(0.0, {STEP!r})
+try:
+    s.setFMUstate(s.deSerializeFMUstate({FOREIGN_STATE!r}))
+    print("RESULT taken")
+except FMICallException as error:
+    print("RESULT raised", error.status)
+s.doStep({STEP!r}, {STEP!r})
+print("RESULT stepped")
+"""
+    run = _child([sys.executable, "-c", program, str(fmu)], tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    results = [line for line in run.stdout.splitlines() if line.startswith("RESULT ")]
+    assert results == ["RESULT raised 4", "RESULT stepped"], run.stdout
+    assert "fmi2SetFMUstate: the state is not one of this FMU" in run.stderr
 
 
 def test_a_state_restores_every_bit_in_an_instance_started_with_other_torques(gear):

@@ -328,6 +328,8 @@ class GearCore:
     def _step(self, current_time, step_size):
         """Advance by one communication step; returns the problem that stops it (already
         reported), or None."""
+        if self.problem is None and self.run is None and self.initialized:
+            self._start_if_changed()  # a start an input held back (_start), valid now?
         if self.problem is None:
             self.input_problem = self._step_problem(current_time, step_size)
             if self.input_problem is None:
@@ -341,12 +343,9 @@ class GearCore:
         problem = (self._order_problem("DoStep") or _step_size_problem(current_time, step_size)
                    or _resolution_problem(current_time + step_size, self.latest_end,
                                           self.stepper.fastest_rate)
-                   or self._stop_time_problem(current_time, step_size))
-        for name in INPUTS:
-            if problem is None and not math.isfinite(self.values[name]):
-                problem = f"input {name} is {self.values[name]}; allowed: any finite number"
-        drift = abs(current_time - self.run.time)
-        if problem is None and drift > _masters_rounding(step_size, current_time):
+                   or self._stop_time_problem(current_time, step_size) or self._input_problem())
+        if problem is None and \
+                abs(current_time - self.run.time) > _masters_rounding(step_size, current_time):
             problem = (f"doStep from t = {current_time!r} s, but the FMU is at "
                        f"t = {self.run.time!r} s (roll back with {self.API['set_state']})")
         if problem is not None and problem != self.input_problem:
@@ -519,10 +518,16 @@ class GearCore:
         return state
 
     def _set_fmu_state(self, state):
+        """A state of this FMU set (`_restore`); another is refused, the FMU keeping its own,
+        and where the host does not hear the log the call raises (Fatal), as a doStep's
+        problem does: a master must not go on as if it had rolled back."""
         if not self._own_state(state):
-            return self._report(f"{self.API['set_state']}: the state is not one of this FMU "
-                                f"(expected {STATE_FORMAT} with this scene's variables); "
-                                "the FMU keeps its own")
+            refused = (f"{self.API['set_state']}: the state is not one of this FMU (expected "
+                       f"{STATE_FORMAT} with this scene's variables); the FMU keeps its own")
+            self._report(refused)
+            if self.host_logs() is False:
+                raise RuntimeError(refused)
+            return None
         try:
             self._restore(state)
         except Exception as error:  # its own layout, numbers that are not this run's
@@ -591,9 +596,19 @@ class GearCore:
 
     def _start(self):
         """Validate the values and place the train in its initial state (docs/model.md section 6)
-        at the start time."""
+        at the start time. An input torque that is not valid holds the start back, not the
+        instance: the static deflection it starts from is the torque's, so the run starts at
+        the first doStep whose inputs are valid (_step), from the start time."""
         self.started_from = (dict(self.values), self.start_time)
-        self.problem, self.input_problem, self.run = None, None, None
+        self.problem, self.run = None, None
+        input_problem = self._input_problem()
+        if input_problem is not None:
+            if input_problem != self.input_problem:
+                self._report(input_problem)
+            self.input_problem = input_problem
+            self.output_values = np.full_like(self.output_values, math.nan)
+            return
+        self.input_problem = None
         problem = self._check_values() or self._build_if_changed()
         if problem is not None:
             return self._fail(problem)
@@ -606,12 +621,16 @@ class GearCore:
         except Exception as error:
             self._fail(f"initialization failed: {error}")
 
+    def _input_problem(self):
+        """The first input torque that is not valid, as its message, or None."""
+        problems = ((name, check_value(p, self.values[name])) for name, p in INPUTS.items())
+        return next((f"input {name} {problem}" for name, problem in problems if problem), None)
+
     def _check_values(self):
-        """The first problem of the inputs and solver settings (the scene checks the model's
-        parameters), or None."""
-        problems = [(name, check_value(p, self.values[name])) for name, p in INPUTS.items()]
-        problems += [(name, self._check_solver_setting(name, self.values[name]))
-                     for name in SOLVER_SETTINGS]
+        """The first problem of the solver settings (the scene checks the model's parameters,
+        `_input_problem` the inputs), or None."""
+        problems = ((name, self._check_solver_setting(name, self.values[name]))
+                    for name in SOLVER_SETTINGS)
         return next((f"{name} {problem}" for name, problem in problems if problem), None)
 
     def _build_if_changed(self):
