@@ -766,3 +766,35 @@ def test_a_compiles_end_is_said_before_the_commands_last_line(monkeypatch, capsy
     assert main(["run", "no_such_scene"]) == 2
     lines = capsys.readouterr().err.splitlines()
     assert lines[0] == "compiled" and lines[-1].startswith("herringbone run: ")
+
+
+def test_a_scenes_torque_table_goes_beside_its_fmu_for_a_host(tmp_path, capsys, monkeypatch):
+    """The FMU's inputs are the host's: torque_step's table, which --simulate plays, is not in
+    the FMU, so build-fmu writes it as fmpy's input file and says so; fmpy's command line plays
+    it as the API does with herringbone.scene_inputs. Built here without a C compiler, whose
+    warning is one line."""
+    from herringbone.fmu.run import simulate_scene_fmu
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    assert main(["build-fmu", "torque_step", "--no-progress"]) == 0
+    said = capsys.readouterr().err.splitlines()
+    assert [line for line in said if line.startswith(
+        "herringbone build-fmu: warning: no C compiler ($CC or cc): the FMI 2.0 FMU keeps")]
+    assert not [line for line in said if "Warning" in line or "warnings.warn" in line]
+    fmu, table = Path("dist/torque_step-fmi2.fmu"), Path("dist/torque_step-fmi2-inputs.csv")
+    assert (f"note: the scene's torque table is not part of the FMU, whose inputs start at its "
+            f"first row (M_motor 500 N.m, M_load 1800 N.m) and hold where a host sets nothing; "
+            f"{table} holds the table for a host: fmpy simulate {fmu} --input-file {table}"
+            in said)
+    assert np.loadtxt(table, delimiter=",", skiprows=1).tolist() == [
+        [0.0, 500.0, 1800.0], [0.005, 500.0, 1800.0], [0.005, 5000.0, 18000.0],
+        [0.02, 5000.0, 18000.0]]
+    fmpy_command = Path(sys.executable).parent / "fmpy"
+    subprocess.run([str(fmpy_command), "simulate", str(fmu), "--input-file", str(table),
+                    "--output-file", "played.csv"], check=True, capture_output=True, timeout=300)
+    played = np.genfromtxt("played.csv", delimiter=",", names=True)
+    expected = simulate_scene_fmu(fmu, herringbone.load_scene("torque_step"))
+    assert np.array_equal(played["time"], expected["time"])
+    assert np.allclose(played["F_mesh"], expected["F_mesh"], rtol=1e-12, atol=0)
+    assert played["F_mesh"].max() > 10 * played["F_mesh"][0]  # the step, ten times the torque

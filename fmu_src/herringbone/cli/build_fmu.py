@@ -121,6 +121,8 @@ def execute(args, parser) -> int:
             "integrator compiled or loaded first, then packed and validated)")
         compile_first(source, not args.no_progress)
         print(f"built {builder.build_gear_fmu(scene=source, output=output, fmi_version=args.fmi)}")
+        if len(scene.inputs.times) > 1:
+            write_input_table(scene, output)
     if args.simulate:
         simulate(output, scene, results)
     return 0
@@ -136,6 +138,24 @@ def ssp_archive(args, parser, scene, source: Path) -> int:
     compile_first(source, not args.no_progress)
     print(f"built {build_ssp(scene=source, output=args.ssp)}")
     return 0
+
+
+def write_input_table(scene, fmu: Path) -> Path:
+    """A scene's torque table is not part of its FMU (a host drives the inputs): write it
+    beside the FMU as fmpy's input file, `FMU-inputs.csv` (time, s; M_motor and M_load, N.m;
+    each change as two rows at its time, held between), and say so. Returns the file."""
+    from ..fmu.run import scene_inputs
+
+    table = fmu.with_name(f"{fmu.stem}-inputs.csv")
+    rows = scene_inputs(scene, scene.experiment.stop_time)
+    lines = ["time,M_motor,M_load", *(",".join(map(repr, row)) for row in rows.tolist())]
+    table.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    first = scene.inputs
+    say(f"note: the scene's torque table is not part of the FMU, whose inputs start at its "
+        f"first row (M_motor {first.M_motor[0]:g} N.m, M_load {first.M_load[0]:g} N.m) and "
+        f"hold where a host sets nothing; {table} holds the table for a host: fmpy simulate "
+        f"{fmu} --input-file {table}")
+    return table
 
 
 def compile_first(scene: Path, progress: bool) -> None:

@@ -43,22 +43,23 @@ def with_resource_path(fmu_path: Path) -> bool:
     binaries/linux64/ID.so renamed `PYTHONFMU_LIBRARY_PREFIX` + ID.so and resource_path.c's
     library, compiled, in its place. Returns whether it did; where no C compiler is found, the
     FMU stays as it is and a ResourcePathWarning says what that leaves. Raises RuntimeError
-    where the compiler fails."""
+    where the FMU has not one such library or the compiler fails."""
     with zipfile.ZipFile(fmu_path) as zf:
         entries = {info.filename: zf.read(info) for info in zf.infolist()}
     libraries = [name for name in entries if name.startswith(FMI2_BINARIES)
                  and name.endswith(".so") and name.count("/") == FMI2_BINARIES.count("/")]
     compiler = c_compiler()
-    if compiler is None or len(libraries) != 1:
-        why = "no C compiler ($CC or cc)" if compiler is None else \
-            f"{len(libraries)} libraries in {FMI2_BINARIES}"
+    if compiler is None:
         warnings.warn(ResourcePathWarning(
-            f"{Path(fmu_path).name}: {why}: the FMU keeps pythonfmu 0.7's library alone, and a "
-            "host that loads it from a folder whose path holds a character a URI escapes, "
-            "other than a space (such as ü, # or %), crashes in fmi2Instantiate; install a C "
-            "compiler and build again, or have hosts unpack it into a folder whose path has "
-            "none"), stacklevel=2)
+            "no C compiler ($CC or cc): the FMI 2.0 FMU keeps pythonfmu 0.7's library alone, "
+            "and a host that loads it from a folder whose path holds a character a URI "
+            "escapes, other than a space (such as ü, # or %), crashes in fmi2Instantiate; "
+            "install a C compiler (Debian: apt install gcc) and build again, or have hosts "
+            "unpack it into a folder whose path has none"), stacklevel=2)
         return False
+    if len(libraries) != 1:
+        raise RuntimeError(f"{fmu_path}: pythonfmu's one library expected in {FMI2_BINARIES}, "
+                           f"found {libraries}")
     name = libraries[0]
     pythonfmu_name = FMI2_BINARIES + PYTHONFMU_LIBRARY_PREFIX + Path(name).name
     entries[pythonfmu_name] = entries[name]
