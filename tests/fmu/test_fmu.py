@@ -307,3 +307,16 @@ def test_a_transverse_inertia_left_to_the_scene_follows_the_mass_the_host_sets(b
     instance.free()
     assert taken == {name: pytest.approx(scene.parameters[name], rel=1e-15)
                      for name in ("J_pinion", "J_wheel")}
+
+
+def test_a_scene_object_is_built_as_its_file_would_be(tmp_path):
+    """build_gear_fmu takes a Scene as the Python API hands it (changed by with_parameters and
+    with_inputs): the FMU declares the changed values and runs as herringbone.simulate does."""
+    scene = herringbone.load_scene("reference").with_parameters(zeta_mesh=0.08).with_inputs(
+        M_motor=600.0, M_load=2160.0)
+    fmu = builder.build_gear_fmu(scene, tmp_path / "changed.fmu")
+    starts = {v.name: v.start for v in fmpy.read_model_description(str(fmu)).modelVariables}
+    assert (float(starts["zeta_mesh"]), float(starts["M_motor"])) == (0.08, 600.0)
+    through_fmu = fmpy.simulate_fmu(str(fmu), stop_time=2e-3, output_interval=1e-4)
+    direct = herringbone.simulate(scene, stop_time=2e-3, output_interval=1e-4)
+    assert force_error(through_fmu, direct, scene) < 1e-9

@@ -107,7 +107,8 @@ def test_scene_error_carries_its_fields():
 
 
 @pytest.mark.parametrize("path, shown", [(None, "None (NoneType)"), (123, "123 (int)"),
-                                         ("", "'' (empty)"), ([1, 2], "[1, 2] (list)")])
+                                         ("", "'' (empty)"), ([1, 2], "[1, 2] (list)"),
+                                         (herringbone.load_scene("reference"), "a Scene")])
 def test_a_path_that_names_no_file_is_blamed_on_the_argument(path, shown):
     """load_scene of something that is no path, or of '' (which pathlib reads as the current
     folder), names its argument, what it got and what is allowed: not a TypeError, not "."."""

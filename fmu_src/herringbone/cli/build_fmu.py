@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..arguments import output_file, output_file_problem, output_folder
 from ..fmu.builder import DEFAULT_SCENE, FMI_VERSIONS, default_fmu_name
+from ..model.scene import scene_file_text, toml_value
 from .common import (
     CommandParser,
     add_progress,
@@ -23,7 +24,6 @@ from .common import (
     fail,
     say,
     scene_of,
-    toml_value,
 )
 from .common import execute as run_command
 
@@ -170,26 +170,11 @@ def compile_first(scene: Path, progress: bool) -> None:
 
 
 def scene_text(scene, settings) -> str:
-    """`scene` as a scene file (its components, the parameters it sets, its experiment and
-    torques), what an FMU built with --set carries: a header naming the scene and the
-    `settings` ((name, value) pairs) it was changed by."""
+    """`scene` as a scene file, what an FMU built with --set carries: a header naming the scene
+    and the `settings` ((name, value) pairs) it was changed by."""
     changes = " ".join(f"--set {name}={toml_value(value)}" for name, value in settings)
-    lines = [f"# {scene.name} ({Path(scene.source).name}) with {changes}: written by herringbone "
-             "build-fmu", "", "[components]",
-             *(f"{name} = {toml_value(value)}" for name, value in scene.components.items()),
-             "", "[parameters]",
-             *(f"{name} = {toml_value(value)}" for name, value in scene.given.items()),
-             "", "[experiment]", f"stop_time = {toml_value(scene.experiment.stop_time)}",
-             f"output_interval = {toml_value(scene.experiment.output_interval)}", "", "[inputs]"]
-    inputs = scene.inputs
-    if len(inputs.times) == 1:
-        lines += [f"M_motor = {toml_value(inputs.M_motor[0])}",
-                  f"M_load = {toml_value(inputs.M_load[0])}"]
-    else:
-        rows = zip(inputs.times, inputs.M_motor, inputs.M_load)
-        lines.append("table = [" + ", ".join(f"[{', '.join(map(toml_value, row))}]" for row in rows)
-                     + "]")
-    return "\n".join(lines) + "\n"
+    return scene_file_text(scene, f"{scene.name} ({Path(scene.source).name}) with {changes}: "
+                                  "written by herringbone build-fmu")
 
 
 def simulate(fmu: Path, scene, csv_path: Path) -> None:

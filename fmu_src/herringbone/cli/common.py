@@ -33,7 +33,7 @@ from ..arguments import (
 )
 from ..model.parameters import PINION_SPEED as W0_PINION_RANGE
 from ..model.parameters import RPM_PER_RAD_S
-from ..model.scene import SceneError
+from ..model.scene import SceneError, toml_value
 from ..suggest import did_you_mean
 
 SCENE_HELP = "scene file (TOML), or the name of a shipped scene (`herringbone scenes` lists them)"
@@ -318,16 +318,6 @@ def _setting_refused(name: str, value, count: int, scene) -> str | None:
         return (f"{given}: the scene's torques are a table of {len(scene.inputs.times)} rows; "
                 "allowed: --set of a torque on a scene with constant torques")
     return None
-
-
-def toml_value(value) -> str:
-    """A value as a scene file writes it, to every digit: true (not Python's True), 10,
-    0.0004, 1e+16, inf, nan, a string quoted."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return f'"{value}"'
-    return str(value) if isinstance(value, int) else repr(float(value))
 
 
 # The most pinion speeds --speeds takes: a stability chart of 100 000 takes minutes (a few ms

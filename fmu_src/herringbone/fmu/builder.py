@@ -303,15 +303,16 @@ def build_example_fmus(output_dir: Path) -> list[Path]:
                                      ("fan_load.py", "FanLoad.fmu"))]
 
 
-def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
+def build_gear_fmu(scene, output: Path, fmi_version: int = 2) -> Path:
     """Build the gear train's co-simulation FMU of a scene: the slave, the modules of the
     herringbone package its run imports (carried.py), the compiled code its run loads and the
     scene (as resources/scene.toml) go into it; its variables are exactly the scene's.
 
     Parameters
     ----------
-    scene : str or pathlib.Path
-        A scene file, or the name of a shipped scene.
+    scene : str, pathlib.Path or Scene
+        A scene file, the name of a shipped scene, or a Scene (`herringbone.load_scene`,
+        changed by its `with_parameters` or `with_inputs`).
     output : pathlib.Path
         The .fmu file to write (replaced if it exists).
     fmi_version : int
@@ -341,11 +342,8 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
     """
     if fmi_version not in FMI_VERSIONS:
         raise ValueError(f"fmi_version {fmi_version!r}; allowed: 2 or 3")
-    from ..model.scene import load_scene
-
-    load_scene(scene)  # a bad scene is reported here, in the scene's own words
-    scene = shipped.resolve_scene(scene)
     with tempfile.TemporaryDirectory(prefix="gear_scene_") as tmp:
+        scene = scene_file(scene, Path(tmp))
         scene_copy = Path(tmp) / FMU_SCENE_FILE
         shutil.copyfile(scene, scene_copy)
         carried = carry_compiled_integrator(scene, Path(tmp))
@@ -359,6 +357,21 @@ def build_gear_fmu(scene: Path, output: Path, fmi_version: int = 2) -> Path:
                                project_files=[package, scene_copy, carried],
                                output=output, handle_state=True, serialize_state=True,
                                no_feedthrough=True, fmi_version=fmi_version)
+
+
+def scene_file(scene, folder: Path) -> Path:
+    """The scene file of `scene`: a Scene written into `folder`, named as the scene; a scene
+    file, or a shipped scene's name, checked (a bad scene is reported here, in the scene's own
+    words) and as it is."""
+    from ..model.scene import Scene, load_scene, scene_file_text
+
+    if isinstance(scene, Scene):
+        path = folder / f"{scene.name}.toml"
+        path.write_text(scene_file_text(scene, f"{scene.name}, as handed to the FMU's build"),
+                        encoding="utf-8")
+        return path
+    load_scene(scene)
+    return shipped.resolve_scene(scene)
 
 
 def carry_compiled_integrator(scene: Path, folder: Path) -> Path:

@@ -95,15 +95,15 @@ def _tag(qualified: str) -> str:
     return f"{{{NAMESPACES[prefix]}}}{name}"
 
 
-def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: float = STEP,
+def build_ssp(scene, output: Path, stop_time: float = STOP_TIME, step: float = STEP,
               parameters: dict[str, dict[str, object]] | None = None) -> Path:
     """The drive train as an SSP archive: the gear FMU of `scene` and the example motor and
     fan FMUs, connected by their SSD (write_ssp).
 
     Parameters
     ----------
-    scene : str or pathlib.Path
-        A scene file, or the name of a shipped scene.
+    scene : str, pathlib.Path or Scene
+        A scene file, the name of a shipped scene, or a Scene (`herringbone.load_scene`).
     output : pathlib.Path
         The .ssp file to write (replaced if it exists).
     stop_time, step : float
@@ -141,14 +141,14 @@ def build_ssp(scene: Path, output: Path, stop_time: float = STOP_TIME, step: flo
     """
     check_experiment(stop_time, step)
     check_components(parameters or {})
-    problem = scene_problem(load_scene(scene))
+    problem = scene_problem(scene if isinstance(scene, Scene) else load_scene(scene))
     if problem is not None:
         raise ValueError(problem)
     from .builder import build_example_fmus, build_gear_fmu
 
     with tempfile.TemporaryDirectory(prefix="drivetrain_ssp_") as tmp:
         folder = Path(tmp)
-        gear = build_gear_fmu(scene=Path(scene), output=folder / FMU_FILES["gear"])
+        gear = build_gear_fmu(scene=scene, output=folder / FMU_FILES["gear"])
         motor, fan = build_example_fmus(output_dir=folder)
         return write_ssp({"gear": gear, "motor": motor, "fan": fan}, output,
                          stop_time=stop_time, step=step, parameters=parameters)

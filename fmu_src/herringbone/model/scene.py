@@ -158,6 +158,39 @@ class Scene:
         return replace(self, inputs=_inputs(data, self.source, call="with_inputs"))
 
 
+def toml_value(value) -> str:
+    """A value as a scene file writes it, to every digit: true (not Python's True), 10,
+    0.0004, 1e+16, inf, nan, a string quoted."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    return str(value) if isinstance(value, int) else repr(float(value))
+
+
+def scene_file_text(scene: Scene, header: str = "") -> str:
+    """`scene` as a scene file, each number to every digit (load_scene of it gives the same
+    scene): its components, the parameters it sets, its experiment and torques, under
+    `header` (a comment line, without its #; none where empty)."""
+    lines = [f"# {header}", ""] if header else []
+    lines += ["[components]",
+              *(f"{name} = {toml_value(value)}" for name, value in scene.components.items()),
+              "", "[parameters]",
+              *(f"{name} = {toml_value(value)}" for name, value in scene.given.items()),
+              "", "[experiment]", f"stop_time = {toml_value(scene.experiment.stop_time)}",
+              f"output_interval = {toml_value(scene.experiment.output_interval)}", "",
+              "[inputs]"]
+    inputs = scene.inputs
+    if len(inputs.times) == 1:
+        lines += [f"M_motor = {toml_value(inputs.M_motor[0])}",
+                  f"M_load = {toml_value(inputs.M_load[0])}"]
+    else:
+        rows = zip(inputs.times, inputs.M_motor, inputs.M_load)
+        lines.append("table = [" + ", ".join(f"[{', '.join(map(toml_value, row))}]"
+                                             for row in rows) + "]")
+    return "\n".join(lines) + "\n"
+
+
 def load_scene(path) -> Scene:
     """Read and validate a scene file (see the module docstring for its format).
 
@@ -230,8 +263,11 @@ def _scene_path(path):
     except TypeError:
         text = None
     if not isinstance(text, str):
-        raise SceneError(f"path is {path!r} ({type(path).__name__}); allowed: "
-                         f"{SCENE_PATH_ALLOWED}", key="path", call="load_scene")
+        shown = repr(path)
+        shown = f"{shown} ({type(path).__name__})" if len(shown) <= 60 else \
+            f"a {type(path).__name__}"
+        raise SceneError(f"path is {shown}; allowed: {SCENE_PATH_ALLOWED}", key="path",
+                         call="load_scene")
     if not text:
         raise SceneError(f"path is {path!r} (empty); allowed: {SCENE_PATH_ALLOWED}", key="path",
                          call="load_scene")
