@@ -197,9 +197,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("ssp", nargs="?", type=Path,
                         help="the .ssp to run (default: build dist/drivetrain.ssp first)")
-    parser.add_argument("--scene", default="reference",
-                        help="scene of the gear FMU when building: a file or a shipped scene's "
-                             "name (default: reference)")
+    parser.add_argument("--scene",
+                        help="scene of the gear FMU when building, without SSP: a file or a "
+                             "shipped scene's name (default: reference)")
     parser.add_argument("--stop-time", type=float, help="s (default: the SSD's stopTime)")
     parser.add_argument("--step", type=float, help="s (default: the SSD's baseStepSize)")
     args = parser.parse_args(argv)
@@ -207,15 +207,21 @@ def main(argv=None):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             parser.error(f"--{name.replace('_', '-')} {value}: allowed: finite and > 0")
+    if args.ssp is not None and args.scene is not None:
+        parser.error(f"--scene {args.scene}: the SSP {args.ssp} carries its own gear FMU; "
+                     "allowed: --scene without SSP (it builds dist/drivetrain.ssp)")
     missing = missing_cosimulator()
     if missing is not None:  # before a build that could not be used
         parser.exit(2, f"{parser.prog}: {missing}\n")
     ssp = args.ssp
     if ssp is None:
         ssp = Path("dist") / "drivetrain.ssp"
+        replacing = " (replacing the one there)" if ssp.exists() else ""
+        print(f"{parser.prog}: building {ssp} from the scene {args.scene or 'reference'}"
+              f"{replacing}", file=sys.stderr, flush=True)
         # another process: this one must not import herringbone (the gear FMU imports its own)
         subprocess.run([sys.executable, "-m", "herringbone.cli", "build-fmu", "--ssp", str(ssp),
-                        str(args.scene)], check=True)
+                        str(args.scene or "reference")], check=True)
     try:
         experiment = read_ssp(ssp)
     except (OSError, KeyError, ValueError, zipfile.BadZipFile, ET.ParseError) as error:

@@ -112,13 +112,13 @@ def test_outputs_wrong_types_and_unknown_references_are_answered_without_fatal(g
     instance.slave.setReal([refs["F_mesh"]], [5.0])
     assert errors(instance, "F_mesh is an output", "cannot be set")
     assert math.isnan(instance.slave.getReal([refs["n_contacts"]])[0])
-    assert errors(instance, "n_contacts is a Integer", "fmi2GetInteger")
+    assert errors(instance, "n_contacts is an Integer", "fmi2GetInteger")
     assert instance.slave.getInteger([refs["F_mesh"]]) == [0]
     assert errors(instance, "F_mesh is a Real", "fmi2GetReal")
     assert math.isnan(instance.slave.getReal([100_000])[0])
     assert errors(instance, "value reference 100000")
     instance.slave.setReal([refs["internal_steps"]], [1.0])  # a local, through the wrong type
-    assert errors(instance, "internal_steps is a Integer")
+    assert errors(instance, "internal_steps is an Integer")
     assert not [text for status, text in instance.messages if status == FATAL]
     forces = run_steps(instance, 3)  # the instance lives on, unchanged
     assert np.array_equal(forces, run_steps(gear(), 3))

@@ -345,6 +345,9 @@ def test_example_follows_the_parameter_set(drivetrain, tmp_path):
                  id="stop-time-shorter-than-two-windows"),
     pytest.param(("--step=-1e-4",), ("--step -0.0001", "allowed: finite and > 0"),
                  id="step-negative"),
+    pytest.param(("--scene", "torsional"), ("--scene torsional", "carries its own gear FMU",
+                                            "allowed: --scene without SSP"),
+                 id="scene-beside-an-ssp"),
 ])
 def test_example_refuses_a_bad_argument_before_the_run(drivetrain, tmp_path, options, words):
     """A step or stop time that cannot give two averaging windows of whole steps: exit 2, one

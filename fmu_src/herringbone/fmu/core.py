@@ -163,6 +163,11 @@ def _step_size_problem(current_time, step_size) -> str | None:
     return f"communicationStepSize is {step_size!r} s; allowed: finite and > 0 s"
 
 
+# what a variable that cannot be set is, in a refusal's words (by its causality)
+CAUSALITY_WORDS = {"output": "an output", "local": "a local variable",
+                   "independent": "the independent variable (the time)"}
+
+
 @dataclasses.dataclass
 class Declaration:
     """One variable of the FMU, in FMI terms both versions share: `kind` is "real", "integer",
@@ -250,7 +255,7 @@ class GearCore:
         slave checks the open one), its setter through _set. A variable that is not a real
         carries its unit in its description."""
         kind = KINDS[parameter.kind]
-        description = parameter.description if kind == "real" or not parameter.unit \
+        description = parameter.description if kind == "real" or parameter.unit in ("", "1") \
             else f"{parameter.description} [{parameter.unit}]"
         if parameter.default is None and name not in self.scene.given:
             description += "; follows the masses and geometry set while at its start value"
@@ -440,8 +445,9 @@ class GearCore:
         for vr, value in zip(vrs, values):
             declaration = self._variable(vr, kind, "set")
             if declaration is not None and declaration.setter is None:
-                self._report(f"{declaration.name} is an {declaration.causality}: it cannot be "
-                             "set; only parameters (before initialization) and inputs can be")
+                what = CAUSALITY_WORDS.get(declaration.causality, declaration.causality)
+                self._report(f"{declaration.name} is {what}: it cannot be set; only parameters "
+                             "(before initialization) and inputs can be")
             elif declaration is not None:
                 declaration.setter(value)
 
@@ -454,7 +460,8 @@ class GearCore:
             names, prefix = self.API["kinds"], self.API["prefix"]
             action = "Get" if verb == "read" else "Set"
             actual = names[declaration.kind]
-            self._report(f"{declaration.name} is a {actual} variable: {verb} it with "
+            article = "an" if actual[0] in "AEIOU" else "a"
+            self._report(f"{declaration.name} is {article} {actual} variable: {verb} it with "
                          f"{prefix}{action}{actual}, not "
                          f"{prefix}{action}{names.get(kind, kind)}")
             return None
