@@ -204,52 +204,22 @@ fmi2Status fmi2Terminate(fmi2Component c) { return pythonfmu.fmi2Terminate(c); }
 
 fmi2Status fmi2Reset(fmi2Component c) { return pythonfmu.fmi2Reset(c); }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
-{
-    return pythonfmu.fmi2GetReal(c, vr, nvr, value);
-}
-
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Integer value[])
-{
-    return pythonfmu.fmi2GetInteger(c, vr, nvr, value);
-}
-
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Boolean value[])
-{
-    return pythonfmu.fmi2GetBoolean(c, vr, nvr, value);
-}
-
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                         fmi2String value[])
-{
-    return pythonfmu.fmi2GetString(c, vr, nvr, value);
-}
-
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       const fmi2Real value[])
-{
-    return pythonfmu.fmi2SetReal(c, vr, nvr, value);
-}
-
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Integer value[])
-{
-    return pythonfmu.fmi2SetInteger(c, vr, nvr, value);
-}
-
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[])
-{
-    return pythonfmu.fmi2SetBoolean(c, vr, nvr, value);
-}
-
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                         const fmi2String value[])
-{
-    return pythonfmu.fmi2SetString(c, vr, nvr, value);
-}
+/* fmi2GetReal, fmi2SetReal and the other kinds' */
+#define VALUES_OF(kind, type)                                                                   \
+    fmi2Status fmi2Get##kind(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,          \
+                             type value[])                                                      \
+    {                                                                                           \
+        return pythonfmu.fmi2Get##kind(c, vr, nvr, value);                                      \
+    }                                                                                           \
+    fmi2Status fmi2Set##kind(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,          \
+                             const type value[])                                                \
+    {                                                                                           \
+        return pythonfmu.fmi2Set##kind(c, vr, nvr, value);                                      \
+    }
+VALUES_OF(Real, fmi2Real)
+VALUES_OF(Integer, fmi2Integer)
+VALUES_OF(Boolean, fmi2Boolean)
+VALUES_OF(String, fmi2String)
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
 {
@@ -314,27 +284,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 
 fmi2Status fmi2CancelStep(fmi2Component c) { return pythonfmu.fmi2CancelStep(c); }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
-{
-    return pythonfmu.fmi2GetStatus(c, s, value);
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
-{
-    return pythonfmu.fmi2GetRealStatus(c, s, value);
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
-{
-    return pythonfmu.fmi2GetIntegerStatus(c, s, value);
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
-{
-    return pythonfmu.fmi2GetBooleanStatus(c, s, value);
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
-{
-    return pythonfmu.fmi2GetStringStatus(c, s, value);
-}
+/* fmi2GetStatus, fmi2GetRealStatus and the other kinds' */
+#define STATUS_OF(kind, type)                                                                   \
+    fmi2Status fmi2Get##kind##Status(fmi2Component c, const fmi2StatusKind s, type *value)       \
+    {                                                                                           \
+        return pythonfmu.fmi2Get##kind##Status(c, s, value);                                    \
+    }
+STATUS_OF(, fmi2Status)
+STATUS_OF(Real, fmi2Real)
+STATUS_OF(Integer, fmi2Integer)
+STATUS_OF(Boolean, fmi2Boolean)
+STATUS_OF(String, fmi2String)
