@@ -349,8 +349,9 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in [
     Output("F_mesh_left", "N", "mesh force of the left half", slot="F_MESH_LEFT"),
     Output("F_mesh_right", "N", "mesh force of the right half", slot="F_MESH_RIGHT"),
     *[Output(f"F_brg_{gear}_{side}", "N", f"reaction of the {side} {gear} bearing along the "
-             "mesh force, the model's one plane (pinion bearings sum to -F_mesh, wheel "
-             "bearings to +F_mesh)",
+             "mesh force, the model's one plane (in static equilibrium the pinion bearings "
+             "sum to -F_mesh, the wheel bearings to +F_mesh; in motion the bodies' inertia "
+             "takes its part)",
              component="bearings")
       for gear in ("pinion", "wheel") for side in ("left", "right")],
     Output("w_motor", "rad/s", "motor speed", component="motor", rate_of="phi_motor"),
