@@ -17,6 +17,7 @@ from helpers import MODELS
 
 import herringbone
 from herringbone import cli, shipped
+from herringbone.fmu import builder
 from herringbone.integrate.compiled_stepper import CompiledStepper
 from herringbone.integrate.contract import Stepper
 from herringbone.integrate.stepping import ScipyStepper
@@ -212,22 +213,25 @@ def test_build_fmu_command_refuses_a_bad_scene_in_one_line(tmp_path, capsys):
 
 def test_build_fmu_command_builds_a_shipped_scene(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    from herringbone.fmu import builder
 
     assert cli.main(["build-fmu", "torsional", "-o", "t.fmu"]) == 0
     assert builder.validate(tmp_path / "t.fmu") == []
     assert f"built {tmp_path / 't.fmu'}" in capsys.readouterr().out
 
 
-def test_the_wheel_ships_the_scenes_and_examples():
-    """pyproject.toml maps models/ and examples/ into the package as data."""
+def test_the_wheel_ships_the_scenes_examples_and_the_fmus_pages():
+    """pyproject.toml maps models/, examples/ and the pages a gear FMU carries (docs/) into
+    the package as data."""
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
     setuptools = pyproject["tool"]["setuptools"]
     assert setuptools["package-dir"]["herringbone.scenes"] == "models"
     assert setuptools["package-dir"]["herringbone.examples"] == "examples"
+    assert setuptools["package-dir"]["herringbone.docs"] == "docs"
+    assert set(setuptools["package-data"]["herringbone.docs"]) == set(builder.FMU_DOCUMENTS)
+    data = {"herringbone.scenes", "herringbone.examples", "herringbone.docs"}
     packages = {".".join(path.relative_to(PACKAGE.parent).parent.parts)
                 for path in PACKAGE.rglob("__init__.py")}
-    assert packages | {"herringbone.scenes", "herringbone.examples"} == set(setuptools["packages"])
+    assert packages | data == set(setuptools["packages"])
     assert shipped.scene_files()["reference"].resolve() == (MODELS / "reference.toml").resolve()
 
 

@@ -1,9 +1,10 @@
 """The scenes and example FMU scripts that come with the package, and the one resolver that
 lets every command take a shipped scene's name where it takes a scene file.
 
-Installed from a wheel, they are package data: `scenes/` (the repository's `models/*.toml`) and
+Installed from a wheel, they are package data: `scenes/` (the repository's `models/*.toml`),
 `examples/` (the repository's `examples/`: the motor and fan FMU scripts and the
-parametric-resonance scene), put there by pyproject.toml. In a source checkout (an editable
+parametric-resonance scene) and `docs/` (the pages a gear FMU carries), put there by
+pyproject.toml. In a source checkout (an editable
 install, or `fmu_src` on the path) they are read where the repository keeps them.
 """
 from __future__ import annotations
@@ -29,6 +30,12 @@ def scenes_folder() -> Path:
 def examples_folder() -> Path:
     """The example FMU scripts and scenes (`examples/` of the repository)."""
     return _folder("examples", "examples")
+
+
+def docs_folder() -> Path:
+    """The documentation pages an FMU carries (`docs/` of the repository; in a wheel, those
+    pyproject.toml lists)."""
+    return _folder("docs", "docs")
 
 
 def scene_files() -> dict[str, Path]:

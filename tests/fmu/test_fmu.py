@@ -1,5 +1,6 @@
 """The gear FMU driven by fmpy against the reference integration (same model, same inputs)."""
 import math
+import zipfile
 
 import fmpy
 import numpy as np
@@ -320,3 +321,19 @@ def test_a_scene_object_is_built_as_its_file_would_be(tmp_path):
     through_fmu = fmpy.simulate_fmu(str(fmu), stop_time=2e-3, output_interval=1e-4)
     direct = herringbone.simulate(scene, stop_time=2e-3, output_interval=1e-4)
     assert force_error(through_fmu, direct, scene) < 1e-9
+
+
+def test_the_fmu_carries_its_documentation_where_the_standard_puts_it(built_fmus, tmp_path):
+    """documentation/ with the entry page FMI names (2.0: _main.html, 3.0: index.html): the
+    scene, the model's page shown, and the pages a host needs beside it."""
+    fmi3 = builder.build_gear_fmu("torsional", tmp_path / "torsional3.fmu", fmi_version=3)
+    for fmu, entry in ((built_fmus["torsional"], "_main.html"), (fmi3, "index.html")):
+        with zipfile.ZipFile(fmu) as archive:
+            names = set(archive.namelist())
+            page = archive.read(f"documentation/{entry}").decode("utf-8")
+        assert {f"documentation/{name}" for name in builder.FMU_DOCUMENTS} < names
+        assert "<h1>HerringboneGear: the scene torsional</h1>" in page
+        assert "The reference gear on rigid bearings" in page  # the scene's own header
+        assert "# The model" in page and "</pre>" in page
+        assert "documentation/model.md in the FMU" in \
+            fmpy.read_model_description(str(fmu)).description

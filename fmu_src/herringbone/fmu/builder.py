@@ -13,6 +13,8 @@ run imports (carried.py) and the compiled code its run loads (carry_compiled_int
 from __future__ import annotations
 
 import hashlib
+import html
+import itertools
 import os
 import shutil
 import subprocess
@@ -43,6 +45,28 @@ UNITS_MODULE_NAME = "fmi_units"
 REFERENCES_MODULE = GEAR_PACKAGE / "fmu" / "pythonfmu_references.py"
 REFERENCES_MODULE_NAME = "pythonfmu_references"
 DEFAULT_SCENE = "reference"  # a shipped scene's name
+# the pages of docs/ a gear FMU carries in its documentation folder (pyproject.toml ships them)
+FMU_DOCUMENTS = {"model.md": "the model: its physics, conventions, variables and their units",
+                 "hosts.md": "what a host needs, and how the FMU answers each host",
+                 "fmi3.md": "what differs in the FMI 3.0 FMU",
+                 "known-issues.md": "the faults of pythonfmu this FMU cures, and how"}
+ENTRY_PAGE = """<!DOCTYPE html>
+<html lang="en">
+<head><meta charset="utf-8"><title>HerringboneGear: {scene}</title></head>
+<body>
+<h1>HerringboneGear: the scene {scene}</h1>
+<p>{header}</p>
+<p>A herringbone Novikov gear train (motor, pinion, wheel and load) as a co-simulation FMU,
+built by the herringbone package from the scene in resources/scene.toml. Its pages, as
+Markdown text:</p>
+<ul>
+{links}
+</ul>
+<h2>model.md</h2>
+<pre>{model}</pre>
+</body>
+</html>
+"""
 
 # FMI 2.0 default `initial` (spec table p. 49), keyed by (causality, variability).
 _DEFAULT_INITIAL = {
@@ -62,7 +86,8 @@ _AFTER_UNIT_DEFINITIONS = ("TypeDefinitions", "LogCategories", "DefaultExperimen
 
 def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
                     handle_state: bool = True, serialize_state: bool = False,
-                    no_feedthrough: bool = False, fmi_version: int = 2) -> Path:
+                    no_feedthrough: bool = False, fmi_version: int = 2,
+                    documentation: Path | None = None) -> Path:
     """Build `slave_script` (one pythonfmu Fmi2Slave class, or for `fmi_version` 3 one
     pythonfmu3 Fmi3Slave class) into the FMU file `output`.
 
@@ -74,9 +99,11 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
     `pythonfmu_references`. `handle_state` declares
     canGetAndSetFMUstate; `serialize_state` declares canSerializeFMUstate (the slave's state
     must then be JSON data, or the slave must override pythonfmu's `_fmu_state_to_bytes`);
-    `no_feedthrough`: see `fix_model_description`.  An FMI 2.0 FMU gets its own library in
-    front of pythonfmu's (`resource_path.with_resource_path`: a ResourcePathWarning where no C
-    compiler is found). The model description is then fixed by `fix_model_description`.
+    `no_feedthrough`: see `fix_model_description`.  `documentation`: a folder that becomes
+    the FMU's documentation/ (FMI 2.0: with _main.html; 3.0: index.html).  An FMI 2.0 FMU gets
+    its own library in front of pythonfmu's (`resource_path.with_resource_path`: a
+    ResourcePathWarning where no C compiler is found). The model description is then fixed by
+    `fix_model_description`.
     `output` (its parent directories are created) is replaced only once the FMU is complete and
     valid.  Needs pythonfmu (pythonfmu3) and fmpy importable by `sys.executable`.  Returns
     `output`.  Raises RuntimeError if pythonfmu fails or `fmpy validate` finds problems.
@@ -96,10 +123,10 @@ def build_slave_fmu(slave_script: Path, project_files: list[Path], output: Path,
         builder = {2: "pythonfmu", 3: "pythonfmu3"}[fmi_version]
         command = [sys.executable, "-m", builder, "build", "-f", str(slave_script),
                    "-d", tmp, *map(str, project_files)]
-        if handle_state:
-            command.append("--handle-state")
-        if serialize_state:
-            command.append("--serialize-state")
+        command += [option for option, wanted in (("--handle-state", handle_state),
+                                                  ("--serialize-state", serialize_state))
+                    if wanted]
+        command += ["--doc", str(documentation)] if documentation is not None else []
         import_paths = [str(p.parent) for p in project_files if p.is_dir() or p.suffix == ".py"]
         if os.environ.get("PYTHONPATH"):
             import_paths.append(os.environ["PYTHONPATH"])
@@ -353,10 +380,34 @@ def build_gear_fmu(scene, output: Path, fmi_version: int = 2) -> Path:
         slave.parent.mkdir()
         shutil.copyfile(source, slave)
         package = carried_package.stage_package(Path(tmp) / "package")
+        documentation = write_documentation(scene, Path(tmp) / "documentation", fmi_version)
         return build_slave_fmu(slave_script=slave,
                                project_files=[package, scene_copy, carried],
                                output=output, handle_state=True, serialize_state=True,
-                               no_feedthrough=True, fmi_version=fmi_version)
+                               no_feedthrough=True, fmi_version=fmi_version,
+                               documentation=documentation)
+
+
+def write_documentation(scene: Path, folder: Path, fmi_version: int) -> Path:
+    """The gear FMU's documentation folder, made in `folder`: the pages of FMU_DOCUMENTS as
+    they are, and the entry page the standard names (FMI 2.0: _main.html, 3.0: index.html),
+    which says what the FMU is (its scene file's opening comment) and shows the model's page.
+    Returns `folder`."""
+    folder.mkdir(parents=True)
+    pages = shipped.docs_folder()
+    for name in FMU_DOCUMENTS:
+        shutil.copyfile(pages / name, folder / name)
+    lines = scene.read_text(encoding="utf-8").splitlines()
+    header = [line[1:].strip()
+              for line in itertools.takewhile(lambda line: line.startswith("#"), lines)]
+    links = "\n".join(f'<li><a href="{name}">{name}</a>: {what}</li>'
+                      for name, what in FMU_DOCUMENTS.items())
+    model = html.escape((pages / "model.md").read_text(encoding="utf-8"))
+    entry = ENTRY_PAGE.format(scene=html.escape(scene.stem), header=html.escape(" ".join(header)),
+                              links=links, model=model)
+    (folder / ("_main.html" if fmi_version == 2 else "index.html")).write_text(
+        entry, encoding="utf-8")
+    return folder
 
 
 def scene_file(scene, folder: Path) -> Path:

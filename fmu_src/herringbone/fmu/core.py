@@ -71,7 +71,8 @@ from herringbone.model.parameters import (  # noqa: E402
     parameters_of,
 )
 
-DESCRIPTION = "Herringbone Novikov gear train: motor, pinion, wheel and load (docs/model.md)"
+DESCRIPTION = ("Herringbone Novikov gear train: motor, pinion, wheel and load (its model: "
+               "documentation/model.md in the FMU)")
 # a run's times must resolve the train's fastest time scale to this share (_resolution_problem)
 RESOLVED_SHARE = 1e-3
 EPSILON = float(np.finfo(float).eps)

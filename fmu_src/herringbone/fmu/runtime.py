@@ -25,7 +25,7 @@ def check_dependencies() -> None:
             f"The FMU needs {', '.join(REQUIRED)}: set PYTHONPATH to the site-packages folder "
             "of an environment that has them (`python -c \"import sysconfig; "
             "print(sysconfig.get_path('purelib'))\"` in that environment), and load that "
-            "Python's libpython first; see docs/hosts.md, What a host needs")
+            "Python's libpython first; see documentation/hosts.md in the FMU, What a host needs")
         print(message, file=sys.stderr, flush=True)
         raise ImportError(message)
 
