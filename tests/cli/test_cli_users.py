@@ -62,7 +62,9 @@ def test_run_says_when_its_samples_miss_the_fastest_mode(tmp_path, capsys):
     assert (f"fastest mode, ringing at {fastest:.0f} Hz with its damping (`herringbone info` "
             f"lists it undamped), {1e4 / fastest:.2g} a period") in note
     assert "the min and max of samples can miss its swings" in note
-    assert f"--output-interval {int(1e7 / (8 * fastest)) / 10:g}e-06 or shorter" in note
+    assert (f"--output-interval {int(1e7 / (8 * fastest)) / 10:g}e-06 or shorter follows the "
+            "ringing, but the force's jumps at contact switches fall between samples at any "
+            "interval") in note
     assert "`herringbone sweep reference --speeds FROM TO COUNT`" in note
     assert main(["run", "reference", "--stop-time", "4e-3", "--output-interval", "5e-6",
                  "--no-progress", "-o", str(tmp_path / "run.csv")]) == 0

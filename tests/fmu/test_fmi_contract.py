@@ -393,6 +393,17 @@ def test_a_state_not_of_this_fmus_layout_is_refused_with_a_message_not_a_fatal(g
         assert np.array_equal(run_steps(instance, 2), clean[2:])
 
 
+def test_internal_steps_stays_at_the_most_an_integer_holds(gear):
+    """A count past 2^31 − 1 (a long stiff run) reads that, not a negative wrapped one."""
+    instance = gear()
+    run_steps(instance, 1)
+    state = json.loads(_serialize(instance))
+    for count, read in ((2**31 - 10, 2**31 - 10), (2**31 + 5, 2**31 - 1), (2**32 + 5, 2**31 - 1)):
+        state["run"]["internal_steps"] = count
+        _restore(instance, json.dumps(state).encode())
+        assert instance.get(["internal_steps"])["internal_steps"] == read
+
+
 FOREIGN_STATE = b'{"not": "a state of this FMU"}'
 
 

@@ -532,3 +532,32 @@ def test_simulate_stops_a_runaway_with_a_message_naming_the_torques(reference_sc
                        match=r"the train runs away; check the torques M_motor = 500 and "
                              r"M_load = 1e\+19 N\.m$"):
         herringbone.simulate(runaway, stop_time=0.01, output_interval=1e-3)
+
+
+# integer_overlap's mesh stiffness is the same in every contact set, so its exact solution is
+# the static one: F_mesh stays at the static mesh force (the reference's to 1e-12)
+STATIC_SCENE = "integer_overlap"
+
+
+def static_force_error(method: str, tolerance: float) -> float:
+    """The largest |F_mesh − the static mesh force| over 10 ms of STATIC_SCENE by `method`,
+    over the force scale."""
+    scene = herringbone.load_scene(MODELS / f"{STATIC_SCENE}.toml")
+    model = GearTrainModel(scene)
+    result = herringbone.simulate(scene, stop_time=0.01, output_interval=1e-4,
+                                  tolerance=tolerance, method=method)
+    return float(np.abs(result["F_mesh"] - model.static_mesh_force()).max()
+                 / model.force_scale())
+
+
+@pytest.mark.parametrize("method", ["dop853", "exponential"])
+def test_a_static_solution_stays_static(method):
+    assert static_force_error(method, 1e-9) < 3e-9
+
+
+@pytest.mark.xfail(strict=True, reason="Radau IIA's step control accepts steps too long for its "
+                   "tolerance: 1.1e-7 of the force on integer_overlap at 1e-9, 60 times the "
+                   "tolerance on an overdamped staggered train that auto gives it "
+                   "(docs/known-issues.md)")
+def test_radau_holds_its_tolerance_where_the_solution_is_static():
+    assert static_force_error("radau", 1e-9) < 3e-9

@@ -68,7 +68,8 @@ def declare(parser) -> None:
     parser.add_argument("--method", choices=COMPILED_METHODS, default=None,
                         help="the compiled integrator's method: auto (the default) picks for "
                              "the scene (exponential where the mesh's contact sets allow it, "
-                             "else dop853, or radau for a stiff train); dop853: explicit "
+                             "else dop853, or radau for an overdamped stiff train); dop853: "
+                             "explicit "
                              "Runge-Kutta of order 8, radau: implicit Radau IIA, exponential: "
                              "exact steps of the linear contact sets (DOP853 elsewhere); not "
                              "with --reference, which always runs scipy's DOP853")
@@ -228,10 +229,11 @@ def sampling_note(scene, results: dict) -> list[str]:
             f"give the train's fastest mode, ringing at {fastest:.0f} Hz with its damping "
             f"(`herringbone info` lists it undamped), {per_period:.2g} a period: the min and "
             "max of samples can miss its swings between them, reading F_mesh's peak and dip "
-            f"(K_v) short{aliases}; for the extremes give --output-interval "
-            f"{finer:g} or shorter, or for the steady state's true peaks `herringbone sweep "
-            f"{named_as_typed(scene)} --speeds FROM TO COUNT` about w0_pinion = {speed:g} "
-            "rad/s"]
+            f"(K_v) short{aliases}; --output-interval {finer:g} or shorter follows the "
+            "ringing, but the force's jumps at contact switches fall between samples at any "
+            "interval (a finer one can read a peak lower); for the steady state's true peaks "
+            f"`herringbone sweep {named_as_typed(scene)} --speeds FROM TO COUNT` about "
+            f"w0_pinion = {speed:g} rad/s"]
 
 
 def _two_digits_down(value: float) -> float:
