@@ -250,11 +250,11 @@ def test_the_compiled_run_shows_progress_and_keeps_its_numbers(capsys):
     ready = []
     watched = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4)
     loaded_first = simulate_with_progress(scene, stop_time=2e-3, output_interval=1e-4,
-                                          on_ready=ready.append)
+                                          on_ready=lambda *said: ready.append(said))
     for name in plain:
         assert np.array_equal(plain[name], watched[name]), name
         assert np.array_equal(plain[name], loaded_first[name]), name
-    assert ready == ["exponential"]  # the method auto takes for the scene
+    assert ready == [("exponential", "")]  # the method auto takes for the scene, as named
     assert "s simulated" in capsys.readouterr().err
 
 

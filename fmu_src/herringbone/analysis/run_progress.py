@@ -71,7 +71,8 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         Show the bar.
     on_ready : callable or None
         Called once the integrator is ready to step, with the method that steps (the compiled
-        integrator's: "auto" resolved; None for the reference): for the compiled one, the
+        integrator's: "auto" resolved; None for the reference) and what it does otherwise than
+        its name says (CompiledStepper.method_note; "" for none): for the compiled one, the
         model's tables built and its compiled loop loaded (compiled the first time), and the
         bar up (importing tqdm takes milliseconds), so that a caller can tell that start from
         the stepping.
@@ -92,7 +93,7 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         check_reference_run(scene, stop_time, output_interval, tolerance)
         with progress_bar(stop, f"run {scene.name}", progress) as bar:
             if on_ready is not None:
-                on_ready(None)
+                on_ready(None, "")
             return checked_reference_run(scene, stop_time, output_interval, tolerance,
                                          wrap=lambda stepper: _watched(stepper, bar, scene))[0]
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
@@ -106,7 +107,7 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
-            on_ready(stepper.method)
+            on_ready(stepper.method, stepper.method_note)
         return simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
                              output_interval)
 

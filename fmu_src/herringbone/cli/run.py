@@ -182,11 +182,13 @@ def compiled_run(scene, stop_time: float, interval: float, tolerance: float, met
     results = simulate_with_progress(
         scene, stop_time=stop_time, output_interval=interval, tolerance=tolerance,
         method=method, progress=progress,
-        on_ready=lambda chosen: ready.append((time.perf_counter() - started, chosen)))
-    start, chosen = ready[0]
+        on_ready=lambda chosen, note: ready.append((time.perf_counter() - started, chosen,
+                                                    note)))
+    start, chosen, note = ready[0]
     picked = ", picked by --method auto" if method == "auto" else ""
+    note = f": {note}" if note else ""
     return (results, time.perf_counter() - started,
-            f"the compiled integrator ({chosen}{picked})", start)
+            f"the compiled integrator ({chosen}{picked}{note})", start)
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:

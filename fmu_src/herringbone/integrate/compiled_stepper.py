@@ -86,7 +86,9 @@ def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> st
     """The method "auto" stands for on this model; the others are returned as they are.
 
     The exponential method wherever every contact set of the mesh period is exact (with all
-    its points loaded): its cost does not depend on the train's stiffness, and it was the
+    its points loaded): its cost does not depend on the train's stiffness (while the modal
+    forms can be made: a mesh stiff enough makes them too ill-conditioned, and DOP853 or
+    Radau IIA takes over, as `method_note` says), and it was the
     cheapest on every such shipped scene. Where only some are, it steps the others by DOP853,
     bit for bit as DOP853 would: it is taken there too where `runge_kutta_method` would take
     DOP853 and at least EXACT_SHARE of the sets are exact (measured: half of them, low_speed,
@@ -299,6 +301,8 @@ class CompiledStepper:
         self.tolerance = float(tolerance)
         modes = model.eigenvalues()
         self.method = choose_method(model, method, modes)
+        # what the method does otherwise than its name says ("": nothing), for a run's summary
+        self.method_note = ""
         # the tolerance each step is held to: tighter where lightly damped modes ring on
         self.step_tolerance = max(self.tolerance * step_tolerance_factor(model, modes),
                                   min(self.tolerance, RINGING_CUT_FLOOR))
@@ -361,10 +365,14 @@ class CompiledStepper:
                      torque_scales, step_tolerance)
         try:
             return exponential.build_tables(*arguments)
-        except np.linalg.LinAlgError:
+        except np.linalg.LinAlgError as refused:
             if method == "exponential":
+                self.method_note = (f"a contact set's modal form refused ({refused}): such "
+                                    "sets stepped by DOP853")
                 return exponential.build_tables(*arguments, skip_defective=True)
             self.method = runge_kutta_method(modes)
+            self.method_note = (f"the exponential method's modal forms refused ({refused}): "
+                                f"{self.method} instead")
             return None
 
     @functools.cached_property
