@@ -32,7 +32,7 @@ from herringbone.fmu import builder
 from herringbone.integrate import first_start
 from herringbone.model.parameters import INPUTS, PARAMETERS
 
-DISCARD, ERROR, FATAL = 2, 3, 4  # fmi2Status
+WARNING, DISCARD, ERROR, FATAL = 1, 2, 3, 4  # fmi2Status
 STEP = 1e-4
 BIN = f"{sys.executable.rsplit('/', 1)[0]}"
 
@@ -209,6 +209,14 @@ def test_a_step_past_what_the_clock_resolves_is_refused_and_the_run_goes_on(gear
     with pytest.raises(FMICallException):
         late.step(STEP)
     assert errors(late, "doStep to t = 1e+09 s", "resolves 1.2e-07 s")
+
+
+def test_a_max_step_whose_rounding_outweighs_its_steps_is_logged_as_a_warning(gear):
+    instance = gear(start_values={"max_step": 1e-9})
+    (said,) = [text for status, text in instance.messages if status == WARNING]
+    assert said.startswith("gear: max_step 1e-09 s takes at least 1e+09 steps a simulated "
+                           "second, and below 1e-07 s their rounding adds more error")
+    run_steps(instance, 1, size=1e-6)  # it runs
 
 
 def test_a_max_step_makes_its_steps_and_no_runaway(gear):

@@ -44,6 +44,7 @@ from herringbone.arguments import (  # noqa: E402
     FMU_SCENE_FILE,
     FMU_SOLVER_METHOD,
     FMU_SOLVER_TOLERANCE,
+    max_step_note,
 )
 from herringbone.fmu.pythonfmu_logger import HostLine  # noqa: E402
 from herringbone.integrate import first_start  # noqa: E402
@@ -626,6 +627,8 @@ class GearCore:
         problem = self._check_values() or self._build_if_changed()
         if problem is not None:
             return self._fail(problem)
+        if max_step_note(self.values["max_step"]) is not None:
+            self._report(max_step_note(self.values["max_step"]), WARNING)
         try:
             position = dataclasses.replace(
                 start_position(self.stepper.model, self.values["M_motor"]), time=self.start_time)
