@@ -1,4 +1,5 @@
 """The gear FMU driven by fmpy against the reference integration (same model, same inputs)."""
+import dataclasses
 import math
 import zipfile
 
@@ -315,6 +316,8 @@ def test_a_scene_object_is_built_as_its_file_would_be(tmp_path):
     with_inputs): the FMU declares the changed values and runs as herringbone.simulate does."""
     scene = herringbone.load_scene("reference").with_parameters(zeta_mesh=0.08).with_inputs(
         M_motor=600.0, M_load=2160.0)
+    # named as scene_from_dict names a scene, and as the FMU names the scene file it carries
+    scene = dataclasses.replace(scene, name="scene")
     fmu = builder.build_gear_fmu(scene, tmp_path / "changed.fmu")
     starts = {v.name: v.start for v in fmpy.read_model_description(str(fmu)).modelVariables}
     assert (float(starts["zeta_mesh"]), float(starts["M_motor"])) == (0.08, 600.0)

@@ -417,7 +417,8 @@ def scene_file(scene, folder: Path) -> Path:
     from ..model.scene import Scene, load_scene, scene_file_text
 
     if isinstance(scene, Scene):
-        path = folder / f"{scene.name}.toml"
+        path = folder / "given" / f"{scene.name}.toml"  # apart from the FMU's own scene.toml
+        path.parent.mkdir()
         path.write_text(scene_file_text(scene, f"{scene.name}, as handed to the FMU's build"),
                         encoding="utf-8")
         return path
