@@ -28,16 +28,15 @@ def reference_simulate(scene, stop_time=None, output_interval=None, tolerance=DE
     stop_time, output_interval : float or None
         Simulated seconds, and seconds between samples (at most stop_time); None: the scene's.
     tolerance : float
-        The error aimed at in the forces over the whole run (held within a few times it, up to
-        21 times on lightly damped trains: docs/reference-accuracy.md), relative to the force
+        The error aimed at in the forces over the run (held within a few times it, up to 21
+        times on lightly damped trains: docs/reference-accuracy.md), relative to the force
         scale (the static mesh force, GearTrainModel.force_scale); [1e-12, 1e-5]. Each step is
         held to it through GearTrainModel.state_scales, cut where the train's modes ring longer
         than stepping.RINGING_BUDGET radians within the run (their step errors add up over every
-        radian they ring: stepping.step_tolerance). A run in which the mesh lifts off entirely
-        and lands again, where a train can amplify small errors from landing to landing, checks
-        its own error over the run by a run with every step ten times tighter, and runs tighter
-        still where it exceeds the tolerance (global_error.py; two to four runs; measured in
-        docs/reference-accuracy.md).
+        radian they ring: stepping.step_tolerance). A run in which the mesh lifts off and lands
+        again, where small errors can grow from landing to landing, checks its error by a run
+        ten times tighter, and runs tighter still where it exceeds the tolerance
+        (global_error.py; two to four runs; measured in docs/reference-accuracy.md).
     method : str
         scipy's solve_ivp method ("DOP853", "Radau", …).
     initial_pinion_angle : float
