@@ -4,8 +4,8 @@ lets every command take a shipped scene's name where it takes a scene file.
 Installed from a wheel, they are package data: `scenes/` (the repository's `models/*.toml`),
 `examples/` (the repository's `examples/`: the motor and fan FMU scripts and the
 parametric-resonance scene) and `docs/` (the pages a gear FMU carries), put there by
-pyproject.toml. In a source checkout (an editable
-install, or `fmu_src` on the path) they are read where the repository keeps them.
+pyproject.toml. In a source checkout (an editable install, or `fmu_src` on the path) they are
+read where the repository keeps them.
 """
 from __future__ import annotations
 

@@ -11,6 +11,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
+from helpers.fmu_host import outputs_in_a_process
 
 HOST_FOLDER = Path(__file__).resolve().parent / "c_host"
 OUTPUTS = ["F_mesh", "F_brg_pinion_left", "F_brg_wheel_right", "dte"]
@@ -53,13 +54,7 @@ def run_host(c_host, unzipped, **environment):
 
 def fmpy_outputs(fmu):
     """fmpy's run of the same experiment, in a fresh process (as a host would be)."""
-    program = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]),"
-               " output_interval=float(sys.argv[3]), output=sys.argv[4:]);"
-               " print('\\n'.join(' '.join(float(x).hex() for x in row) for row in r))")
-    run = subprocess.run([sys.executable, "-c", program, str(fmu), str(STOP), str(STEP),
-                          *OUTPUTS], capture_output=True, text=True, check=True, timeout=120)
-    return np.array([[float.fromhex(x) for x in line.split()]
-                     for line in run.stdout.splitlines()])
+    return outputs_in_a_process(fmu, STOP, STEP, OUTPUTS)
 
 
 def test_repeated_runs_exit_cleanly_with_fmpys_outputs_bit_for_bit(c_host, unzipped):

@@ -1,13 +1,13 @@
 """The FMI 2.0 FMU's own library in front of pythonfmu's (fmu/resource_path.py and .c): an FMU
 loads from a folder whose path a URI must escape, where pythonfmu 0.7's library alone crashed
 the host in fmi2Instantiate."""
-import subprocess
 import sys
 import zipfile
 
 import fmpy
 import numpy as np
 import pytest
+from helpers.fmu_host import outputs_in_a_process
 
 from herringbone.fmu import resource_path
 from herringbone.fmu.pythonfmu_references import PYTHONFMU_LIBRARY_PREFIX
@@ -18,16 +18,9 @@ pytestmark = pytest.mark.skipif(sys.platform != "linux" or resource_path.c_compi
 STOP, STEP = 0.003, 1e-3
 
 
-def outputs_in_a_fresh_process(location) -> np.ndarray:
-    """F_mesh of fmpy's run of the FMU or unpacked folder `location`, in a process of its own:
-    a crash there is an exit status, not this test's."""
-    program = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]),"
-               " output_interval=float(sys.argv[3]), output=['F_mesh']);"
-               " print(' '.join(float(x).hex() for x in r['F_mesh']))")
-    run = subprocess.run([sys.executable, "-c", program, str(location), str(STOP), str(STEP)],
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, f"{location}: exit {run.returncode}: {run.stderr[-2000:]}"
-    return np.array([float.fromhex(x) for x in run.stdout.split()])
+def f_mesh_in_a_process(location) -> np.ndarray:
+    """F_mesh of fmpy's run of the FMU or unpacked folder `location`, in a process of its own."""
+    return outputs_in_a_process(location, STOP, STEP, ["F_mesh"])[:, 1]
 
 
 @pytest.mark.parametrize("folder", ["über", "issue#24", "100%", "a%20b c"])
@@ -35,9 +28,9 @@ def test_the_fmu_runs_from_a_folder_a_uri_escapes(scene_fmu, tmp_path, folder):
     fmu = scene_fmu("reference")
     unpacked = tmp_path / folder
     fmpy.extract(str(fmu), str(unpacked))
-    expected = outputs_in_a_fresh_process(fmu)
+    expected = f_mesh_in_a_process(fmu)
     assert len(expected) == round(STOP / STEP) + 1
-    assert np.array_equal(outputs_in_a_fresh_process(unpacked), expected)
+    assert np.array_equal(f_mesh_in_a_process(unpacked), expected)
 
 
 def fake_fmu(path, library=b"pythonfmu's library"):

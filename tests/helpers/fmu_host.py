@@ -1,5 +1,8 @@
-"""A small fmpy host for tests: one FMU2Slave instance with its log captured."""
+"""A small fmpy host for tests: one FMU2Slave instance with its log captured; and fmpy's run
+of an FMU in a process of its own."""
 import shutil
+import subprocess
+import sys
 from ctypes import byref
 
 import numpy as np
@@ -81,3 +84,17 @@ def structured_inputs(times, motor_torque, load_torque):
     table = np.zeros(len(times), dtype=[("time", float), ("M_motor", float), ("M_load", float)])
     table["time"], table["M_motor"], table["M_load"] = times, motor_torque, load_torque
     return table
+
+
+def outputs_in_a_process(location, stop_time: float, step: float, outputs) -> np.ndarray:
+    """fmpy.simulate_fmu of the FMU (or unpacked folder) `location` in a process of its own, as
+    a host would run it (a crash there is its exit status, not the test's): a row per sample,
+    the time and then `outputs` (names), every bit of each float."""
+    program = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]),"
+               " output_interval=float(sys.argv[3]), output=sys.argv[4:]);"
+               " print('\\n'.join(' '.join(float(x).hex() for x in row) for row in r))")
+    run = subprocess.run([sys.executable, "-c", program, str(location), str(stop_time),
+                          str(step), *outputs], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, f"{location}: exit {run.returncode}: {run.stderr[-2000:]}"
+    return np.array([[float.fromhex(x) for x in line.split()]
+                     for line in run.stdout.splitlines()])

@@ -81,7 +81,7 @@ def excitation(model: GearTrainModel, harmonics: int = HARMONICS_CONSIDERED) -> 
     """The contact points' force at the mean static deflection, harmonic by harmonic over one
     mesh period (quadrature on each contact interval, where it is a polynomial in φp)."""
     deflection = _mean_static_deflection(model)
-    pitch = _angular_pitch(model)
+    pitch = model.geometry.angular_pitch
     nodes, weights = np.polynomial.legendre.leggauss(QUADRATURE_NODES)
     orders = np.arange(harmonics + 1)
     force = np.zeros((harmonics + 1, model.size), complex)
@@ -117,12 +117,7 @@ def _mean_lead_force(model: GearTrainModel) -> np.ndarray:
     for y, contact_set, share in model.mesh_period_nodes():
         stiffness, lever_arm, lead_error = model.contact_geometry(y, contact_set)
         total += share * (model.contact_rows(lever_arm).T @ (stiffness * lead_error))
-    return total / _angular_pitch(model)
-
-
-def _angular_pitch(model: GearTrainModel) -> float:
-    """The mesh period in pinion angle, rad: what mesh_period_nodes' shares add up to."""
-    return 2.0 * math.pi / model.geometry.z_pinion
+    return total / model.geometry.angular_pitch  # what mesh_period_nodes' shares add up to
 
 
 def resonances(scene, low: float, high: float, least: float = STRENGTH_LISTED,

@@ -69,8 +69,8 @@ def declare(parser) -> None:
                         help="the compiled integrator's method: auto (the default) picks for "
                              "the scene (exponential where the mesh's contact sets allow it, "
                              "else dop853, or radau for an overdamped stiff train); dop853: "
-                             "explicit "
-                             "Runge-Kutta of order 8, radau: implicit Radau IIA, exponential: "
+                             "explicit Runge-Kutta of order 8, radau: implicit Radau IIA, "
+                             "exponential: "
                              "exact steps of the linear contact sets (DOP853 elsewhere); not "
                              "with --reference, which always runs scipy's DOP853")
     parser.add_argument("--reference", action="store_true",

@@ -118,8 +118,8 @@ SOLVER_SETTINGS = {
     "solver_method": Parameter(
         "solver_method", "auto", "", "internal integrator: 'dop853' (explicit, order 8), "
         "'radau' (implicit, L-stable, order 5, for overdamped stiff trains), 'exponential' "
-        "(time-invariant "
-        "segments propagated exactly, the others by dop853) or 'auto' (exponential where every "
+        "(time-invariant segments propagated exactly, the others by dop853) or 'auto' "
+        "(exponential where every "
         "contact set, or at least half where dop853 would run, is time-invariant; else radau "
         f"when the fastest eigenvalue is over {STIFFNESS_RATIO:g} times the fastest "
         "oscillation, dop853 otherwise)", kind=str),
@@ -627,8 +627,9 @@ class GearCore:
         problem = self._check_values() or self._build_if_changed()
         if problem is not None:
             return self._fail(problem)
-        if max_step_note(self.values["max_step"]) is not None:
-            self._report(max_step_note(self.values["max_step"]), WARNING)
+        note = max_step_note(self.values["max_step"])
+        if note is not None:
+            self._report(note, WARNING)
         try:
             position = dataclasses.replace(
                 start_position(self.stepper.model, self.values["M_motor"]), time=self.start_time)
