@@ -36,14 +36,28 @@ def mode_character(mode_shape, masses, coordinate_names) -> str:
     return f"{kind} ({100.0 * shares[kind]:.0f} % of kinetic energy)"
 
 
+def _mode_lines(frequencies, shapes, masses, names, rigid) -> list[str]:
+    """The lines of the natural frequencies: the rigid rotation first (column `rigid` of
+    `shapes`, at 0 Hz), then the elastic modes ascending. Where an elastic mode is as slow
+    as the rounding of a zero, the eigensolver may return either of the two as the slower,
+    so the rigid rotation is not told by its place."""
+    elastic = [i for i in np.argsort(frequencies, kind="stable") if i != rigid]
+    return [_mode_line(1, 0.0, "rigid rotation")] + [
+        _mode_line(number, frequencies[i], mode_character(shapes[:, i], masses, names),
+                   frequencies.max())
+        for number, i in enumerate(elastic, start=2)]
+
+
 def _mode_line(number, frequency_hz, character, fastest_hz=0.0) -> str:
     """A line of the natural frequencies: a mode below 0.01 Hz by its significant digits,
-    and where rounding blurs it beside the fastest mode (`fastest_hz`) by more than 0.1 %,
-    by how much."""
+    and where rounding blurs it beside the fastest mode (`fastest_hz`; 0: the rigid
+    rotation's line, which is not blurred) by more than 0.1 %, by how much; an elastic
+    mode whose ω² rounded to zero or below is all rounding."""
     shown = f"{frequency_hz:12.2f}" if frequency_hz == 0.0 or frequency_hz >= 0.01 \
         else f"{frequency_hz:12.3g}"
     line = f"  {number:2d} {shown} Hz  {character}"
-    blur = rounding_share(frequency_hz, fastest_hz) if frequency_hz > 0.0 else 0.0
+    blur = (0.0 if fastest_hz <= 0.0 else math.inf if frequency_hz <= 0.0
+            else rounding_share(frequency_hz, fastest_hz))
     if blur >= 1.0:
         return f"{line}; rounding beside {fastest_hz:.0f} Hz, not a frequency: too slow to resolve"
     if blur > 1e-3:
@@ -101,17 +115,15 @@ def scene_report(scene) -> str:
     frequencies, shapes, names = natural_modes(scene, pinion_angle=None)
     masses = np.diag(mass_matrix(scene))
     rigid = rigid_rotation_mode(shapes, masses, GearTrainModel(scene).rigid_rotation)
-    lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m"]
-    # the rigid rotation's frequency is rounding of a zero (0.01 Hz beside modes in the MHz)
-    lines += [_mode_line(i + 1, 0.0, "rigid rotation") if i == rigid else
-              _mode_line(i + 1, f, mode_character(shapes[:, i], masses, names),
-                         frequencies.max())
-              for i, f in enumerate(frequencies)]
+    lines += [f"Natural frequencies at the mean mesh stiffness {mesh.mean_stiffness():.4g} N/m",
+              *_mode_lines(frequencies, shapes, masses, names, rigid)]
     lines += ["", f"Resonances: pinion speed at which k*f_mesh meets f_n, rpm (rad/s), k up to "
                   f"{HARMONICS[-1]} (higher harmonics ring too: below); speeds above "
                   f"{MAX_RPM:.0f} rpm are not listed",
               "  f_n / Hz    " + "".join(f"{f'k = {k}':<22}" for k in HARMONICS)]
     for f in np.delete(frequencies, rigid):
+        if f <= 0.0 or rounding_share(f, frequencies.max()) >= 1.0:
+            continue  # not a frequency (its line says so)
         speeds = resonance_speeds(f, g.z_pinion)
         cells = [f"{w * RPM_PER_RAD_S:.0f} ({w:.1f})" if w * RPM_PER_RAD_S <= MAX_RPM else "-"
                  for w in speeds.values()]
