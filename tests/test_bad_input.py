@@ -333,6 +333,9 @@ OPTION_ROWS = [  # (id, culprit, arguments, words, program)
      RUN + ("--stop-time", "1e-5"), ("--output-interval", "<= the stop time"), "herringbone"),
     ("run-tolerance-zero", "--tolerance", RUN + ("--tolerance", "0"), RUN_TOL, "herringbone"),
     ("run-tolerance-one", "--tolerance", RUN + ("--tolerance", "1"), RUN_TOL, "herringbone"),
+    # (argparse before Python 3.13 took a negative number with an exponent for an option)
+    ("run-tolerance-negative-exponent", "--tolerance", RUN + ("--tolerance", "-1e-7"),
+     ("--tolerance -1e-07", *RUN_TOL[1:]), "herringbone"),
     ("run-tolerance-too-tight", "--tolerance", RUN + ("--tolerance", "1e-13"), RUN_TOL,
      "herringbone"),
     ("run-reference-tolerance-above-maximum", "--tolerance",

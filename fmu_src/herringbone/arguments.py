@@ -520,6 +520,10 @@ def output_folder(text: str) -> Path:
     return path
 
 
+# a negative number as an argument, exponent included (Python 3.13's argparse reads it so)
+NEGATIVE_NUMBER = re.compile(r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?$")
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line on stderr, "PROG: --option VALUE: allowed: …",
     and exit code 2: no usage block (`PROG --help` shows it, and the line says so).
@@ -528,6 +532,9 @@ class OneLineParser(argparse.ArgumentParser):
     def __init__(self, *args, help_command: str | None = None, **kwargs):
         super().__init__(*args, **kwargs)
         self.help_command = help_command or f"{self.prog} --help"
+        # argparse before Python 3.13 takes `-1e-7` for an option ("expected one argument"),
+        # where its checks would say what is allowed; no option of ours looks like a number
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message):
         """One line on stderr naming the option and what is allowed, then exit code 2."""
