@@ -541,6 +541,19 @@ def test_a_run_whose_torques_load_the_back_flanks_says_so(tmp_path, capsys):
     assert len(mesh_force) == 21 and (mesh_force == 0.0).all()  # F_mesh [N]: no contact
 
 
+def test_a_run_of_a_torque_table_says_whose_static_force_it_prints(tmp_path, capsys):
+    """torque_step's torques step tenfold at 5 ms: the static mesh force printed is the first
+    row's (500 N·m / Rp), and the line names the force the tolerance is relative to, the
+    largest torque's, ten times it."""
+    assert main(["run", "torque_step", "--stop-time", "1e-3", "--no-progress",
+                 "-o", str(tmp_path / "run.csv")]) == 0
+    (line,) = [text for text in capsys.readouterr().out.splitlines()
+               if text.startswith("static mesh force")]
+    assert line == ("static mesh force M_motor/Rp = 23036.4 N at t = 0 (M_motor = 500 N·m, the "
+                    "torque table's first row; the tolerance is relative to the largest "
+                    "torque's, 230364.2 N)")
+
+
 def test_a_run_whose_face_leaves_the_pair_without_contact_says_so(tmp_path, capsys):
     """A face of 0.1 mm (ε_β = 0.003 a half) has no point on it for 99.4 % of each mesh period:
     the run goes on as the model says (F_mesh 0 most of the time), and its summary says why

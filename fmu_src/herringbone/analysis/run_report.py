@@ -71,10 +71,20 @@ def _start_lines(scene, model, results: dict) -> list[str]:
     from .steady_state import unbalance_lines
 
     static = model.static_mesh_force()
-    return [f"static mesh force M_motor/Rp = {static:.1f} N" + _back_flanks(static)
-            + _tension_at_start(static, results["F_mesh"][0]),
+    return [f"static mesh force M_motor/Rp = {static:.1f} N" + _torque_table_note(scene, model)
+            + _back_flanks(static) + _tension_at_start(static, results["F_mesh"][0]),
             *_without_contact(model.mesh), *unbalance_lines(scene),
             *_large_deflection(scene.parameters["m_n"], results["dte"][0])]
+
+
+def _torque_table_note(scene, model) -> str:
+    """Where the scene's torque table changes M_motor: that the static mesh force is the first
+    row's, and the force scale the tolerance is judged on (the largest torque's); '' else."""
+    motor = scene.inputs.M_motor
+    if min(motor) == max(motor):
+        return ""
+    return (f" at t = 0 (M_motor = {motor[0]:g} N·m, the torque table's first row; the "
+            f"tolerance is relative to the largest torque's, {model.force_scale():.1f} N)")
 
 
 def _back_flanks(static_force: float) -> str:
