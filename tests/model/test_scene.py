@@ -176,6 +176,19 @@ def test_every_range_that_refuses_inf_says_finite():
         assert "finite" in raised.value.problem or p.allowed.high is not None, name
 
 
+def test_a_lead_error_is_refused_as_the_slope_it_is():
+    """dbeta_* is a lead deviation per axial travel, written in rad as small slopes are: its
+    message says so, and not "an angle in radians" as a helix angle's does."""
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"dbeta_left": 0.5}})
+    assert raised.value.problem == (
+        "dbeta_left is 0.5 rad; allowed: [-0.1, 0.1] rad (a slope, the lead deviation per unit "
+        "of axial travel f_Hb/b: 10 µm over 35 mm is 2.86e-4)")
+    with pytest.raises(SceneError) as raised:
+        herringbone.scene_from_dict({"parameters": {"beta": 5.0}})
+    assert raised.value.problem.endswith("rad, an angle in radians")
+
+
 def test_a_flag_of_the_wrong_kind_is_shown_with_what_it_got():
     with pytest.raises(SceneError) as raised:
         herringbone.scene_from_dict({"parameters": {"contact_loss": "yes"}})

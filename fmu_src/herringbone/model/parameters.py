@@ -100,6 +100,9 @@ MASS = Range(1e-9, 1e7)
 # moments of inertia (kg.m2): 1e-18, a gear of 10 µm module, to 1e8, twenty times the ring
 # gear of a 14 m mill
 INERTIA = Range(1e-18, 1e8)
+# a lead error is a slope, which small-angle usage writes in rad
+LEAD_ERROR_MEANING = ("a slope, the lead deviation per unit of axial travel f_Hb/b: 10 µm over "
+                      "35 mm is 2.86e-4")
 
 
 @dataclass(frozen=True)
@@ -222,7 +225,7 @@ def allowed_words(allowed: Range, unit: str = "", whole: bool = False, infinite:
         described += " and finite"
     described = f"a whole number {described}" if whole else described
     described = f"0, {described}" if zero else described
-    described += ", an angle in radians" if unit == "rad" else ""
+    described += ", an angle in radians" if unit == "rad" and not meaning else ""
     return described + (f" ({meaning})" if meaning else "")
 
 
@@ -282,8 +285,9 @@ def check_value(parameter: Parameter, value) -> str | None:
     if parameter.kind is bool:
         return None if is_flag(value) \
             else f"must be true or false, got {typed_repr(value)}"
+    meaning = {id(FRACTION): FRACTION_MEANING, id(LEAD_ERROR): LEAD_ERROR_MEANING}
     return number_problem(value, parameter.allowed, parameter.unit, whole=parameter.kind is int,
-                          meaning=FRACTION_MEANING if parameter.allowed is FRACTION else "")
+                          meaning=meaning.get(id(parameter.allowed), ""))
 
 
 def values_problem(name: str, values) -> str | None:
