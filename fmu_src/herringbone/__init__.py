@@ -15,8 +15,8 @@ The public API: `load_scene`, `scene_from_dict` and `Scene` (SceneError for a ba
 `simulate` (the compiled integrator, what the FMU runs) and `reference_simulate` (scipy's),
 which give a `Result` and raise ValueError for a bad argument, IntegrationError
 (StepBudgetExceeded among them) for a run that cannot go on (the reference warns with
-ReferenceAccuracyWarning where it cannot hold its tolerance); `sweep`; `scene_inputs` (a scene's
-input table for fmpy).
+ReferenceAccuracyWarning where it cannot hold its tolerance); `sweep` and its `Protocol`;
+`scene_inputs` (a scene's input table for fmpy).
 
 The public API is loaded on first use, so that `import herringbone.fmu.runtime` (which the FMU
 runs before numpy is imported, to name a missing dependency) imports nothing heavy.
@@ -48,7 +48,7 @@ _API = {
     "scene_from_dict": ".model.scene",
     "reference_simulate": ".integrate.reference",
     "simulate": ".integrate.compiled_stepper",
-    "sweep": ".analysis.sweep",
+    "sweep": ".analysis.sweep", "Protocol": ".analysis.sweep_point",
     # what a run gives and what it raises (besides ValueError for a bad argument)
     "Result": ".integrate.contract", "IntegrationError": ".integrate.contract",
     "StepBudgetExceeded": ".integrate.compiled_stepper", "MissingDependency": ".optional",
@@ -59,7 +59,7 @@ _API = {
 _SUBMODULES = ("model", "integrate", "analysis", "fmu", "arguments", "shipped", "cli", "optional",
                "suggest")
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "reference_simulate",
-           "simulate", "sweep", "Result", "IntegrationError", "StepBudgetExceeded",
+           "simulate", "sweep", "Protocol", "Result", "IntegrationError", "StepBudgetExceeded",
            "MissingDependency", "ReferenceAccuracyWarning", "scene_inputs", "__version__"]
 
 

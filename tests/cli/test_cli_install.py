@@ -2,6 +2,7 @@
 installed package, the FMU's runtime needs stay numpy, scipy, numba (and the FMI tools), the
 analysis and co-simulation packages come as extras, and a missing one is named with the extra
 that brings it."""
+import inspect
 import subprocess
 import sys
 import tomllib
@@ -87,8 +88,11 @@ def test_python_dash_m_herringbone_is_the_command(tmp_path):
 
 def test_the_public_api_exports_what_a_run_raises_and_gives():
     for name in ("Result", "IntegrationError", "StepBudgetExceeded", "SceneError",
-                 "MissingDependency", "scene_inputs"):
+                 "MissingDependency", "scene_inputs", "Protocol"):
         assert name in herringbone.__all__ and getattr(herringbone, name) is not None
+    # sweep's signature names Protocol: a user finds it where sweep is
+    assert isinstance(inspect.signature(herringbone.sweep).parameters["protocol"].default,
+                      herringbone.Protocol)
     assert issubclass(herringbone.StepBudgetExceeded, herringbone.IntegrationError)
     result = herringbone.simulate(herringbone.load_scene("reference"), stop_time=4e-4,
                                   output_interval=1e-4)

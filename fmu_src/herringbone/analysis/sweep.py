@@ -208,7 +208,7 @@ def sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol(), meth
         `speeds`, at most two quantities (a grid). One torque swept, the other follows; a
         tooth count, M_load: each point needs M_load = u·M_motor, M_motor > 0.
     protocol : Protocol
-        How each time-integration point is settled and recorded (analysis.sweep_point.Protocol).
+        How each time-integration point is settled and recorded (herringbone.Protocol).
     method : {"shooting", "time"} or None
         "shooting" (None's choice where it applies: the speed, or a continuous parameter or
         torque at one speed or none, no FMU): the branches of periodic steady states
@@ -306,8 +306,8 @@ def check_sweep(scene, speeds=None, params=None, protocol: Protocol = Protocol()
     check_scene(scene)
     if not isinstance(protocol, Protocol):
         raise ValueError(f"protocol is a {type(protocol).__name__} ({protocol!r}); allowed: "
-                         "a herringbone.analysis.sweep_point.Protocol, e.g. "
-                         "Protocol(settle_time=0.05)")
+                         "a herringbone.Protocol, e.g. "
+                         "herringbone.Protocol(settle_time=0.05)")
     unknown = sorted(set(options) - set(OPTIONS))
     if unknown:
         raise ValueError(f"unknown option {unknown[0]}{did_you_mean(unknown[0], OPTIONS)}; "
