@@ -641,8 +641,8 @@ def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
         reference_scene):
     """Where the continuation could not go on (an undamped train's resonance, say) and
     shooting began again further on, the first orbit there is flagged "restart": the summary
-    names where the branch was lost, and the curve draws no line across what nobody
-    computed."""
+    names where the branch was lost, its K_v line says that a peak in that gap is not in its
+    figures, and the curve draws no line across what nobody computed."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -658,9 +658,12 @@ def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
                           "mesh_periods": [1] * 5, "event": ["", "", "", "", "restart"],
                           "contact_lost_share": [0.0] * 5})
     table.attrs.update(continued="w0_pinion", folds=[])
+    lines = describe(reference_scene, table, 1.0).splitlines()
     assert ("the branch was lost past 306.1 rad/s: no orbit followed on to 600 rad/s, where "
-            "shooting began again (nothing computed between them)"
-            in describe(reference_scene, table, 1.0).splitlines())
+            "shooting began again (nothing computed between them)") in lines
+    (k_v,) = [line for line in lines if line.startswith("K_v from")]
+    assert k_v.endswith("; nothing computed from 306.1 rad/s to 600 rad/s, where the branch was "
+                        "lost: a peak there is not in these figures")
     figure, axes = plt.subplots(1, 1)
     draw_branch([axes], table, [("K_v", "k")])
     (stable,) = [line for line in axes.get_lines() if line.get_label() == "K_v, stable orbits"]

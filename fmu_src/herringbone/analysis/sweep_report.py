@@ -124,12 +124,16 @@ def _k_v_lines(table) -> list[str]:
     orbits (and the points by time integration), not the unstable ones; and the more loaded
     helix half's factor (`_half_lines`)."""
     where = ""
+    gaps = _lost_gaps(_single_branch(table), table.attrs.get("continued", SPEED)) \
+        if by_shooting(table) else []
     if is_branch(table) and (table["stability"] != "unstable").any():
         table = table[table["stability"] != "unstable"]
         where = (" (stable orbits and points by time integration)"
                  if (table["stability"] == "time").any() else " (stable orbits)")
+    unseen = "".join(f"; nothing computed from {lost} to {found}, where the branch was lost: a "
+                     "peak there is not in these figures" for lost, found in gaps)
     return [f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}{where}; "
-            f"largest at {resonation_summary(table)}", *_half_lines(table, where)]
+            f"largest at {resonation_summary(table)}{unseen}", *_half_lines(table, where)]
 
 
 def _half_lines(table, where: str) -> list[str]:
@@ -176,7 +180,9 @@ def _branch_lines(table) -> list[str]:
              + (f"; {unconverged} points where no orbit converged, run by time integration"
                 if unconverged else "")]
     lines += _values_line(f"folds (jumps) in {name}", table.attrs.get("folds", []), name)
-    lines += _lost_lines(table[~doubled], name)
+    lines += [f"the branch was lost past {lost}: no orbit followed on to {found}, where "
+              "shooting began again (nothing computed between them)"
+              for lost, found in _lost_gaps(_single_branch(table), name)]
     doublings = table.attrs.get("period_doublings", [])
     if len(doublings):
         counts = table["stability"][doubled].value_counts()
@@ -188,20 +194,27 @@ def _branch_lines(table) -> list[str]:
     return lines
 
 
-def _lost_lines(table, name: str) -> list[str]:
-    """Where the branch (rows in its order) was lost: from the furthest of its orbits before
-    each "restart" row (where it could not go on, or turned back at a fold) to that row,
-    where shooting began again; nothing was computed between."""
-    lines = []
+def _single_branch(table):
+    """A shooting table's rows of the mesh-periodic branch (not the period-doubled ones)."""
+    if "mesh_periods" not in table:
+        return table
+    return table[(table["mesh_periods"] <= 1).to_numpy()]
+
+
+def _lost_gaps(table, name: str) -> list[tuple[str, str]]:
+    """Where the branch (rows in its order) was lost, as (lost, found) values of the quantity
+    `name` with their unit: from the furthest of its orbits before each "restart" row (where
+    it could not go on, or turned back at a fold) to that row, where shooting began again;
+    nothing was computed between."""
+    gaps = []
     stability, values = table["stability"].to_numpy(), table[name].to_numpy()
     for row in np.flatnonzero(table["event"].str.contains("restart").to_numpy()):
         orbits = np.flatnonzero(np.isin(stability[:row], ("stable", "unstable")))
         if len(orbits):
             lost, found = (with_unit(f"{value:.6g}", unit_of(name))
                            for value in (values[orbits].max(), values[row]))
-            lines.append(f"the branch was lost past {lost}: no orbit followed on to {found}, "
-                         "where shooting began again (nothing computed between them)")
-    return lines
+            gaps.append((lost, found))
+    return gaps
 
 
 def _values_line(what: str, values, name: str) -> list[str]:
