@@ -683,6 +683,38 @@ def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
     plt.close(figure)
 
 
+def test_the_resonance_curves_legends_stand_beside_the_data(tmp_path, monkeypatch):
+    """Inside its panel, a legend of a dozen orders k hid the curve's low speeds (the reference
+    scene's peak of K_v 2.0 at 677 rpm, swept from 20 to 1500 rad/s): each panel's legend
+    stands to the right of the panel, and the orders are listed once, on the top one."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from herringbone.analysis import sweep_plots
+    from herringbone.analysis.excitation import Resonance
+
+    drawn = []
+    monkeypatch.setattr(sweep_plots, "_save", lambda figure, path: drawn.append(figure))
+    speeds = np.linspace(20.0, 1500.0, 20)
+    table = pd.DataFrame({"w0_pinion": speeds, "speed_rpm": speeds * 30 / math.pi,
+                          "K_v": 1.5 + 0.1 * np.sin(speeds), "dte_p2p_um": 15.0 + speeds / 100,
+                          "dte_rms_um": 5.0 + speeds / 300, "contact_lost_share": 0.0})
+    found = [Resonance(2 * math.pi * f / (k * 10), k, f, 0.1, 0.05, 0.0)
+             for f in (112.9, 683.7) for k in range(1, 13)]
+    sweep_plots.plot_resonance_curve(table, tmp_path / "curve.png",
+                                     sorted(found, key=lambda r: r.speed), "curve")
+    (figure,) = drawn
+    figure.canvas.draw()
+    for panel in figure.axes[:2]:
+        legend = panel.get_legend().get_window_extent()
+        assert legend.x0 >= panel.get_window_extent().x1
+    entries = [[text.get_text() for text in panel.get_legend().get_texts()]
+               for panel in figure.axes[:2]]
+    assert [e for e in entries[0] if e.startswith("k·f_mesh")] == [
+        f"k·f_mesh = f_n, k = {k}" for k in range(1, 13)]
+    assert not [e for e in entries[1] if e.startswith("k·f_mesh")]
+
+
 def test_resonance_marks_list_their_orders_in_order_and_keep_their_labels_apart():
     """The legend gives the orders k = 1, 2, 3 in that order (it listed them as the speeds
     met them: 3, 2, 1), and two resonances 17 rpm apart (4102 and 4119 rpm on the reference

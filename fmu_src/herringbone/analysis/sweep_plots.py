@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.parameters import RPM_PER_RAD_S, unit_of
-from .plots import _pyplot, _save, amplitude_spectrum, spread_apart
+from .plots import _legend_beside, _pyplot, _save, amplitude_spectrum, spread_apart
 from .report import HARMONICS
 from .sweep_point import SETTLED_DRIFT
 
@@ -141,7 +141,7 @@ def plot_resonance_curve(table, path, resonances, title, sweeps=None) -> None:
     branch = is_branch(table)
     if not branch:
         table = table.sort_values("w0_pinion")
-    figure, axes = plt.subplots(2, 1, figsize=(10, 7.5), sharex=True)
+    figure, axes = plt.subplots(2, 1, figsize=(12, 7.5), sharex=True)
     draw_k_v(axes[0], table, "speed_rpm", branch)
     if branch:
         draw_branch(axes[1:], table, [("dte_p2p_um", "C2")])
@@ -161,7 +161,7 @@ def plot_resonance_curve(table, path, resonances, title, sweeps=None) -> None:
     top.set_xlabel("pinion speed, rad/s")
     for panel in axes:
         panel.grid(True, alpha=0.3)
-        panel.legend(loc="upper left", fontsize=8)
+        _legend_beside(panel)  # inside, its entries for the orders k hid the low speeds
     axes[0].set_title(title)
     _save(figure, path)
 
@@ -181,14 +181,12 @@ LABEL_STRIP = 1.24
 def mark_resonances(axes, found, low, high) -> None:
     """Each resonance k·f_mesh = f_n of `found` (excitation.Resonance, by speed) between the
     speeds low and high (rad/s): a dashed line on every panel, one legend entry per order k
-    in the order of k, and f_n written above the first panel (LABEL_FOOT), labels moved
+    on the first panel in the order of k, and f_n written above it (LABEL_FOOT), labels moved
     apart where lines lie close (a label's width on the panel as drawn, at least LABEL_GAP of
     the speeds), each joined to its line by a leader."""
     resonances = [(r.speed, r.order, r.frequency) for r in found if low <= r.speed <= high]
-    for k in sorted({k for _, k, _ in resonances}):
-        for panel in axes:  # the legend's entries, in the order of k
-            panel.plot([], [], color=f"C{3 + k}", lw=0.8, ls="--",
-                       label=f"k·f_mesh = f_n, k = {k}")
+    for k in sorted({k for _, k, _ in resonances}):  # the legend's entries, in the order of k
+        axes[0].plot([], [], color=f"C{3 + k}", lw=0.8, ls="--", label=f"k·f_mesh = f_n, k = {k}")
     rpm = [speed * RPM_PER_RAD_S for speed, _, _ in resonances]
     for (_, k, _), at in zip(resonances, rpm):
         for panel in axes:
@@ -363,7 +361,7 @@ def plot_waterfall(table, series, path, natural, z_pinion, title) -> None:
     waterfall_scale_bar(axes, rpm.min(), per_um, largest)
     axes.set_xlabel(frequency_label(top, nyquists, beyond, rpm, z_pinion))
     axes.set_ylabel("pinion speed, rpm (each trace: the dte amplitude spectrum at that speed)")
-    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+    _legend_beside(axes)
     axes.grid(True, alpha=0.3)
     axes.set_title(title)
     _save(figure, path, dpi=WATERFALL_DPI)
