@@ -240,29 +240,27 @@ def check_tight(scene, bound=checks.TIGHT_BOUND):
 # Regression scenes whose forces at the tight tolerance rounding decides: a relative 1e-13 on
 # the initial pinion speed moves the checked reference by about the tight bound, so the
 # compiled run falls on either side of it from one machine to another.
-# Each is judged at twice that measured spread (checks.rounding_spread), and only while it
-# lasts.
+# Each is judged at twice that spread as measured on the machine the test runs on
+# (checks.rounding_spread), never looser than the tight bound: where rounding moves it less,
+# the plain bound holds.
 ROUNDING_DECIDED = {
     "found_ac909a1c90": "an undamped gear pair alone (no bearings, motor or load rotor) at "
                         "2 322 rad/s for 15.6 ms, found with the compiled run 6.4e-6 off: the "
                         "1e-13 moves the reference 1.07e-6; DOP853, Radau IIA and the "
                         "exponential method at 1e-12 lie 5e-7 to 2.1e-6 apart; the compiled "
                         "run at 1e-9 lies 1.2e-6 off on a Zen 4 EPYC (2026-11-29), within 1e-6 "
-                        "on the machine before it",
+                        "on the machine before it; on an EPYC with numpy 2.4 (2026-12-01) "
+                        "rounding moved the reference 2.6e-7 only",
 }
 
 
 def tight_bound(name, scene):
     """The tight check's bound for the regression scene `name`: TIGHT_BOUND, or for one that
-    ROUNDING_DECIDED names, twice its checks.rounding_spread, which must reach half the tight
-    bound (else the entry has outlived its reason)."""
+    ROUNDING_DECIDED names, twice its checks.rounding_spread on this machine where that is
+    larger."""
     if name not in ROUNDING_DECIDED:
         return checks.TIGHT_BOUND
-    spread = checks.rounding_spread(scene, 1e-12)
-    assert spread >= 0.5 * checks.TIGHT_BOUND, (
-        f"{name}: rounding moves its forces by {spread:.3g} only; take it out of "
-        f"ROUNDING_DECIDED")
-    return max(checks.TIGHT_BOUND, 2.0 * spread)
+    return max(checks.TIGHT_BOUND, 2.0 * checks.rounding_spread(scene, 1e-12))
 
 
 def check_loose(scene):
