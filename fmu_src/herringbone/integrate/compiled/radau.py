@@ -1,18 +1,20 @@
 """Radau IIA of order 5: the implicit, L-stable Runge-Kutta method of Hairer and Wanner.
 
-For stiff scenes (very stiff bearings on light bodies): its step size is set by accuracy alone,
-and modes far above what the step resolves are damped, not amplified (L-stability). The
-constants are scipy's (`solve_ivp(method="Radau")`); the algorithm follows scipy's, which
-follows Hairer & Wanner's RADAU5: the collocation system is solved by simplified Newton
-iterations on its real and complex blocks.
+For overdamped stiff trains (very stiff, strongly damped bearings on light bodies): its step
+size is set by accuracy alone, and modes far above what the step resolves are damped, not
+amplified (L-stability). The constants are scipy's (`solve_ivp(method="Radau")`); the algorithm
+follows scipy's, which follows Hairer & Wanner's RADAU5: the collocation system is solved by
+simplified Newton iterations on its real and complex blocks.
 
 Contract of `step`: from `state`, whose derivative is `rate`, with `jacobian` the derivative's
 Jacobian and `factors` the LU factors of (MU_REAL/h·I − J) and (MU_COMPLEX/h·I − J) for this h
 (`factorize`), take one step of size h with the segment fixed. Write the result to `new_state`
 and return (error norm, Newton iterations); the error norm is inf if Newton did not converge
-(then retry with a fresh Jacobian or a smaller h). Within a segment the equations are linear in
-every entry but the pinion angle, which only moves the contact points slowly, so Newton
-converges in a few iterations on a Jacobian taken at the segment's start; it is taken to
+(then retry with a fresh Jacobian or a smaller h). After a rejected step, an error norm over 1
+is estimated again (`_second_estimate`). The next step's size is `step_factor`'s, with
+`predicted_factor`'s prediction from the last accepted step. Within a segment the equations are
+linear in every entry but the pinion angle, which only moves the contact points slowly, so
+Newton converges in a few iterations on a Jacobian taken at the segment's start; it is taken to
 rounding, which keeps the train's angular momentum (docs/integrator.md, Methods).
 """
 from __future__ import annotations
@@ -76,16 +78,20 @@ def lu_solve(matrix, pivots, vector):
 
 
 @njit(**COUNTED)
-def jacobian_of(system, segment, state, rate, scale, jacobian, trial, column):
+def jacobian_of(system, segment, state, rate, absolute_tolerance, relative_tolerance, jacobian,
+                trial, column):
     """The Jacobian ∂(derivative)/∂(state) of the segment (its equations as `step` takes them)
     at `state` (whose derivative is `rate`) into `jacobian`, by forward differences of size
-    1e-7·max(|state_k|, scale_k) per column k (`scale`: the state's typical magnitude per
-    entry, in its units); exact but for rounding in every entry the equations are linear in.
-    Work arrays: `trial` and `column`, one state each."""
+    1e-7·max(|state_k|, typical_k) per column k, typical_k = absolute_tolerance_k /
+    relative_tolerance being the entry's typical magnitude (GearTrainModel.state_scales, in
+    its units); exact but for rounding in every entry the equations are linear in. Work
+    arrays: `trial` and `column`, one state each."""
     size = state.shape[0]
     for k in range(size):
         trial[:] = state
-        delta = 1e-7 * max(abs(state[k]), scale[k])
+        # not a tolerance-sized step: where an entry is near zero (the pinion's, re-expressed
+        # from each set's start; a tilt at rest) it would be lost in the derivative's rounding
+        delta = 1e-7 * max(abs(state[k]), absolute_tolerance[k] / relative_tolerance)
         trial[k] += delta
         derivative(system, segment.points, segment.point_count, segment.loaded,
                    segment.motor_torque, segment.load_torque, trial, column)
@@ -121,15 +127,16 @@ def factorize(jacobian, h, factors):
 
 @njit(**COUNTED)
 def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance, factors,
-         stages, new_state):
+         stages, new_state, rejected):
     """One Radau IIA step of size h (s) from `state`, whose derivative is `rate`, with the
     `factors` that `factorize` made for this h: see the module's docstring for the contract.
 
     `segment` holds the equations (walk.CompiledSegment: its points, point_count, loaded,
     motor_torque and load_torque, as equations.derivative takes them); `absolute_tolerance`
     is per entry of the state (its units), `relative_tolerance` a number. `stages`: a
-    3 × size work array. Returns (error norm, Newton iterations); the norm is inf where
-    Newton did not converge."""
+    3 × size work array. `rejected`: whether the step before this one (of this h or longer)
+    was rejected. Returns (error norm, Newton iterations); the norm is inf where Newton did
+    not converge."""
     size = state.shape[0]
     # Newton goes on to rounding (scipy's floor in the error's scales), not to scipy's
     # √tolerance: only the collocation solution itself keeps a linear invariant, and stages
@@ -154,8 +161,13 @@ def step(system, segment, state, rate, h, absolute_tolerance, relative_tolerance
         _apply_correction(real_rhs, complex_rhs, transformed, increments)
         if norm == 0.0 or (rate_of_convergence > 0.0 and rate_of_convergence
                            / (1 - rate_of_convergence) * norm < newton_tolerance):
-            return _error_norm(state, rate, h, increments, factors, absolute_tolerance,
-                               relative_tolerance, new_state), iterations
+            error = _error_estimate(state, rate, h, increments, factors, new_state)
+            norm = _scaled_norm(error, state, new_state, absolute_tolerance, relative_tolerance)
+            if rejected and norm > 1.0:
+                _second_estimate(system, segment, state, h, increments, factors, stages, error)
+                norm = _scaled_norm(error, state, new_state, absolute_tolerance,
+                                    relative_tolerance)
+            return norm, iterations
         previous_norm = norm
     return math.inf, iterations
 
@@ -203,10 +215,9 @@ def _apply_correction(real_rhs, complex_rhs, transformed, increments):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _error_norm(state, rate, h, increments, factors, absolute_tolerance, relative_tolerance,
-                new_state):
-    """The converged step's result into `new_state`, and its error norm: scipy's estimate
-    (E·Z/h + rate, filtered through the real factors), scaled entry by entry, RMS."""
+def _error_estimate(state, rate, h, increments, factors, new_state):
+    """The converged step's result into `new_state`, and its error estimate (a new array):
+    scipy's, E·Z/h + rate filtered through the real factors."""
     size = state.shape[0]
     error = np.empty(size)
     for j in range(size):
@@ -214,6 +225,31 @@ def _error_norm(state, rate, h, increments, factors, absolute_tolerance, relativ
         error[j] = rate[j] + (_E[0] * increments[0, j] + _E[1] * increments[1, j]
                               + _E[2] * increments[2, j]) / h
     lu_solve(factors.real, factors.real_pivots, error)
+    return error
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _second_estimate(system, segment, state, h, increments, factors, stages, error):
+    """In place: `error` estimated again with the derivative at `state` + `error` in place of
+    the step's starting rate (Hairer & Wanner's estimate after a rejected step, as scipy's):
+    the first one overstates a stiff component's error, and a step retried on it alone may be
+    rejected again and again. `stages`' first two rows are scratch."""
+    size = state.shape[0]
+    for j in range(size):
+        stages[0, j] = state[j] + error[j]
+    derivative(system, segment.points, segment.point_count, segment.loaded,
+               segment.motor_torque, segment.load_torque, stages[0], stages[1])
+    for j in range(size):
+        error[j] = stages[1, j] + (_E[0] * increments[0, j] + _E[1] * increments[1, j]
+                                   + _E[2] * increments[2, j]) / h
+    lu_solve(factors.real, factors.real_pivots, error)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _scaled_norm(error, state, new_state, absolute_tolerance, relative_tolerance):
+    """The error's RMS norm, entry j scaled by absolute_tolerance_j + relative_tolerance ·
+    max(|state_j|, |new_state_j|)."""
+    size = state.shape[0]
     norm = 0.0
     for j in range(size):
         scale_j = absolute_tolerance[j] + relative_tolerance * max(abs(state[j]),
@@ -223,11 +259,25 @@ def _error_norm(state, rate, h, increments, factors, absolute_tolerance, relativ
 
 
 @njit(cache=True, error_model="numpy")
-def step_factor(error_norm, iterations, rejected):
-    """By how much to scale h after a step with this error norm and Newton iterations (scipy's
-    Radau controller without its two-step prediction); at most 1 after a rejected step."""
+def step_factor(error_norm, iterations, rejected, prediction):
+    """By how much to scale h after a step with this error norm and Newton iterations, times
+    the `prediction` (`predicted_factor`'s, at most 1), as scipy's Radau; at most 1 after a
+    rejected step."""
     safety = SAFETY * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
     if error_norm > 1.0:
-        return max(MIN_FACTOR, safety * error_norm ** -0.25)
-    factor = MAX_FACTOR if error_norm == 0.0 else min(MAX_FACTOR, safety * error_norm ** -0.25)
+        return max(MIN_FACTOR, safety * prediction * error_norm ** -0.25)
+    factor = MAX_FACTOR if error_norm == 0.0 else min(MAX_FACTOR, safety * prediction
+                                                      * error_norm ** -0.25)
     return min(1.0, factor) if rejected else factor
+
+
+@njit(cache=True, error_model="numpy")
+def predicted_factor(h, error_norm, previous_h, previous_error_norm):
+    """Gustafsson's predictive factor of a step of h (s) with this error norm after an
+    accepted one of previous_h (0: none) with previous_error_norm, as scipy's Radau takes it:
+    h/previous_h·(previous_error_norm/error_norm)^¼, never above 1. Where the error grew
+    faster than the step, it holds the next step back further than the error alone says: the
+    error estimate of a step too long for a stiff component falls short of its true error."""
+    if previous_h <= 0.0 or not 0.0 < error_norm < math.inf:
+        return 1.0
+    return min(1.0, h / previous_h * (previous_error_norm / error_norm) ** 0.25)

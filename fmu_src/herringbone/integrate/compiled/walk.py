@@ -270,6 +270,7 @@ class Controller(NamedTuple):
 
     previous_error: float  # the last accepted step's error norm (a Runge-Kutta step's)
     rejected: bool  # whether the last step was rejected
+    previous_h: float  # Radau IIA: the last accepted uncut step's size, s; 0: none
 
 # where a debug run looks inside each step for a point in tension or penetrating unloaded
 INSIDE_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
@@ -762,7 +763,7 @@ def _implicit_trial_step(system, segment, settings, state, workspace, h, out):
 def radau_trial_step(system, segment, settings, state, workspace, h, out):
     """A step of Radau IIA of size h (s) from `state` to `out`, its LU factors made for h."""
     factorize_for(workspace, h)
-    factored_step(system, segment, settings, state, workspace, h, out)
+    factored_step(system, segment, settings, state, workspace, h, out, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -781,14 +782,14 @@ def radau_factors(workspace):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def factored_step(system, segment, settings, state, workspace, h, out):
+def factored_step(system, segment, settings, state, workspace, h, out, rejected):
     """Radau IIA's step of size h (s) from `state` (its rate in the RATE row) to `out`, on the
     factors made for h. Returns (the error norm, inf where Newton did not converge; Newton
     iterations)."""
     vectors = workspace.vectors
     return radau.step(system, segment, state, vectors[Vector.RATE], h,
                       settings[Setting.ABSOLUTE_TOLERANCE:], settings[Setting.RELATIVE_TOLERANCE],
-                      radau_factors(workspace), vectors[Vector.STAGES:], out)
+                      radau_factors(workspace), vectors[Vector.STAGES:], out, rejected)
 
 
 @njit(cache=True, error_model="numpy")
@@ -963,21 +964,22 @@ def step_allowed(steps, max_steps, time, plan):
     return Status.OK
 
 
-def implicit_step(system, segment, settings, state, workspace, h):
+def implicit_step(system, segment, settings, state, workspace, h, rejected):
     """`radau_step` where the workspace is Radau IIA's; never called (and nothing compiled)
     where it is DOP853's, whose loop takes the explicit branch."""
 
 
 @overload(implicit_step)
-def _implicit_step(system, segment, settings, state, workspace, h):
+def _implicit_step(system, segment, settings, state, workspace, h, rejected):
     # radau_step itself, compiled as a call of its own (a wrapper that called it would count
     # every array it passes on: 5 % of a Radau IIA step)
     if _lacks(workspace, "matrices"):
-        return lambda system, segment, settings, state, workspace, h: (False, math.inf, 0)
+        return lambda system, segment, settings, state, workspace, h, rejected: (False, math.inf,
+                                                                                  0)
     return radau_step
 
 
-def radau_step(system, segment, settings, state, workspace, h):
+def radau_step(system, segment, settings, state, workspace, h, rejected):
     """One step of Radau IIA of size h (s) from `state` to NEW_STATE, with the Jacobian of the
     segment (made at its first step) and LU factors for h (kept while h stays), as the
     workspace's counters and memory record them. Returns (retry: Newton failed on an old
@@ -986,7 +988,8 @@ def radau_step(system, segment, settings, state, workspace, h):
     vectors, counters, memory = workspace.vectors, workspace.counters, workspace.memory
     if counters[Counter.JACOBIAN_SEGMENT] != counters[Counter.SEGMENT]:
         radau.jacobian_of(system, segment, state, vectors[Vector.RATE],
-                          settings[Setting.ABSOLUTE_TOLERANCE:], workspace.matrices[JACOBIAN],
+                          settings[Setting.ABSOLUTE_TOLERANCE:],
+                          settings[Setting.RELATIVE_TOLERANCE], workspace.matrices[JACOBIAN],
                           vectors[Vector.TRIAL], vectors[Vector.WORK])
         counters[Counter.JACOBIAN_SEGMENT] = counters[Counter.SEGMENT]
         counters[Counter.JACOBIAN_FRESH] = 1
@@ -994,7 +997,7 @@ def radau_step(system, segment, settings, state, workspace, h):
     if h != memory[Memory.FACTORED_H]:
         factorize_for(workspace, h)
     error, iterations = factored_step(system, segment, settings, state, workspace, h,
-                                      vectors[Vector.NEW_STATE])
+                                      vectors[Vector.NEW_STATE], rejected)
     if math.isinf(error) and counters[Counter.JACOBIAN_FRESH] == 0:
         counters[Counter.JACOBIAN_SEGMENT] = -1  # Newton failed on an old Jacobian: refresh it
         return True, error, iterations
@@ -1007,24 +1010,29 @@ def control_step(explicit, error, iterations, plan, controller):
     reject it, by the explicit or the implicit method's controller (its memory a
     Controller). Returns (accepted; the step size to try next, s; the Controller)."""
     previous_error, rejected = controller.previous_error, controller.rejected
+    previous_h = controller.previous_h
     h_step, h_wanted, landing, aimed = plan.h_step, plan.h_wanted, plan.landing, plan.aimed
+    prediction = (1.0 if explicit
+                  else radau.predicted_factor(h_step, error, previous_h, previous_error))
     if not error <= 1.0:  # too large, or NaN
         factor = (dop853.step_factor(error, previous_error, rejected) if explicit
-                  else radau.step_factor(error, iterations, rejected))
+                  else radau.step_factor(error, iterations, rejected, prediction))
         return (False, h_step * (factor if math.isfinite(error) else 0.5),
-                Controller(previous_error, True))
+                Controller(previous_error, True, previous_h))
     if explicit:
         factor = dop853.step_factor(error, previous_error, rejected)
         if not (landing or aimed):  # a cut step's small error would hold the next one back
             previous_error = max(error, 1e-4)
     else:
-        factor = radau.step_factor(error, iterations, rejected)
+        factor = radau.step_factor(error, iterations, rejected, prediction)
         if factor < 1.2:
             factor = 1.0  # keep the factorization (scipy's rule)
+        if not (landing or aimed):
+            previous_error, previous_h = error, h_step
     h_next = h_step * factor
     if landing or aimed:  # a step cut short says little about the next one
         h_next = max(h_next, h_wanted)
-    return True, h_next, Controller(previous_error, False)
+    return True, h_next, Controller(previous_error, False, previous_h)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1544,7 +1552,7 @@ def walk(system, mesh, settings, run, workspace, end, torques, max_steps, sample
     explicit = is_explicit(workspace)
     status, steps, k, segment = open_walk(system, mesh, settings, run, workspace, end, torques,
                                           max_steps, samples, k)
-    controller, h = Controller(1e-4, False), clock[1]
+    controller, h = Controller(1e-4, False, 0.0), clock[1]
     while status == Status.OK:
         target = stop_at(samples, k, end, segment.exact)
         if clock[0] >= target:
@@ -1610,7 +1618,7 @@ def runge_kutta_step(system, segment, settings, state, workspace, rows, plan, co
             settings[Setting.RELATIVE_TOLERANCE], rows.stages, rows.work, rows.new_state), 0
     else:
         retry, error, iterations = implicit_step(system, segment, settings, state, workspace,
-                                                 plan.h_step)
+                                                 plan.h_step, controller.rejected)
         if retry:
             return True, False, plan.h_step, controller
     accepted, h_next, controller = control_step(explicit, error, iterations, plan, controller)
@@ -1637,7 +1645,7 @@ def take_exact_step(system, segment, settings, state, workspace, rows, plan, con
                                           controller.rejected)
     workspace.counters[Counter.REJECTED_STEPS] += 0 if accepted else 1
     return (verdict == exponential.CERTIFIED, accepted, h_next,
-            Controller(controller.previous_error, not accepted))
+            Controller(controller.previous_error, not accepted, controller.previous_h))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
