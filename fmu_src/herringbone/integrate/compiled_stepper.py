@@ -107,6 +107,23 @@ def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> st
     return "exponential" if choice == "dop853" and exact.mean() >= EXACT_SHARE else choice
 
 
+def auto_note(model: GearTrainModel, method: str, modes) -> str:
+    """Why "auto" took `method` (choose_method's answer) where it did not take the
+    exponential method, for a run's summary ("" where it did, or where `method` was asked
+    for by name)."""
+    if method == "exponential":
+        return ""
+    exact = exponential.exact_sets(model.system, model.mesh.period_table())[
+        :, exponential.ALL_LOADED]
+    sets = (f"{int(exact.sum())} of {len(exact)} contact sets are exact, where the exponential "
+            f"method needs at least {EXACT_SHARE:.0%} (a lead error, an edge ramp or halves "
+            "that differ make a set's equations change as its points travel)")
+    if method == "radau":
+        return ("the train's fastest modes are overdamped, which cost an explicit method steps "
+                f"for stability alone, and {sets}")
+    return sets
+
+
 def runge_kutta_method(modes) -> str:
     """DOP853 or Radau IIA for a train with these eigenvalues (1/s). An explicit step is
     bounded by stability to about 6/max|λ| (and held to 3.5/max|λ|). Oscillating modes
@@ -301,8 +318,9 @@ class CompiledStepper:
         self.tolerance = float(tolerance)
         modes = model.eigenvalues()
         self.method = choose_method(model, method, modes)
-        # what the method does otherwise than its name says ("": nothing), for a run's summary
-        self.method_note = ""
+        # why "auto" took what it took, or what the method does otherwise than its name says
+        # ("": nothing to say), for a run's summary
+        self.method_note = auto_note(model, self.method, modes) if method == "auto" else ""
         # the tolerance each step is held to: tighter where lightly damped modes ring on
         self.step_tolerance = max(self.tolerance * step_tolerance_factor(model, modes),
                                   min(self.tolerance, RINGING_CUT_FLOOR))
