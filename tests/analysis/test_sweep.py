@@ -683,6 +683,29 @@ def test_a_branch_lost_and_begun_again_is_said_so_and_drawn_with_no_line_across(
     plt.close(figure)
 
 
+def test_a_resonance_the_sweep_steps_over_is_said_so(reference_scene):
+    """The reference scene's 113 Hz mode (ζ 0.3 %) rings at 23.6 rad/s with k = 3: a sweep
+    from 20 to 100 rad/s in 20 speeds computes 20 and 24.2 rad/s beside it, 18 % apart, and its
+    line says the peak may lie between them and how to look there (a drive-train engineer
+    read such a table as no resonance at 23.6 rad/s, whose peak is K_v 1.64); the primary
+    resonance at 70.9 rad/s, about which the continuation computed points 0.1 rad/s apart,
+    says nothing of the kind."""
+    from herringbone.analysis.sweep_report import describe
+
+    speeds = np.sort(np.concatenate([np.linspace(20.0, 100.0, 20), [70.85, 70.95, 71.05]]))
+    table = pd.DataFrame({"w0_pinion": speeds, "speed_rpm": speeds * 30 / math.pi,
+                          "K_v": 1.5, "stability": "stable", "mesh_periods": 1, "event": "",
+                          "contact_lost_share": 0.0})
+    table.attrs.update(continued="w0_pinion", folds=[])
+    lines = describe(reference_scene, table, 1.0).splitlines()
+    (third,) = [line for line in lines if line.startswith("resonance k·f_mesh = f_n at 226 rpm")]
+    assert third.endswith("; the nearest points computed, 20 and 24.21 rad/s, lie further apart "
+                          "than its width (±0.29 %): its peak may lie between them (`herringbone "
+                          "sweep reference --speeds 22.46 24.82 20` looks there)")
+    (primary,) = [line for line in lines if line.startswith("resonance k·f_mesh = f_n at 677 rpm")]
+    assert primary.endswith("of the static force")
+
+
 def test_the_resonance_curves_legends_stand_beside_the_data(tmp_path, monkeypatch):
     """Inside its panel, a legend of a dozen orders k hid the curve's low speeds (the reference
     scene's peak of K_v 2.0 at 677 rpm, swept from 20 to 1500 rad/s): each panel's legend

@@ -89,12 +89,36 @@ def describe(scene, table, wall: float, through_fmu: bool = False, time_sweeps=N
         lines += [f"resonance k·f_mesh = f_n at {r.speed * RPM_PER_RAD_S:.0f} rpm "
                   f"({r.speed:.1f} rad/s): k = {r.order}, f_n = {r.frequency:.1f} Hz, its "
                   f"harmonic {100 * r.strength:.1f} % of the static force"
+                  + _unresolved(scene, table[SPEED].to_numpy(), r)
                   for r in ringing(scene, table)]
     if (table["contact_lost_share"] > 0).any():
         lost = int((table["contact_lost_share"] > 0).sum())
         lines.append(f"a helix half out of contact at {lost} point{'s' if lost != 1 else ''} "
                      "(contact_lost_share > 0)")
     return "\n".join(lines)
+
+
+def _unresolved(scene, speeds, resonance) -> str:
+    """Where the sweep's computed `speeds` (rad/s) about a `resonance` lie further apart than
+    its width (±ζ of its speed, ζ its mode's damping ratio): that its peak may lie between
+    them, and a sweep about it that would resolve it; '' where they do not."""
+    below, above = speeds[speeds <= resonance.speed], speeds[speeds >= resonance.speed]
+    if not len(below) or not len(above):
+        return ""
+    low, high = below.max(), above.min()
+    if high - low <= 2.0 * resonance.damping * resonance.speed:
+        return ""
+    around = (f"{resonance.speed * (1 - RESOLVE_SPAN):.4g} "
+              f"{resonance.speed * (1 + RESOLVE_SPAN):.4g} {RESOLVE_COUNT}")
+    return (f"; the nearest points computed, {low:.4g} and {high:.4g} rad/s, lie further apart "
+            f"than its width (±{100 * resonance.damping:.2g} %): its peak may lie between "
+            f"them (`herringbone sweep {scene.name} --speeds {around}` looks there)")
+
+
+# the sweep an unresolved resonance's line proposes: ±RESOLVE_SPAN of its speed (a peak of
+# the nonlinear train lies up to a few per cent off the linear estimate), RESOLVE_COUNT speeds
+RESOLVE_SPAN = 0.05
+RESOLVE_COUNT = 20
 
 
 def ringing(scene, table):
