@@ -706,6 +706,24 @@ def test_a_resonance_the_sweep_steps_over_is_said_so(reference_scene):
     assert primary.endswith("of the static force")
 
 
+def test_a_speed_sweep_names_its_peaks_largest_first(reference_scene):
+    """Beside the largest K_v, a speed sweep's summary names every row whose K_v exceeds both
+    neighbours', largest first, along the branch's stable orbits (an unstable orbit between
+    them is not a neighbour): the engineer's session had to find them in the CSV."""
+    from herringbone.analysis.sweep_report import describe
+
+    speeds = np.array([100.0, 110.0, 120.0, 125.0, 130.0, 140.0, 150.0])
+    table = pd.DataFrame({"w0_pinion": speeds, "speed_rpm": speeds * 30 / math.pi,
+                          "K_v": [1.5, 1.8, 1.6, 2.5, 1.7, 2.0, 1.9],
+                          "stability": ["stable", "stable", "stable", "unstable", "stable",
+                                        "stable", "stable"],
+                          "mesh_periods": 1, "event": "", "contact_lost_share": 0.0})
+    table.attrs.update(continued="w0_pinion", folds=[])
+    lines = describe(reference_scene, table, 1.0).splitlines()
+    assert ("peaks of K_v (largest first; a peak between the points computed is not among "
+            "them): 2.0000 at 140 rad/s, 1.8000 at 110 rad/s") in lines
+
+
 def test_the_resonance_curves_legends_stand_beside_the_data(tmp_path, monkeypatch):
     """Inside its panel, a legend of a dozen orders k hid the curve's low speeds (the reference
     scene's peak of K_v 2.0 at 677 rpm, swept from 20 to 1500 rad/s): each panel's legend

@@ -157,7 +157,27 @@ def _k_v_lines(table) -> list[str]:
     unseen = "".join(f"; nothing computed from {lost} to {found}, where the branch was lost: a "
                      "peak there is not in these figures" for lost, found in gaps)
     return [f"K_v from {table['K_v'].min():.4f} to {table['K_v'].max():.4f}{where}; "
-            f"largest at {resonation_summary(table)}{unseen}", *_half_lines(table, where)]
+            f"largest at {resonation_summary(table)}{unseen}", *_peak_lines(table),
+            *_half_lines(table, where)]
+
+
+def _peak_lines(table) -> list[str]:
+    """The peaks of K_v over the speed of a speed sweep (rows as _k_v_lines took them, in the
+    branch's order or by speed): the rows whose K_v exceeds both neighbours', largest first,
+    at most PEAKS_LISTED; none for another sweep, or where there is no such row."""
+    if swept_columns(table) != [SPEED]:
+        return []
+    ordered = table if is_branch(table) else table.sort_values(SPEED)
+    k_v, speeds = ordered["K_v"].to_numpy(), ordered[SPEED].to_numpy()
+    peaks = [i for i in range(1, len(k_v) - 1) if k_v[i - 1] < k_v[i] >= k_v[i + 1]]
+    peaks = sorted(peaks, key=lambda i: -k_v[i])[:PEAKS_LISTED]
+    if not peaks:
+        return []
+    return ["peaks of K_v (largest first; a peak between the points computed is not among "
+            "them): " + ", ".join(f"{k_v[i]:.4f} at {speeds[i]:.6g} rad/s" for i in peaks)]
+
+
+PEAKS_LISTED = 8  # the peaks of K_v a speed sweep's summary names
 
 
 def _half_lines(table, where: str) -> list[str]:
