@@ -268,7 +268,7 @@ class Controller(NamedTuple):
     """The step-size controller's memory: the Runge-Kutta methods' (`control_step`), and of
     an exact step only whether it was rejected (`control_exact_step`)."""
 
-    previous_error: float  # the last accepted step's error norm (a Runge-Kutta step's)
+    previous_error: float  # the last accepted uncut Runge-Kutta step's error norm (DOP853: >= 1e-4)
     rejected: bool  # whether the last step was rejected
     previous_h: float  # Radau IIA: the last accepted uncut step's size, s; 0: none
 
@@ -974,15 +974,16 @@ def _implicit_step(system, segment, settings, state, workspace, h, rejected):
     # radau_step itself, compiled as a call of its own (a wrapper that called it would count
     # every array it passes on: 5 % of a Radau IIA step)
     if _lacks(workspace, "matrices"):
-        return lambda system, segment, settings, state, workspace, h, rejected: (False, math.inf,
-                                                                                  0)
+        return lambda system, segment, settings, state, workspace, h, rejected: (
+            False, math.inf, 0)
     return radau_step
 
 
 def radau_step(system, segment, settings, state, workspace, h, rejected):
     """One step of Radau IIA of size h (s) from `state` to NEW_STATE, with the Jacobian of the
     segment (made at its first step) and LU factors for h (kept while h stays), as the
-    workspace's counters and memory record them. Returns (retry: Newton failed on an old
+    workspace's counters and memory record them; `rejected`: whether the step before it was
+    (radau.step estimates an error over 1 again then). Returns (retry: Newton failed on an old
     Jacobian, which is dropped, and the step is to be tried again; the error norm, inf where
     Newton did not converge; Newton iterations)."""
     vectors, counters, memory = workspace.vectors, workspace.counters, workspace.memory
