@@ -162,12 +162,13 @@ def _k_v_lines(table) -> list[str]:
 
 
 def _peak_lines(table) -> list[str]:
-    """The peaks of K_v over the speed of a speed sweep (rows as _k_v_lines took them, in the
-    branch's order or by speed): the rows whose K_v exceeds both neighbours', largest first,
-    at most PEAKS_LISTED; none for another sweep, or where there is no such row."""
+    """The peaks of K_v over the speed of a speed sweep (rows as _k_v_lines took them, along
+    the mesh-periodic branch or by speed): the rows whose K_v exceeds both neighbours',
+    largest first, at most PEAKS_LISTED; none for another sweep, or where there is no such
+    row."""
     if swept_columns(table) != [SPEED]:
         return []
-    ordered = table if is_branch(table) else table.sort_values(SPEED)
+    ordered = _single_branch(table) if is_branch(table) else table.sort_values(SPEED)
     k_v, speeds = ordered["K_v"].to_numpy(), ordered[SPEED].to_numpy()
     peaks = [i for i in range(1, len(k_v) - 1) if k_v[i - 1] < k_v[i] >= k_v[i + 1]]
     peaks = sorted(peaks, key=lambda i: -k_v[i])[:PEAKS_LISTED]
