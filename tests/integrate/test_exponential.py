@@ -226,8 +226,9 @@ def test_a_tight_tolerance_leaves_the_exact_segments_exact(name):
     bound of 2.5e-14 on stiff_bearings, and the bound fell below the modal round trip's own
     rounding of an undamped train's tilt (5e-15 against 3e-15): the segments went on by
     DOP853: 41 230, 4 488 and 668 steps in 20 ms against 52, 62 and 44 at 1e-7. The exact
-    method's steps hardly depend on the tolerance (now the same from 1e-7 to 1e-12): at 1e-10
-    at most twice those at 1e-7, and the tilt rows have exact zeros where no power of A
+    method's steps hardly depend on the tolerance (the same from 1e-7 to 1e-10; below about
+    1e-11 wide_face's forms, of condition 195, are refused): at 1e-10 at most twice those at
+    1e-7, and the tilt rows have exact zeros where no power of A
     reaches."""
     steps = {}
     for tolerance in (1e-7, 1e-10):
@@ -1121,6 +1122,24 @@ def test_free_bodies_that_rounding_makes_diagonalizable_have_no_modal_form():
     start = np.array([0.0882, 0.0172, -29.3, -12624.0, -3033.0, -3800.0, 67.4, 134.7, 1.0])
     for h in (1e-7, 1e-6, 5e-6):
         assert modal_step_error(form, a, b, start, h, model.state_scales()) <= 1e-9
+
+
+def test_a_stiff_mesh_keeps_the_exponential_method_while_its_rounding_is_within_the_tolerance():
+    """The reference scene with c_point = 2e10 N/m (80 times its own): the modal forms'
+    eigenvalues have a condition number of 1.5e3, whose rounding (2.7e-16·κ² = 6e-10 of the
+    force scale) is within 1e-7 and not within 1e-10. At 1e-7 `auto` takes the exponential
+    method, 1.8e-9 off DOP853 at 1e-11 over 5 ms (measured); at 1e-10 it takes DOP853, and
+    says why."""
+    scene = herringbone.load_scene(MODELS / "reference.toml").with_parameters(c_point=2e10)
+    model = GearTrainModel(scene)
+    truth = simulate_with(CompiledStepper(model, 1e-11, "dop853"), scene, 0.005, 1e-4)
+    stepper = CompiledStepper(model, 1e-7)
+    assert stepper.method == "exponential" and stepper.exact_tables.valid.any()
+    run = simulate_with(stepper, scene, 0.005, 1e-4)
+    assert force_error(run, truth, scene) <= 1e-8
+    tight = CompiledStepper(model, 1e-10)
+    assert tight.method == "dop853"
+    assert "condition number is 1.49e+03, over 609 at the tolerance 1e-10" in tight.method_note
 
 
 class ModalStep(NamedTuple):

@@ -87,8 +87,9 @@ def choose_method(model: GearTrainModel, method: str = "auto", modes=None) -> st
 
     The exponential method wherever every contact set of the mesh period is exact (with all
     its points loaded): its cost does not depend on the train's stiffness (while the modal
-    forms can be made: a mesh stiff enough makes them too ill-conditioned, and DOP853 or
-    Radau IIA takes over, as `method_note` says), and it was the
+    forms can be made: a mesh stiff enough makes them too ill-conditioned for the run's
+    tolerance, exponential.condition_limit, and DOP853 or Radau IIA takes over, as
+    `method_note` says), and it was the
     cheapest on every such shipped scene. Where only some are, it steps the others by DOP853,
     bit for bit as DOP853 would: it is taken there too where `runge_kutta_method` would take
     DOP853 and at least EXACT_SHARE of the sets are exact (measured: half of them, low_speed,
@@ -373,7 +374,8 @@ class CompiledStepper:
     def _exact_tables(self, model, method, modes, step_tolerance):
         """The exponential method's modal forms of every contact set; where a set's linear
         system has no such form (free bodies whose zero eigenvalues rounding splits, with
-        eigenvectors too nearly parallel: exponential.CONDITION_LIMIT), "auto" takes
+        eigenvectors too nearly parallel; a mesh so stiff that the form's rounding would show
+        at the run's tolerance: exponential.condition_limit), "auto" takes
         `runge_kutta_method`'s choice instead (its rule was measured on scenes with every
         form), and an explicit "exponential" steps that set by DOP853, as it does every set
         that is not exact."""
@@ -382,12 +384,13 @@ class CompiledStepper:
         arguments = (model.system, model.mesh.period_table(), model.state_scales(),
                      torque_scales, step_tolerance)
         try:
-            return exponential.build_tables(*arguments)
+            return exponential.build_tables(*arguments, tolerance=self.tolerance)
         except np.linalg.LinAlgError as refused:
             if method == "exponential":
                 self.method_note = (f"a contact set's modal form refused ({refused}): such "
                                     "sets stepped by DOP853")
-                return exponential.build_tables(*arguments, skip_defective=True)
+                return exponential.build_tables(*arguments, skip_defective=True,
+                                                tolerance=self.tolerance)
             self.method = runge_kutta_method(modes)
             self.method_note = (f"the exponential method's modal forms refused ({refused}): "
                                 f"{self.method} instead")

@@ -63,6 +63,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
+from ...arguments import COMPILED_DEFAULT_TOLERANCE
 from ...compiling.counting import COUNTED, NUMBERS_ONLY
 from ...model.equations import (
     LEAD_ERROR0,
@@ -81,13 +82,21 @@ from .buffers import matrix_view as _matrix
 INPUTS = 3  # u = (motor torque, load torque, 1)
 # An eigenvalue of Â below this fraction of the largest belongs to the slow block
 SLOW_FRACTION = 1e-7
-# The largest condition number of a fast eigenvalue that a modal form may have (modal_form).
-# Every set of the shipped scenes and of the seeded random test scenes has 2 to 182. Free bodies
-# (a train without bearings, its points unloaded: the pinion alone, the wheel with its load)
-# have zero eigenvalues on chains that rounding splits into small ones with nearly parallel
-# eigenvectors (±9.3e-3 s⁻¹ beside 1.3e3 s⁻¹, condition 7e4): their coordinates cancel in R·z,
-# and an exact step moved the wheel 1e-4 rad off scipy's expm.
-CONDITION_LIMIT = 1e3
+# A modal form's own error, over the force scale, grows as the square of its worst fast
+# eigenvalue's condition number κ (rounding in the eigenvectors, then in R·L): runs of the
+# reference scene with its mesh stiffened (c_point 2.5e8 to 1e12 N/m, κ 53 to 7.3e4) settled at
+# 1.7e-16·κ² to 2.7e-16·κ² off scipy's DOP853 at 1e-12 where κ passed 1e3, whatever their own
+# tolerance (docs/exponential-integrator.md, "The modal form's rounding").
+ROUNDING_PER_CONDITION_SQUARED = 2.7e-16
+# A form is taken where that error stays within the run's tolerance (the error a run at that
+# tolerance is allowed anyway: DOP853 at 1e-12 lands 2e-12 off), and where κ stays within
+# this, whatever the tolerance. Free bodies (a train without bearings, its points unloaded:
+# the pinion alone, the wheel with its load) have zero eigenvalues on chains that rounding
+# splits into small ones with nearly parallel eigenvectors (±9.3e-3 s⁻¹ beside 2.2e5 s⁻¹, κ 5e4
+# to 5e5 on the regression scenes): their coordinates cancel in R·z, and an exact step moved
+# the wheel 1e-4 rad off scipy's expm. The sets of the shipped scenes have κ of 2 to 195, those
+# of the regression scenes' trains up to 580, those of the seeded random test scenes 18.5.
+CONDITION_CEILING = 1e4
 # Relative size below which a sum that the exact condition wants zero counts as zero (rounding)
 ZERO = 1e-11
 # Loaded variants of a contact set that the tables hold: every point loaded, none loaded (a
@@ -302,14 +311,16 @@ def exact_condition(system: System, points: np.ndarray, count: int, loaded: np.n
     return bool(np.all(driven <= ZERO * np.abs(b).max(axis=0)))
 
 
-def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
+def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray,
+               tolerance: float = COMPILED_DEFAULT_TOLERANCE):
     """The split of Â = [[A, B], [0, 0]] (module docstring): (R, L, Λ, T_slow) with
     Â = R·diag(T_slow, diag(Λ))·L, L = R⁻¹, the slow block first; Λ has zeros in its place.
     It is made on Â measured in `scales` (one an entry of X: the state's, then the inputs'),
     D⁻¹·Â·D with D = diag(scales): the pinion's speed and the torques are then no longer
     millions of times a deflection, and R's condition falls by as much (rounding in R·z
     scales with it). A nilpotent Â (every eigenvalue exactly zero: free bodies with nothing
-    elastic between them) is its slow block alone, with no fast mode."""
+    elastic between them) is its slow block alone, with no fast mode. A fast block too
+    ill-conditioned for a run at `tolerance` (condition_limit) raises np.linalg.LinAlgError."""
     size = a.shape[0] + b.shape[1]
     augmented = np.zeros((size, size))
     augmented[:a.shape[0], :a.shape[0]] = a
@@ -322,7 +333,7 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
     # T_slow·X − X·T_fast = −T_coupling: the change of basis that decouples the two blocks
     decoupling = scipy.linalg.solve_sylvester(slow_block, -fast_block, -coupling)
     rates, vectors = np.linalg.eig(fast_block)
-    _require_conditioned(vectors)
+    _require_conditioned(vectors, tolerance)
     right = np.zeros((size, size), dtype=complex)
     right[:slow, :slow] = np.eye(slow)
     right[:slow, slow:] = decoupling @ vectors
@@ -335,17 +346,38 @@ def modal_form(a: np.ndarray, b: np.ndarray, scales: np.ndarray):
     return right, left, all_rates, slow_block.astype(complex)
 
 
-def _require_conditioned(vectors: np.ndarray) -> None:
+def condition_limit(tolerance: float) -> float:
+    """The largest condition number κ of a fast eigenvalue that a modal form may have in a run
+    at `tolerance` (relative to the force scale): its rounding, ROUNDING_PER_CONDITION_SQUARED·κ²,
+    within the tolerance, and κ within CONDITION_CEILING.
+
+    Examples
+    --------
+    >>> [round(condition_limit(tolerance)) for tolerance in (1e-2, 1e-7, 1e-10, 1e-12)]
+    [10000, 10000, 609, 61]
+    """
+    return min(CONDITION_CEILING, math.sqrt(tolerance / ROUNDING_PER_CONDITION_SQUARED))
+
+
+def _require_conditioned(vectors: np.ndarray, tolerance: float) -> None:
     """Raise np.linalg.LinAlgError where the eigenvectors `vectors` (columns) of the fast
     block leave an eigenvalue's condition number ‖v‖·‖w‖ (w its row of the inverse) above
-    CONDITION_LIMIT: a defective system that rounding has made diagonalizable, though too
-    inaccurately to be used. It is refused as numpy refuses one whose eigenvectors rounding
-    left singular (the inverse raises the same error), and build_tables treats both alike."""
+    condition_limit(tolerance): a defective system that rounding has made diagonalizable,
+    or one so ill-conditioned that its modal form's rounding would be seen at that tolerance.
+    It is refused as numpy refuses one whose eigenvectors rounding left singular (the inverse
+    raises the same error), and build_tables treats both alike."""
     condition = np.linalg.norm(vectors, axis=0) * np.linalg.norm(np.linalg.inv(vectors), axis=1)
-    if condition.max(initial=0.0) > CONDITION_LIMIT:
+    worst, limit = condition.max(initial=0.0), condition_limit(tolerance)
+    if worst <= limit:
+        return
+    if limit == CONDITION_CEILING:
         raise np.linalg.LinAlgError(
-            f"a fast eigenvalue's condition number is {condition.max():.3g}, over "
-            f"{CONDITION_LIMIT:g}: the system is defective but for rounding")
+            f"a fast eigenvalue's condition number is {worst:.3g}, over {limit:g}: the system "
+            "is defective but for rounding")
+    raise np.linalg.LinAlgError(
+        f"a fast eigenvalue's condition number is {worst:.3g}, over {limit:.3g} at the "
+        f"tolerance {tolerance:g}: the modal form's rounding, about "
+        f"{ROUNDING_PER_CONDITION_SQUARED * worst**2:.2g} of the force scale, would pass it")
 
 
 def exact_sets(system: System, period_table) -> np.ndarray:
@@ -405,10 +437,12 @@ def _unit_rows(matrix: np.ndarray) -> np.ndarray:
 
 def build_tables(system: System, period_table, state_scales: np.ndarray,
                  torque_scales: tuple[float, float], step_tolerance: float,
-                 skip_defective: bool = False) -> ExactTables:
+                 skip_defective: bool = False, tolerance: float | None = None) -> ExactTables:
     """The ExactTables of a mesh period (mesh.period_table's lengths, counts, tables) for the
     stepper's state scales (GearTrainModel.state_scales), the torques' scales (N·m: motor,
-    load) and the step tolerance. A set and variant whose linear system has no modal form
+    load), the step tolerance and the run's `tolerance` (None: the step tolerance), which
+    bounds the modal forms' conditioning (condition_limit). A set and variant whose linear
+    system has no modal form
     raises np.linalg.LinAlgError, or with `skip_defective` is left out of the exact ones (its
     segments are stepped by DOP853)."""
     scales = np.concatenate([state_scales, torque_scales, [1.0]])
@@ -416,7 +450,9 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     # rounding of the modal round trip grows with the largest scaled entry: it is measured by
     # the longest interval instead.
     scales[system.pinion] = max(scales[system.pinion], float(np.max(period_table[0])))
-    valid, forms, rows_of = _exact_forms(system, period_table, scales, skip_defective)
+    valid, forms, rows_of = _exact_forms(
+        system, period_table, scales, skip_defective,
+        step_tolerance if tolerance is None else tolerance)
     size = 2 * system.mass.shape[0]
     width = size + INPUTS
     slow_width = max([len(form[3]) for form in forms.values()], default=1)
@@ -435,11 +471,13 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
         aimed_fast=np.zeros(fast_width, dtype=complex), series=np.zeros((2, slow_width)))
 
 
-def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defective: bool):
+def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defective: bool,
+                 tolerance: float):
     """(valid, forms, rows): per exact form's index interval·VARIANTS + variant, 1 where the
     set and variant meet exact_condition and have a modal form; for those, (R, L, Λ, T_slow,
     the places of the fast modes kept, their weights) and the tilt rows. A set without a modal
-    form raises np.linalg.LinAlgError unless `skip_defective`."""
+    form (for a run at `tolerance`: condition_limit) raises np.linalg.LinAlgError unless
+    `skip_defective`."""
     lengths, counts, tables = period_table
     forms, rows_of = {}, {}
     valid = np.zeros(len(lengths) * VARIANTS, dtype=np.int64)
@@ -452,7 +490,7 @@ def _exact_forms(system: System, period_table, scales: np.ndarray, skip_defectiv
             if not exact_condition(system, tables[interval], count, loaded, b, rows):
                 continue
             try:
-                right, left, rates, slow = modal_form(a, b, scales)
+                right, left, rates, slow = modal_form(a, b, scales, tolerance)
                 kept, weights = kept_modes(rates[len(slow):])
             except np.linalg.LinAlgError:
                 if not skip_defective:
