@@ -52,7 +52,7 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
 
 def simulate_with_progress(scene, stop_time=None, output_interval=None, tolerance=None,
                            reference=False, progress=True, on_ready=None,
-                           method="auto") -> dict:
+                           method="auto", on_finished=None) -> dict:
     """herringbone.simulate (or with `reference` reference_simulate) with a progress bar on
     stderr, and the integrator's compile announced there, as every compile is by default
     (compiling/announce.py): before it starts, every 10 s and at its end.
@@ -78,6 +78,8 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         the stepping.
     method : str
         The compiled integrator's method (herringbone.simulate's `method`).
+    on_finished : callable or None
+        Called at the compiled run's end with its internal steps (the warm-up's not counted).
 
     Returns
     -------
@@ -87,15 +89,9 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     from ..integrate.contract import simulate_with
     from ..model.assembly import GearTrainModel
 
-    stop = scene.experiment.stop_time if stop_time is None else stop_time
     if reference:
-        tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
-        check_reference_run(scene, stop_time, output_interval, tolerance)
-        with progress_bar(stop, f"run {scene.name}", progress) as bar:
-            if on_ready is not None:
-                on_ready(None, "")
-            return checked_reference_run(scene, stop_time, output_interval, tolerance,
-                                         wrap=lambda stepper: _watched(stepper, bar, scene))[0]
+        return _reference_with_progress(scene, stop_time, output_interval, tolerance, progress,
+                                        on_ready)
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..integrate.contract import start_position
 
@@ -105,11 +101,28 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     stepper = CompiledStepper(model, tolerance, method)
     if on_ready is not None:
         warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
+    stop = scene.experiment.stop_time if stop_time is None else stop_time
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready(stepper.method, stepper.method_note)
-        return simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
-                             output_interval)
+        results = simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
+                                output_interval)
+    if on_finished is not None:
+        on_finished(stepper.accepted_steps)
+    return results
+
+
+def _reference_with_progress(scene, stop_time, output_interval, tolerance, progress,
+                             on_ready) -> dict:
+    """simulate_with_progress's run of the scipy reference (its arguments)."""
+    tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
+    check_reference_run(scene, stop_time, output_interval, tolerance)
+    stop = scene.experiment.stop_time if stop_time is None else stop_time
+    with progress_bar(stop, f"run {scene.name}", progress) as bar:
+        if on_ready is not None:
+            on_ready(None, "")
+        return checked_reference_run(scene, stop_time, output_interval, tolerance,
+                                     wrap=lambda stepper: _watched(stepper, bar, scene))[0]
 
 
 def _watched(stepper, bar, scene) -> ProgressStepper:

@@ -37,12 +37,13 @@ def write_csv(results: dict, path: Path) -> None:
 
 
 def summary(scene, results: dict, wall_time: float, integrator: str = "",
-            start_time: float | None = None, start: str = START_WORDS) -> str:
+            start_time: float | None = None, start: str = START_WORDS,
+            steps: int | None = None) -> str:
     """A few lines on a finished run: its span, the static mesh force, a table of each output
     (with its unit) at the start, its least and largest sample and at the end, and the time
     it took (`integrator`: what ran it, in words; `start_time`: the part of `wall_time`, s,
     before the stepping, None where it is not known; `start`: what that part did, in
-    words)."""
+    words; `steps`: the integrator's internal steps, where known)."""
     from ..model.assembly import GearTrainModel
 
     model = GearTrainModel(scene)
@@ -51,6 +52,7 @@ def summary(scene, results: dict, wall_time: float, integrator: str = "",
     lines = [f"scene {scene.name} ({scene.source}): {model.size} degrees of freedom "
              f"({', '.join(model.coordinates)})",
              f"simulated {stop:g} s{by} in {_wall_time(stop, wall_time, start_time, start)}",
+             *_steps_line(stop, steps),
              *_start_lines(scene, model, results),
              # no mean: samples synchronous with the mesh period alias its fast content
              f"{'output':<20}{'unit':<8}{'at t=0':>14}{'min of samples':>16}"
@@ -144,6 +146,14 @@ def _wall_time(stop: float, wall_time: float, start_time: float | None,
     stepping = wall_time - start_time
     return (f"{wall_time:.2f} s of wall time: {start_time:.2f} s to start ({start}), "
             f"{stepping:.3g} s stepping ({stepping / stop:.3g} s per simulated second)")
+
+
+def _steps_line(stop: float, steps: int | None) -> list[str]:
+    """How many internal steps a run of `stop` simulated s took, and their rate: what its
+    cost grows with (an exact segment of the exponential method counts as one step)."""
+    if steps is None:
+        return []
+    return [f"{steps} internal steps ({steps / stop:.3g} per simulated second)"]
 
 
 # samples a period of the train's fastest mode (sweep_point.fastest_ringing) that a run's

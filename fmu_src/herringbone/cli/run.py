@@ -144,12 +144,13 @@ def execute(args, parser) -> int:
         require("matplotlib", "--plot")
     progress = progress_of(args)
     if args.reference:
-        results, wall, integrator, start = reference_run(scene, stop_time, interval,
-                                                         tolerance, progress)
+        results, wall, integrator, start, steps = reference_run(scene, stop_time, interval,
+                                                                tolerance, progress)
     else:
-        results, wall, integrator, start = compiled_run(scene, stop_time, interval, tolerance,
-                                                        args.method or "auto", progress)
-    lines = [summary(scene, results, wall, integrator, start), *sampling_note(scene, results),
+        results, wall, integrator, start, steps = compiled_run(
+            scene, stop_time, interval, tolerance, args.method or "auto", progress)
+    lines = [summary(scene, results, wall, integrator, start, steps=steps),
+             *sampling_note(scene, results),
              *slip_notes(scene, results)]
     print("\n".join(lines), flush=True)  # before the CSV, which may take longer than the run
     write_timed(results, output, wall)
@@ -162,33 +163,35 @@ def execute(args, parser) -> int:
 
 def reference_run(scene, stop_time: float, interval: float, tolerance: float, progress: bool):
     """The scipy reference's run: (results, wall time s, what ran it in words, None: its start
-    is not told apart, there being no compiled code to load)."""
+    is not told apart, there being no compiled code to load, None: its steps not counted)."""
     from ..analysis.run_progress import simulate_with_progress
 
     started = time.perf_counter()
     results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
                                      tolerance=tolerance, reference=True, progress=progress)
-    return results, time.perf_counter() - started, "the scipy reference", None
+    return results, time.perf_counter() - started, "the scipy reference", None, None
 
 
 def compiled_run(scene, stop_time: float, interval: float, tolerance: float, method: str,
                  progress: bool):
     """The compiled integrator's run by `method` with its bar (run_progress): (results, wall
     time s, what ran it in words with the method, the part of the wall time before the first
-    step s: the model's tables and the compiled loop loaded)."""
+    step s: the model's tables and the compiled loop loaded, its internal steps)."""
     from ..analysis.run_progress import simulate_with_progress
 
     started, ready = time.perf_counter(), []
+    steps: list[int] = []
     results = simulate_with_progress(
         scene, stop_time=stop_time, output_interval=interval, tolerance=tolerance,
         method=method, progress=progress,
         on_ready=lambda chosen, note: ready.append((time.perf_counter() - started, chosen,
-                                                    note)))
+                                                    note)),
+        on_finished=steps.append)
     start, chosen, note = ready[0]
     picked = ", picked by --method auto" if method == "auto" else ""
     note = f": {note}" if note else ""
     return (results, time.perf_counter() - started,
-            f"the compiled integrator ({chosen}{picked}{note})", start)
+            f"the compiled integrator ({chosen}{picked}{note})", start, steps[0])
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:
