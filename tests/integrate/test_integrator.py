@@ -576,15 +576,16 @@ def test_auto_says_why_it_did_not_take_the_exponential_method(reference_scene):
 
 def test_a_method_that_does_otherwise_than_its_name_says_so(reference_scene):
     """A mesh 80 times the reference's stiffness makes the modal forms too ill-conditioned to
-    take: `auto` then takes DOP853, and an explicit "exponential" steps every set by DOP853;
-    method_note says so (the run's summary shows it), where the plain scene says nothing."""
+    take at 1e-10 (exponential.condition_limit): `auto` then takes DOP853, and an explicit
+    "exponential" steps every set by DOP853; method_note says so (the run's summary shows it),
+    where the plain scene says nothing."""
     stiff = GearTrainModel(reference_scene.with_parameters(c_point=2e10))
-    auto = CompiledStepper(stiff, 1e-7)
+    auto = CompiledStepper(stiff, 1e-10)
     assert auto.method == "dop853"
     assert auto.method_note.startswith("the exponential method's modal forms refused (a fast "
                                        "eigenvalue's condition number is")
     assert auto.method_note.endswith("): dop853 instead")
-    explicit = CompiledStepper(stiff, 1e-7, "exponential")
+    explicit = CompiledStepper(stiff, 1e-10, "exponential")
     assert explicit.method == "exponential"
     assert "such sets stepped by DOP853" in explicit.method_note
     assert CompiledStepper(GearTrainModel(reference_scene), 1e-7).method_note == ""
