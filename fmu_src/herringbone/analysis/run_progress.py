@@ -89,9 +89,10 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     from ..integrate.contract import simulate_with
     from ..model.assembly import GearTrainModel
 
+    stop = scene.experiment.stop_time if stop_time is None else stop_time
     if reference:
-        return _reference_with_progress(scene, stop_time, output_interval, tolerance, progress,
-                                        on_ready)
+        return _reference_with_progress(scene, stop_time, stop, output_interval, tolerance,
+                                        progress, on_ready)
     from ..integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper, warm_up
     from ..integrate.contract import start_position
 
@@ -101,7 +102,6 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     stepper = CompiledStepper(model, tolerance, method)
     if on_ready is not None:
         warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
-    stop = scene.experiment.stop_time if stop_time is None else stop_time
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready(stepper.method, stepper.method_note)
@@ -112,12 +112,12 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     return results
 
 
-def _reference_with_progress(scene, stop_time, output_interval, tolerance, progress,
+def _reference_with_progress(scene, stop_time, stop, output_interval, tolerance, progress,
                              on_ready) -> dict:
-    """simulate_with_progress's run of the scipy reference (its arguments)."""
+    """simulate_with_progress's run of the scipy reference (its arguments; `stop`: stop_time
+    or the scene's, the bar's end)."""
     tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance
     check_reference_run(scene, stop_time, output_interval, tolerance)
-    stop = scene.experiment.stop_time if stop_time is None else stop_time
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready(None, "")

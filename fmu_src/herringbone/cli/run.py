@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -144,16 +145,15 @@ def execute(args, parser) -> int:
         require("matplotlib", "--plot")
     progress = progress_of(args)
     if args.reference:
-        results, wall, integrator, start, steps = reference_run(scene, stop_time, interval,
-                                                                tolerance, progress)
+        run = reference_run(scene, stop_time, interval, tolerance, progress)
     else:
-        results, wall, integrator, start, steps = compiled_run(
-            scene, stop_time, interval, tolerance, args.method or "auto", progress)
-    lines = [summary(scene, results, wall, integrator, start, steps=steps),
-             *sampling_note(scene, results),
-             *slip_notes(scene, results)]
+        run = compiled_run(scene, stop_time, interval, tolerance, args.method or "auto",
+                           progress)
+    results = run.results
+    lines = [summary(scene, results, run.wall, run.integrator, run.start, steps=run.steps),
+             *sampling_note(scene, results), *slip_notes(scene, results)]
     print("\n".join(lines), flush=True)  # before the CSV, which may take longer than the run
-    write_timed(results, output, wall)
+    write_timed(results, output, run.wall)
     if args.plot:
         from ..analysis.run_report import plot_run
         written = plot_run(scene, results, output, None if args.reference else tolerance)
@@ -161,22 +161,32 @@ def execute(args, parser) -> int:
     return 0
 
 
-def reference_run(scene, stop_time: float, interval: float, tolerance: float, progress: bool):
-    """The scipy reference's run: (results, wall time s, what ran it in words, None: its start
-    is not told apart, there being no compiled code to load, None: its steps not counted)."""
+class FinishedRun(NamedTuple):
+    """A run as its summary tells it."""
+    results: dict
+    wall: float  # s, the run's wall time
+    integrator: str  # what ran it, in words
+    start: float | None  # s of `wall` before the first step (None: not told apart)
+    steps: int | None  # the integrator's internal steps (None: not counted)
+
+
+def reference_run(scene, stop_time: float, interval: float, tolerance: float,
+                  progress: bool) -> FinishedRun:
+    """The scipy reference's run: its start is not told apart, there being no compiled code to
+    load, and its steps are not counted."""
     from ..analysis.run_progress import simulate_with_progress
 
     started = time.perf_counter()
     results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
                                      tolerance=tolerance, reference=True, progress=progress)
-    return results, time.perf_counter() - started, "the scipy reference", None, None
+    return FinishedRun(results, time.perf_counter() - started, "the scipy reference", None,
+                       None)
 
 
 def compiled_run(scene, stop_time: float, interval: float, tolerance: float, method: str,
-                 progress: bool):
-    """The compiled integrator's run by `method` with its bar (run_progress): (results, wall
-    time s, what ran it in words with the method, the part of the wall time before the first
-    step s: the model's tables and the compiled loop loaded, its internal steps)."""
+                 progress: bool) -> FinishedRun:
+    """The compiled integrator's run by `method` with its bar (run_progress), its start the
+    model's tables and the compiled loop loaded."""
     from ..analysis.run_progress import simulate_with_progress
 
     started, ready = time.perf_counter(), []
@@ -190,8 +200,8 @@ def compiled_run(scene, stop_time: float, interval: float, tolerance: float, met
     start, chosen, note = ready[0]
     picked = ", picked by --method auto" if method == "auto" else ""
     note = f": {note}" if note else ""
-    return (results, time.perf_counter() - started,
-            f"the compiled integrator ({chosen}{picked}{note})", start, steps[0])
+    return FinishedRun(results, time.perf_counter() - started,
+                       f"the compiled integrator ({chosen}{picked}{note})", start, steps[0])
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:

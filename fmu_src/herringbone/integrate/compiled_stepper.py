@@ -381,16 +381,16 @@ class CompiledStepper:
         that is not exact."""
         force = model.force_scale()
         torque_scales = (force * model.geometry.radius_pinion, force * model.geometry.radius_wheel)
-        arguments = (model.system, model.mesh.period_table(), model.state_scales(),
-                     torque_scales, step_tolerance)
+        build = functools.partial(exponential.build_tables, model.system,
+                                  model.mesh.period_table(), model.state_scales(),
+                                  torque_scales, step_tolerance, self.tolerance)
         try:
-            return exponential.build_tables(*arguments, tolerance=self.tolerance)
+            return build()
         except np.linalg.LinAlgError as refused:
             if method == "exponential":
                 self.method_note = (f"a contact set's modal form refused ({refused}): such "
                                     "sets stepped by DOP853")
-                return exponential.build_tables(*arguments, skip_defective=True,
-                                                tolerance=self.tolerance)
+                return build(skip_defective=True)
             self.method = runge_kutta_method(modes)
             self.method_note = (f"the exponential method's modal forms refused ({refused}): "
                                 f"{self.method} instead")

@@ -436,13 +436,12 @@ def _unit_rows(matrix: np.ndarray) -> np.ndarray:
 
 
 def build_tables(system: System, period_table, state_scales: np.ndarray,
-                 torque_scales: tuple[float, float], step_tolerance: float,
-                 skip_defective: bool = False, tolerance: float | None = None) -> ExactTables:
+                 torque_scales: tuple[float, float], step_tolerance: float, tolerance: float,
+                 skip_defective: bool = False) -> ExactTables:
     """The ExactTables of a mesh period (mesh.period_table's lengths, counts, tables) for the
     stepper's state scales (GearTrainModel.state_scales), the torques' scales (N·m: motor,
-    load), the step tolerance and the run's `tolerance` (None: the step tolerance), which
-    bounds the modal forms' conditioning (condition_limit). A set and variant whose linear
-    system has no modal form
+    load), the step tolerance and the run's `tolerance`, which bounds the modal forms'
+    conditioning (condition_limit). A set and variant whose linear system has no modal form
     raises np.linalg.LinAlgError, or with `skip_defective` is left out of the exact ones (its
     segments are stepped by DOP853)."""
     scales = np.concatenate([state_scales, torque_scales, [1.0]])
@@ -450,9 +449,8 @@ def build_tables(system: System, period_table, state_scales: np.ndarray,
     # rounding of the modal round trip grows with the largest scaled entry: it is measured by
     # the longest interval instead.
     scales[system.pinion] = max(scales[system.pinion], float(np.max(period_table[0])))
-    valid, forms, rows_of = _exact_forms(
-        system, period_table, scales, skip_defective,
-        step_tolerance if tolerance is None else tolerance)
+    valid, forms, rows_of = _exact_forms(system, period_table, scales, skip_defective,
+                                         tolerance)
     size = 2 * system.mass.shape[0]
     width = size + INPUTS
     slow_width = max([len(form[3]) for form in forms.values()], default=1)
