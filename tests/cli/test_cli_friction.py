@@ -333,8 +333,8 @@ def test_build_fmu_simulate_tells_the_fmus_start_from_its_stepping(tmp_path, cap
     stepping's is a third of it: the start is apart, ending at the first step's end."""
     monkeypatch.chdir(tmp_path)
     assert main(["build-fmu", "reference", "--simulate", "--no-progress"]) == 0
-    line = next(text for text in capsys.readouterr().out.splitlines()
-                if text.startswith("simulated "))
+    out = capsys.readouterr().out
+    line = next(text for text in out.splitlines() if text.startswith("simulated "))
     found = re.search(r"in ([\d.]+) s of wall time: ([\d.]+) s to start \(the FMU unpacked, "
                       r"instantiated and set up, its first step\), ([\d.e+-]+) s stepping "
                       r"\(([\d.e+-]+) s per simulated second\)", line)
@@ -342,6 +342,28 @@ def test_build_fmu_simulate_tells_the_fmus_start_from_its_stepping(tmp_path, cap
     wall, start, stepping, rate = map(float, found.groups())
     assert start + stepping == pytest.approx(wall, abs=0.01)
     assert rate == pytest.approx(stepping / 0.1, rel=1e-2)  # the scene's stop time
+    fmu_steps(out)
+
+
+def fmu_steps(out: str) -> None:
+    """The FMU's internal steps in build-fmu's summary are its integrator's, one call of
+    run_to a communication step as the FMU makes them (the reference scene: about 1.1e4 a
+    simulated second, a call's end ending a step besides each switch), not the outputs' rows
+    (1e4 a second) nor the steps of one call over the run (about 1.1e3); not in the table."""
+    from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+    from herringbone.integrate.contract import output_times, start_position
+    from herringbone.model.assembly import GearTrainModel
+
+    found = re.search(r"^(\d+) internal steps \(([\d.e+-]+) per simulated second\)$", out,
+                      re.MULTILINE)
+    assert found and "internal_steps" not in out, out
+    scene = herringbone.load_scene("reference")
+    stepper = CompiledStepper(GearTrainModel(scene), DEFAULT_TOLERANCE)
+    run = stepper.start(start_position(stepper.model, scene.inputs.at(0.0)[0]))
+    times = output_times(scene.experiment.stop_time, scene.experiment.output_interval)
+    for end in times[1:]:
+        stepper.run_to(run, end, scene.inputs.at(0.0))
+    assert int(found[1]) == stepper.accepted_steps > len(times)
 
 
 def test_the_console_script_runs_the_package(tmp_path):

@@ -33,6 +33,8 @@ HELP = ("build the co-simulation FMU of a scene (FMI 2.0; --fmi 3: 3.0), named "
         "drive train as an SSP archive")
 DIST = Path("dist")
 SIMULATED = Path("results") / "<scene>_fmu.csv"
+# the FMU's count of its integrator's steps (a local variable, which fmpy records when named)
+STEPS = "internal_steps"
 
 
 def declare(parser, dist: Path = DIST) -> None:
@@ -194,15 +196,26 @@ def simulate(fmu: Path, scene, csv_path: Path) -> None:
         return True
 
     started = time.perf_counter()
-    results = simulate_scene_fmu(fmu_path=fmu, scene=scene, step_finished=step_finished)
+    results = simulate_scene_fmu(fmu_path=fmu, scene=scene, step_finished=step_finished,
+                                 output=[*fmu_outputs(fmu), STEPS])
     wall = time.perf_counter() - started
+    steps = int(results.pop(STEPS)[-1])
     # the first step's end: what fmpy does before it (the FMU unpacked and instantiated, its
     # model set up) would hide the stepping's rate under a fixed cost a hundred times its size
     start = first_step[0] - started if first_step else None
     print("\n".join([summary(scene, results, wall, f"its FMU {fmu}", start,
-                             "the FMU unpacked, instantiated and set up, its first step"),
+                             "the FMU unpacked, instantiated and set up, its first step",
+                             steps),
                      *sampling_note(scene, results), *slip_notes(scene, results)]), flush=True)
     write_timed(results, csv_path, wall)
+
+
+def fmu_outputs(fmu: Path) -> list[str]:
+    """The names of the FMU's outputs, in its model description's order."""
+    import fmpy
+
+    return [variable.name for variable in fmpy.read_model_description(str(fmu)).modelVariables
+            if variable.causality == "output"]
 
 
 def main(argv: list[str] | None = None, prog: str = "herringbone build-fmu",

@@ -54,10 +54,12 @@ def scene_inputs(scene, stop_time: float) -> np.ndarray:
 
 
 def simulate_scene_fmu(fmu_path, scene, stop_time=None, output_interval=None,
-                       start_values=None, step_finished=None) -> dict[str, np.ndarray]:
+                       start_values=None, step_finished=None, output=None
+                       ) -> dict[str, np.ndarray]:
     """Simulate a gear FMU with fmpy under the scene's experiment and inputs; the
     communication step is the output interval; `step_finished(time, recorder)` is fmpy's,
-    called after each step (it returns True to go on). Returns {"time": …, output: …}."""
+    called after each step (it returns True to go on); `output`: the names of the variables
+    to record (None: the FMU's outputs). Returns {"time": …, name: …}."""
     import fmpy
 
     stop_time = stop_time or scene.experiment.stop_time
@@ -66,7 +68,7 @@ def simulate_scene_fmu(fmu_path, scene, stop_time=None, output_interval=None,
                                output_interval=output_interval,
                                input=scene_inputs(scene, stop_time),
                                start_values=start_values or {},
-                               step_finished=step_finished)
+                               step_finished=step_finished, output=output)
     if result["time"][-1] < stop_time - 1e-9 * output_interval:
         raise RuntimeError(f"{fmu_path}: the FMU stopped at t = {result['time'][-1]:g} s "
                            "(run with fmpy's debug_logging to see why)")
