@@ -94,12 +94,21 @@ def test_the_public_api_exports_what_a_run_raises_and_gives():
     assert isinstance(inspect.signature(herringbone.sweep).parameters["protocol"].default,
                       herringbone.Protocol)
     assert issubclass(herringbone.StepBudgetExceeded, herringbone.IntegrationError)
-    result = herringbone.simulate(herringbone.load_scene("reference"), stop_time=4e-4,
-                                  output_interval=1e-4)
+    from herringbone.integrate.compiled_stepper import DEFAULT_TOLERANCE, CompiledStepper
+    from herringbone.integrate.contract import simulate_with
+    from herringbone.model.assembly import GearTrainModel
+
+    scene = herringbone.load_scene("reference")
+    result = herringbone.simulate(scene, stop_time=4e-4, output_interval=1e-4)
     assert isinstance(result, herringbone.Result)
     assert np.array_equal(result.time, result["time"]) and len(result.time) == 5
     assert result.units["F_mesh"] == "N" and result.units["time"] == "s"
     assert result.units["dte"] == "m" and result.units["w_pinion"] == "rad/s"
+    # its steps are those of its stepper over the run; the reference's are not counted
+    stepper = CompiledStepper(GearTrainModel(scene), DEFAULT_TOLERANCE)
+    simulate_with(stepper, scene, 4e-4, 1e-4)
+    assert result.steps == stepper.accepted_steps >= 1
+    assert herringbone.reference_simulate(scene, stop_time=4e-4).steps is None
 
 
 def test_scene_inputs_hold_each_row_in_fmpy():

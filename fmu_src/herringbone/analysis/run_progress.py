@@ -8,6 +8,7 @@ an array, the bar moved after each compiled call.
 from __future__ import annotations
 
 from ..arguments import check_compiled_run, check_reference_run
+from ..integrate.contract import Result
 from ..integrate.reference import DEFAULT_TOLERANCE as REFERENCE_TOLERANCE
 from ..integrate.reference import checked_reference_run
 from .progress_bar import progress_bar
@@ -52,7 +53,7 @@ def reference_simulate_with_progress(scene, stop_time=None, output_interval=None
 
 def simulate_with_progress(scene, stop_time=None, output_interval=None, tolerance=None,
                            reference=False, progress=True, on_ready=None,
-                           method="auto", on_finished=None) -> dict:
+                           method="auto") -> Result:
     """herringbone.simulate (or with `reference` reference_simulate) with a progress bar on
     stderr, and the integrator's compile announced there, as every compile is by default
     (compiling/announce.py): before it starts, every 10 s and at its end.
@@ -78,13 +79,12 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
         the stepping.
     method : str
         The compiled integrator's method (herringbone.simulate's `method`).
-    on_finished : callable or None
-        Called at the compiled run's end with its internal steps (the warm-up's not counted).
 
     Returns
     -------
-    dict
-        {"time": …, output name: …}, the same numbers to the bit as without the bar.
+    Result
+        {"time": …, output name: …}, the same numbers to the bit as without the bar; its
+        `steps`, the compiled integrator's internal steps (the warm-up's not counted).
     """
     from ..integrate.contract import simulate_with
     from ..model.assembly import GearTrainModel
@@ -107,13 +107,12 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
             on_ready(stepper.method, stepper.method_note)
         results = simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
                                 output_interval)
-    if on_finished is not None:
-        on_finished(stepper.accepted_steps)
+    results.steps = stepper.accepted_steps
     return results
 
 
 def _reference_with_progress(scene, stop_time, stop, output_interval, tolerance, progress,
-                             on_ready) -> dict:
+                             on_ready) -> Result:
     """simulate_with_progress's run of the scipy reference (its arguments; `stop`: stop_time
     or the scene's, the bar's end)."""
     tolerance = REFERENCE_TOLERANCE if tolerance is None else tolerance

@@ -190,18 +190,16 @@ def compiled_run(scene, stop_time: float, interval: float, tolerance: float, met
     from ..analysis.run_progress import simulate_with_progress
 
     started, ready = time.perf_counter(), []
-    steps: list[int] = []
     results = simulate_with_progress(
         scene, stop_time=stop_time, output_interval=interval, tolerance=tolerance,
         method=method, progress=progress,
         on_ready=lambda chosen, note: ready.append((time.perf_counter() - started, chosen,
-                                                    note)),
-        on_finished=steps.append)
+                                                    note)))
     start, chosen, note = ready[0]
     picked = ", picked by --method auto" if method == "auto" else ""
     note = f": {note}" if note else ""
     return FinishedRun(results, time.perf_counter() - started,
-                       f"the compiled integrator ({chosen}{picked}{note})", start, steps[0])
+                       f"the compiled integrator ({chosen}{picked}{note})", start, results.steps)
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:

@@ -36,7 +36,11 @@ class IntegrationError(RuntimeError):
 class Result(dict):
     """A run's outputs: {"time": sample times, s; output name: samples}, numpy arrays of one
     length, in SI units (`units`); a dict, so `result["F_mesh"]` and `list(result)` work as
-    they always have."""
+    they always have. `steps`: the compiled integrator's internal steps over the run, what
+    its cost grows with (an exact segment of the exponential method is one); None where they
+    are not counted (the scipy reference)."""
+
+    steps: int | None = None
 
     @property
     def time(self) -> np.ndarray:
