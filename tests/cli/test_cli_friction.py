@@ -14,6 +14,9 @@ import herringbone
 from herringbone.cli import main
 
 REFERENCE = str(MODELS / "reference.toml")
+# the summary's line of a compiled run's internal steps: (steps, per simulated second)
+STEPS_LINE = re.compile(r"^(\d+) internal steps \(([\d.e+-]+) per simulated second\)$",
+                        re.MULTILINE)
 
 
 def reference_variant(folder, name: str, *replacements: tuple[str, str]):
@@ -314,8 +317,7 @@ def test_run_counts_its_internal_steps(tmp_path, capsys, method):
 
     assert main(["run", "reference", "--stop-time", "0.02", "--method", method,
                  "--no-progress", "-o", str(tmp_path / "run.csv")]) == 0
-    found = re.search(r"^(\d+) internal steps \(([\d.e+-]+) per simulated second\)$",
-                      capsys.readouterr().out, re.MULTILINE)
+    found = STEPS_LINE.search(capsys.readouterr().out)
     assert found
     steps, rate = int(found[1]), float(found[2])
     scene = herringbone.load_scene("reference")
@@ -354,8 +356,7 @@ def fmu_steps(out: str) -> None:
     from herringbone.integrate.contract import output_times, start_position
     from herringbone.model.assembly import GearTrainModel
 
-    found = re.search(r"^(\d+) internal steps \(([\d.e+-]+) per simulated second\)$", out,
-                      re.MULTILINE)
+    found = STEPS_LINE.search(out)
     assert found and "internal_steps" not in out, out
     scene = herringbone.load_scene("reference")
     stepper = CompiledStepper(GearTrainModel(scene), DEFAULT_TOLERANCE)
