@@ -21,6 +21,11 @@ class ProgressStepper:
         self.model = stepper.model
         self._stepper, self._bar = stepper, bar
 
+    @property
+    def accepted_steps(self) -> int | None:
+        """The wrapped stepper's count of its steps, None where it keeps none."""
+        return getattr(self._stepper, "accepted_steps", None)
+
     def advance(self, position, end, torques, sample_times=(), on_sample=None):
         """The wrapped stepper's advance, the bar moved on at every sample."""
         def watched(t, outputs):
@@ -107,7 +112,6 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
             on_ready(stepper.method, stepper.method_note)
         results = simulate_with(SampledProgressStepper(stepper, bar), scene, stop_time,
                                 output_interval)
-    results.steps = stepper.accepted_steps
     return results
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -41,6 +41,9 @@ from .common import (
     say,
     scene_of,
 )
+
+if TYPE_CHECKING:
+    from ..integrate.contract import Result
 
 NAME = "run"
 HELP = ("simulate a scene on the compiled integrator (what the FMU runs; --reference: the scipy "
@@ -150,7 +153,7 @@ def execute(args, parser) -> int:
         run = compiled_run(scene, stop_time, interval, tolerance, args.method or "auto",
                            progress)
     results = run.results
-    lines = [summary(scene, results, run.wall, run.integrator, run.start, steps=run.steps),
+    lines = [summary(scene, results, run.wall, run.integrator, run.start, steps=results.steps),
              *sampling_note(scene, results), *slip_notes(scene, results)]
     print("\n".join(lines), flush=True)  # before the CSV, which may take longer than the run
     write_timed(results, output, run.wall)
@@ -163,11 +166,10 @@ def execute(args, parser) -> int:
 
 class FinishedRun(NamedTuple):
     """A run as its summary tells it."""
-    results: dict
+    results: Result  # its steps: the integrator's internal steps (None: not counted)
     wall: float  # s, the run's wall time
     integrator: str  # what ran it, in words
     start: float | None  # s of `wall` before the first step (None: not told apart)
-    steps: int | None  # the integrator's internal steps (None: not counted)
 
 
 def reference_run(scene, stop_time: float, interval: float, tolerance: float,
@@ -179,8 +181,7 @@ def reference_run(scene, stop_time: float, interval: float, tolerance: float,
     started = time.perf_counter()
     results = simulate_with_progress(scene, stop_time=stop_time, output_interval=interval,
                                      tolerance=tolerance, reference=True, progress=progress)
-    return FinishedRun(results, time.perf_counter() - started, "the scipy reference", None,
-                       None)
+    return FinishedRun(results, time.perf_counter() - started, "the scipy reference", None)
 
 
 def compiled_run(scene, stop_time: float, interval: float, tolerance: float, method: str,
@@ -199,7 +200,7 @@ def compiled_run(scene, stop_time: float, interval: float, tolerance: float, met
     picked = ", picked by --method auto" if method == "auto" else ""
     note = f": {note}" if note else ""
     return FinishedRun(results, time.perf_counter() - started,
-                       f"the compiled integrator ({chosen}{picked}{note})", start, results.steps)
+                       f"the compiled integrator ({chosen}{picked}{note})", start)
 
 
 def write_timed(results: dict, output: Path, run_wall: float) -> None:

@@ -640,6 +640,4 @@ def simulate(scene, stop_time=None, output_interval=None, tolerance=DEFAULT_TOLE
     check_compiled_run(scene, stop_time, output_interval, tolerance, method, max_step)
 
     stepper = CompiledStepper(GearTrainModel(scene), tolerance, method, max_step)
-    result = simulate_with(stepper, scene, stop_time, output_interval)
-    result.steps = stepper.accepted_steps
-    return result
+    return simulate_with(stepper, scene, stop_time, output_interval)

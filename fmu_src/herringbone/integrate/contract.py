@@ -119,15 +119,30 @@ def simulate_with(stepper: Stepper, scene, stop_time=None, output_interval=None,
     is stored (the benchmarks watch their budget through it; an exception it raises ends the
     run). A bad span or start raises ValueError before any work (arguments.check_run_times).
     Without on_sample, a SamplingStepper samples each piece of the input table into an array
-    (`sampled_run`), the same numbers to the bit."""
+    (`sampled_run`), the same numbers to the bit. The Result's `steps` are the stepper's
+    `accepted_steps` over the run, where it counts them (the compiled one)."""
     check_run_times(scene, stop_time, output_interval, initial_pinion_angle)
     stop_time = scene.experiment.stop_time if stop_time is None else stop_time
     output_interval = scene.experiment.output_interval if output_interval is None \
         else output_interval
-    model = stepper.model
     times = output_times(stop_time, output_interval)
+    before = getattr(stepper, "accepted_steps", None)
     if on_sample is None and isinstance(stepper, SamplingStepper):
-        return sampled_run(stepper, scene, stop_time, times, initial_pinion_angle)
+        result = sampled_run(stepper, scene, stop_time, times, initial_pinion_angle)
+    else:
+        result = run_sampled_by_call(stepper, scene, stop_time, times, initial_pinion_angle,
+                                     on_sample)
+    after = getattr(stepper, "accepted_steps", None)
+    if before is not None and after is not None:
+        result.steps = after - before
+    return result
+
+
+def run_sampled_by_call(stepper: Stepper, scene, stop_time: float, times: np.ndarray,
+                        initial_pinion_angle=0.0, on_sample=None) -> Result:
+    """simulate_with's run through Stepper.advance (its arguments checked there): each sample
+    handed over as a dict and stored, then to `on_sample(t, outputs)` where one is given."""
+    model = stepper.model
     results = {name: np.empty(len(times)) for name in model.output_names}
     index = {t: i for i, t in enumerate(times)}
 
