@@ -1,11 +1,12 @@
-"""A run sampled in one compiled call (walk.advance_sampled, CompiledStepper.sample) against
-one call per sample time (CompiledStepper.run_to, how simulate sampled before): the same
-outputs to the bit, through simulate_with with and without a callback, on scenes with a torque
-step, contact loss and separation, with DOP853 and with the exponential method where no
-segment is exact; where segments are exact, samples taken inside the steps of a run that does
-not stop for them, within the method's own error of one that does; the same error, raised
-after the same samples, where a run fails; and the one call, compiled without numba's
-reference counts as walk.advance is, frees what it allocates and keeps what it is given."""
+"""A run sampled in one compiled call (walk.advance handed the sample times,
+CompiledStepper.sample) against one call per sample time (CompiledStepper.run_to, the same loop
+handed none, how simulate sampled before): the same outputs to the bit, through simulate_with
+with and without a callback, on scenes with a torque step, contact loss and separation, with
+DOP853 and with the exponential method where no segment is exact; where segments are exact,
+samples taken inside the steps of a run that does not stop for them, within the method's own
+error of one that does; the same error, raised after the same samples, where a run fails; and
+the one call, compiled without numba's reference counts, frees what it allocates and keeps what
+it is given."""
 
 import numpy as np
 import pytest

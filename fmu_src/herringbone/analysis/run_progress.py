@@ -106,7 +106,7 @@ def simulate_with_progress(scene, stop_time=None, output_interval=None, toleranc
     model = GearTrainModel(scene)
     stepper = CompiledStepper(model, tolerance, method)
     if on_ready is not None:
-        warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]), sampled=True)
+        warm_up(stepper, start_position(model, scene.inputs.at(0.0)[0]))
     with progress_bar(stop, f"run {scene.name}", progress) as bar:
         if on_ready is not None:
             on_ready(stepper.method, stepper.method_note)

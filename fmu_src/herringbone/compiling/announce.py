@@ -31,7 +31,7 @@ PROGRESS_SECONDS = 10.0  # between the lines said while compiles go on, by defau
 # an announcement ends this long after a compile where no other has started (s): the next
 # kernel a run compiles follows within milliseconds
 QUIET_SECONDS = 1.0
-LOOPS = ("walk.advance", "walk.advance_sampled")  # the integrator's loops: last to compile
+LOOP = "walk.advance"  # the integrator's loop: last to compile
 _KERNEL_MODULES = frozenset(sources.kernel_modules())
 
 
@@ -180,7 +180,7 @@ class _Announcer(event.Listener):
             session.kernel, session.last_end = None, now
         if tuple(ev.data["args"]) in dispatcher.overloads:  # compiled, not failed
             record_seconds(kernel, session.took[kernel])
-        if kernel in LOOPS:
+        if kernel == LOOP:
             self._close(session)
 
     def _close(self, session, quiet=False):

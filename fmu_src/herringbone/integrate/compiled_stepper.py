@@ -1,14 +1,15 @@
 """The fast integrator: the compiled loop (compiled/walk.py) behind the stepping contract.
 
 `CompiledStepper.advance(position, end, torques)` keeps the contract of stepping.ScipyStepper:
-start from `position`, integrate with the torques held to exactly `end`, stopping on every contact
-switch, contact loss and regain; the result depends only on the position passed in, so a saved
-position re-runs identically. One call is one pass through compiled code, however many switches
-the span holds, and through any number of sample times: `sample` (compiled/walk.py's
-advance_sampled) writes the outputs at each into a row of an array, stopping there as a call
-of its own would, to the bit, or where the segment is exact, taking them from its exact
-solution inside the step that passes them. A caller that steps on and on (the FMU) keeps a
-`Run` instead, which `run_to` advances in place, and takes a Position of it only to save it.
+start from `position`, integrate with the torques held to exactly `end`, stopping on every
+contact switch, contact loss and regain; the result depends only on the position passed in, so
+a saved position re-runs identically. One call is one pass through compiled code, however many
+switches the span holds, and through any number of sample times: `sample` (compiled/walk.py's
+`advance`, the one loop every drive runs) writes the outputs at each into a row of an array,
+stopping there as a call of its own would, to the bit, or where the segment is exact, taking
+them from its exact solution inside the step that passes them. A caller that steps on and on
+(the FMU) keeps a `Run` instead, which `run_to` advances in place, and takes a Position of it
+only to save it.
 
 Methods (`method`):
 - "dop853": explicit, order 8. Its steps are held to h·|λ|max <= 3.5 (|λ|max the fastest
@@ -198,11 +199,15 @@ FAILURES = {walk.Status.STALLED: "contact switches without progress (grazing con
                                        "is beyond the integrator's resolution)"}
 
 NO_STEP_BUDGET = 2**62  # run_to's max_steps when it has none
-# Samples per compiled call (`advance`, `advance_sampled`): a callback (on_sample) is handed
+# run_to's samples: none (walk.advance's times and rows, of the types `sample` hands it, so
+# that both drives run one compiled loop)
+NO_TIMES = np.empty(0)
+NO_ROWS = np.empty((0, 0))
+# Samples per compiled call of walk.advance (`sample`): a callback (on_sample) is handed
 # them after the call, so a progress bar or a budget watch lags this many samples; the call's
 # own cost (a few µs) and the step that ends on its last time are shared by as many
 SAMPLES_PER_CALL = 64
-# Runaway guard: a run over h s (a doStep, a call of advance or advance_sampled) may take
+# Runaway guard: a run over h s (a doStep, a call of walk.advance) may take
 # STEP_BUDGET_FLOOR + STEP_BUDGET_PER_MODE·h·|λ|max internal steps (|λ|max the fastest
 # eigenvalue). Measured on the shipped scenes at the default
 # tolerance: at most 2·h·|λ|max + 10 (from_rest), so the bound leaves 50 times that, and a
@@ -438,10 +443,10 @@ class CompiledStepper:
         if end <= run.clock.item(0):
             return
         # float(): an int would make numba compile another version
-        arguments = (self.constants, self.exact_buffers, run.implicit, run.buffers, float(end),
-                     float(torques[0]), float(torques[1]),
+        arguments = (self.constants, self.exact_buffers, run.implicit, run.buffers, NO_TIMES,
+                     NO_ROWS, float(end), float(torques[0]), float(torques[1]),
                      NO_STEP_BUDGET if max_steps is None else int(max_steps))
-        status, steps = self.loop(*arguments)
+        status, steps, _ = self.loop(*arguments)
         if self.loop is walk.advance:
             self.loop = compiled_entry(walk.advance, arguments)
         self.accepted_steps += steps
@@ -452,7 +457,7 @@ class CompiledStepper:
                torques: tuple[float, float], max_steps: int | None = None,
                on_sample=None) -> None:
         """Integrate the run through `times` (s, rising, in [run's time, end]) to `end` with
-        the torques held, in place, in one call of compiled code (walk.advance_sampled): rows[k]
+        the torques held, in place, in one call of compiled code (walk.advance): rows[k]
         gets the outputs (model.output_layout) at times[k]. Where the run's segments are exact
         (the exponential method), a sample comes from the exact solution inside the step that
         passes it, and the steps are those of run_to straight to `end`; elsewhere the run and
@@ -470,7 +475,7 @@ class CompiledStepper:
         if len(times) and not (times[-1] <= end and np.all(times[1:] >= times[:-1])):
             raise ValueError(f"times: {_unordered(times, end)}; allowed: rising times, none "
                              f"past end")
-        status, steps, written = walk.advance_sampled(
+        status, steps, written = walk.advance(
             self.constants, self.exact_buffers, run.implicit, run.buffers, times, rows,
             float(end), float(torques[0]), float(torques[1]),
             NO_STEP_BUDGET if max_steps is None else int(max_steps))
@@ -566,23 +571,16 @@ def compiled_entry(function, arguments):
         return function
 
 
-def warm_up(stepper: CompiledStepper, position: Position, sampled: bool = False
-            ) -> float | None:
-    """Load a compiled loop before the first step (from the cache, or by compiling it the
-    first time): run_to's, the one the FMU and the sweeps run (an FMU never runs the sampled
-    one), or with `sampled` the one herringbone.simulate runs (CompiledStepper.sample), by a
-    run of a nanosecond from `position` whose steps the stepper does not count; returns the
-    seconds spent compiling, or None if it came from the cache."""
+def warm_up(stepper: CompiledStepper, position: Position) -> float | None:
+    """Load the compiled loop (walk.advance, which every drive runs: the FMU's steps, the
+    sweeps, herringbone.simulate) before the first step, from the cache or by compiling it
+    the first time, by a run of a nanosecond from `position` whose steps the stepper does not
+    count; returns the seconds spent compiling, or None if it came from the cache."""
     started = time.perf_counter()
     steps = stepper.accepted_steps
-    if sampled:
-        stepper.advance(position, position.time + 1e-9, (0.0, 0.0), [position.time],
-                        lambda t, outputs: None)
-    else:
-        stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
+    stepper.run_to(stepper.start(position), position.time + 1e-9, (0.0, 0.0))
     stepper.accepted_steps = steps
-    loop = walk.advance_sampled if sampled else walk.advance
-    compiled = any(loop.stats.cache_misses.values())
+    compiled = any(walk.advance.stats.cache_misses.values())
     return time.perf_counter() - started if compiled else None
 
 

@@ -1,12 +1,12 @@
 """The integrator's first start on a machine: compiled code carried in, a word before compiling.
 
-numba compiles each of the integrator's entries (compiled/walk.py: `advance`, what the FMU
-and the sweeps step with, `advance_sampled`, herringbone.simulate's and `herringbone run`'s)
-for each method on its first use on a machine, numba version and version of the package, and
-caches it (compiling/cache.py). An FMU carries the compiled code a run of its scene loads
-(`carry_for_scene`, in resources/numba_cache: `CARRIED_FOLDER`); `prepare`, called as the slave
-is instantiated, adds to the user's cache folder what that lacks of it (cache.seed_from), so an
-FMU started on a machine of the build machine's kind loads its code in a fraction of a second.
+numba compiles the integrator's loop (compiled/walk.py's `advance`, which the FMU, the sweeps,
+herringbone.simulate and `herringbone run` all step with) for each method on its first use on a
+machine, numba version and version of the package, and caches it (compiling/cache.py). An FMU
+carries the compiled code a run of its scene loads (`carry_for_scene`, in
+resources/numba_cache: `CARRIED_FOLDER`); `prepare`, called as the slave is instantiated, adds
+to the user's cache folder what that lacks of it (cache.seed_from), so an FMU started on a
+machine of the build machine's kind loads its code in a fraction of a second.
 
 Where numba must compile anyway (another CPU, another numba, no carried cache), the compile
 is announced (compiling/announce.py: on stderr unless a caller hands over its own `say`) before

@@ -244,7 +244,7 @@ class StepPlan(NamedTuple):
 
 
 class Samples(NamedTuple):
-    """The sample times of a run sampled in one call (`advance_sampled`) and the rows their
+    """The sample times of a call of `advance` (none for a plain step) and the rows their
     outputs go to."""
     times: np.ndarray  # s, rising
     rows: np.ndarray  # one row of equations.outputs per time
@@ -313,8 +313,8 @@ TURN_BACK_FLOOR = 1.0 / 64.0
 NEVER = math.inf  # s: the time to an event that is not ahead
 
 # Inlining and speed. The helpers the loop runs at every step are inlined (inline="always")
-# into `advance` and `advance_sampled`, which are compiled without numba's reference counts
-# (compiling.counting): a compiled call would cost its call and, compiled with counts, an atomic
+# into `advance`, which is compiled without numba's reference counts (compiling.counting):
+# a compiled call would cost its call and, compiled with counts, an atomic
 # count of every array of every record it is handed, on the way in and out (the System alone
 # has 15 arrays). What runs once per event or less (cross_event, locate_event, probe_inside,
 # contact_violated_inside, trial_step, exact_samples) stays a call, and returns numbers only,
@@ -530,35 +530,24 @@ def _exact_event_ahead(system, workspace, exact, state, motor_torque, load_torqu
                                                 load_torque, length, horizon))
 
 
+@njit(cache=True, error_model="numpy", inline="always")
 def stop_at(samples, k, end, exact):
     """Where the loop stops: at `end`, or where the segment is not exact (its exact form
-    `exact` < 0), at the sample time `k` of `samples` if that comes first (a sampled run's
-    other segments take their samples inside their steps: `sample_inside`). `end` for a run
-    without samples (None)."""
+    `exact` < 0), at the sample time `k` of `samples` if that comes first (the exact segments
+    take their samples inside their steps: `sample_inside`)."""
+    if exact >= 0 or k >= samples.times.shape[0]:
+        return end
+    return min(end, samples.times[k])
 
 
-@overload(stop_at, inline="always")
-def _stop_at(samples, k, end, exact):
-    if isinstance(samples, types.NoneType):
-        return lambda samples, k, end, exact: end
-
-    def stop(samples, k, end, exact):
-        if exact >= 0 or k >= samples.times.shape[0]:
-            return end
-        return min(end, samples.times[k])
-    return stop
-
-
+@njit(cache=True, error_model="numpy", inline="always")
 def sample_inside(samples, k, system, segment, state, workspace, time, until):
-    """exact_samples where the run has samples; k (none taken) for a run without (None)."""
-
-
-@overload(sample_inside, inline="always")
-def _sample_inside(samples, k, system, segment, state, workspace, time, until):
-    if isinstance(samples, types.NoneType):
-        return lambda samples, k, system, segment, state, workspace, time, until: k
-    return lambda samples, k, system, segment, state, workspace, time, until: exact_samples(
-        system, segment, state, workspace, samples.times, samples.rows, k, time, until)
+    """exact_samples where a sample lies before `until`; k (none taken) where none does (a
+    plain step has none, and at an event's pace even an empty call costs its arguments)."""
+    if k >= samples.times.shape[0] or samples.times[k] >= until:
+        return k
+    return exact_samples(system, segment, state, workspace, samples.times, samples.rows, k,
+                         time, until)
 
 
 @njit(**NUMBERS_ONLY)
@@ -576,19 +565,13 @@ def exact_samples(system, segment, state, workspace, times, rows, k, time, until
     return k
 
 
+@njit(cache=True, error_model="numpy", inline="always")
 def sample_in_window(samples, k, system, segment, state, workspace, time, until, event):
-    """window_samples where the run has a sample before `until`; k (none taken) for a run
-    without (None) or where the next sample lies at or past it."""
-
-
-@overload(sample_in_window, inline="always")
-def _sample_in_window(samples, k, system, segment, state, workspace, time, until, event):
-    if isinstance(samples, types.NoneType):
-        return lambda samples, k, system, segment, state, workspace, time, until, event: k
-    return lambda samples, k, system, segment, state, workspace, time, until, event: (
-        k if k >= samples.times.shape[0] or samples.times[k] >= until else window_samples(
-            system, segment, state, workspace, samples.times, samples.rows, k, time, until,
-            event))
+    """window_samples where a sample lies before `until`; k (none taken) where none does."""
+    if k >= samples.times.shape[0] or samples.times[k] >= until:
+        return k
+    return window_samples(system, segment, state, workspace, samples.times, samples.rows, k,
+                          time, until, event)
 
 
 @njit(**NUMBERS_ONLY)
@@ -1501,30 +1484,11 @@ def all_finite(state):
     return True
 
 
-@njit(**UNCOUNTED)
-def advance(constants, exact, implicit, run, end, motor_torque, load_torque, max_steps):
-    """Integrate a run to exactly `end` (s) with the motor and load torques (N·m) held.
-    Returns (the Status's value, accepted steps). At most `max_steps` steps are taken: beyond
-    them the run stops where it is with OVER_BUDGET (a runaway that would hold its caller for
-    ever).
-
-    Its records come as a few buffers (buffers.py says why): constants, buffers.pack_constants'
-    (the System, the mesh period, the settings); exact, exponential.pack_tables' (None but
-    for the exponential method); implicit, allocate_implicit's; run, pack_run's (the run's
-    position, read and written back, also where the run fails, its `outputs` getting
-    equations.outputs there, and its workspace). Compiled UNCOUNTED (compiling.counting): its
-    body neither allocates nor copies by slices."""
-    status, steps, _ = advance_to(constants, exact, implicit, run, end,
-                                  (motor_torque, load_torque), max_steps, None, 0)
-    return status, steps
-
-
 @njit(cache=True, error_model="numpy", inline="always")
 def advance_to(constants, exact, implicit, run, end, torques, max_steps, samples, k):
-    """advance's body, and one stretch of advance_sampled's (`samples`: its Samples, the
-    `k`-th the next to take; None in advance): the run integrated to `end`, or to where
-    `stop_at` stops it first. Returns (the Status's value, accepted steps, the next sample's
-    index)."""
+    """One stretch of advance's (`samples`: its Samples, the `k`-th the next to take): the run
+    integrated to `end`, or to where `stop_at` stops it first. Returns (the Status's value,
+    accepted steps, the next sample's index)."""
     system, mesh, settings, run, workspace = unpack_records(constants, exact, implicit, run)
     begin_walk(workspace)
     status, steps, k = walk(system, mesh, settings, run, workspace, end, torques, max_steps,
@@ -1546,8 +1510,8 @@ def advance_to(constants, exact, implicit, run, end, torques, max_steps, samples
 @njit(cache=True, error_model="numpy", inline="always")
 def walk(system, mesh, settings, run, workspace, end, torques, max_steps, samples, k):
     """advance's loop (after begin_walk): steps and events (cross_event, chain_switches) to
-    `end` or where stop_at stops it, unless the run fails, taking the samples (a Samples or
-    None) from the `k`-th that exact segments pass. Returns (Status, steps, next sample)."""
+    `end` or where stop_at stops it, unless the run fails, taking the samples (a Samples)
+    from the `k`-th that exact segments pass. Returns (Status, steps, next sample)."""
     clock, state, first_steps = run.clock, run.state, run.first_steps
     counters, values, rows = workspace.counters, workspace.values, step_rows(workspace, settings)
     explicit = is_explicit(workspace)
@@ -1720,7 +1684,7 @@ def grazing_probe(system, segment, settings, state, workspace, h_step, event, ce
 @njit(cache=True, error_model="numpy", inline="always")
 def samples_before_event(samples, k, system, segment, settings, state, workspace, time, high,
                          h_step, event):
-    """In an exact segment, the samples (a Samples or None) from the `k`-th on before `event`,
+    """In an exact segment, the samples (a Samples) from the `k`-th on before `event`,
     located at `high` (s) into the step of h_step (s) from `state` at `time` (s): those before
     the location's window (sample_inside), then those in it (sample_in_window). Returns the
     next sample's index."""
@@ -1778,7 +1742,7 @@ def chain_switches(system, mesh, settings, run, workspace, exact, torques, end, 
     grazing check, the location, begin_segment) changes nothing there, and cost high_speed
     two fifths of its time: docs/exponential-measurements.md, "Phase switches chained".
     `exact`: the exact form of the run's segment (exact_form); `torques` (N·m) are held;
-    `end` (s): where the call stops; the samples (a Samples; None: none) from the `k`-th on
+    `end` (s): where the call stops; the samples (a Samples) from the `k`-th on
     that a step passes are taken inside it, as cross_event takes them; `steps` accepted of
     `max_steps`. A debug run (contact slack >= 0) checks every step by violated_before: not
     here. Returns (pass_event's Status: a stalled or chattering run stops, and walk's loop
@@ -2001,24 +1965,31 @@ def begin_walk(workspace):
     workspace.memory[Memory.MODAL_AIM] = exponential.NO_AIM
 
 
-# --- a run sampled in one call ----------------------------------------------------------------
+# --- the loop's entry ---------------------------------------------------------------------------
 
 @njit(**UNCOUNTED)
-def advance_sampled(constants, exact, implicit, run, times, rows, end, motor_torque,
-                    load_torque, max_steps):
-    """Integrate a run through its sample times to `end` (s) in one call, with the torques
-    (motor, load; N·m) held, the outputs (equations.outputs, as the run's `outputs`) at each of
-    `times` (s, rising, none past `end`) written into the row of `rows` of the same index.
-    Where the segment is exact (the exponential method), a sample is taken from the exact
-    solution inside the step that passes it (sample_inside), and the steps are those of a run
-    without samples; elsewhere the run stops at each time as `advance` would, and the run and
-    the rows are to the bit those of one `advance` per time. At most `max_steps` steps in all.
-    Returns (the Status's value, accepted steps, rows written): where the run fails it stops
-    there, with the rows it passed written (none of the failing stretch where its end
-    showed the failure: a state not finite, or past its contact interval).
+def advance(constants, exact, implicit, run, times, rows, end, motor_torque, load_torque,
+            max_steps):
+    """Integrate a run to exactly `end` (s) in one call, with the torques (motor, load; N·m)
+    held, the outputs (equations.outputs, as the run's `outputs`) at each of `times` (s,
+    rising, none past `end`; none for a plain step, as the FMU's) written into the row of
+    `rows` of the same index. Where the segment is exact (the exponential method), a sample is
+    taken from the exact solution inside the step that passes it (sample_inside), and the
+    steps are those of a run without samples; elsewhere the run stops at each time, and the
+    run and the rows are to the bit those of one call per time. At most `max_steps` steps in
+    all: beyond them the run stops where it is with OVER_BUDGET (a runaway that would hold its
+    caller for ever). Returns (the Status's value, accepted steps, rows written): where the
+    run fails it stops there, with the rows it passed written (none of the failing stretch
+    where its end showed the failure: a state not finite, or past its contact interval).
 
-    The records come as `advance` takes them; `rows` is C-contiguous, a row as long as the
-    run's outputs. Compiled UNCOUNTED, as `advance`."""
+    One entry for every drive, so that each method's loop is compiled once (minutes on two
+    cores). Its records come as a few buffers (buffers.py says why): constants,
+    buffers.pack_constants' (the System, the mesh period, the settings); exact,
+    exponential.pack_tables' (None but for the exponential method); implicit,
+    allocate_implicit's; run, pack_run's (the run's position, read and written back, also
+    where the run fails, its `outputs` getting equations.outputs there, and its workspace);
+    `rows` C-contiguous, a row as long as the run's outputs. Compiled UNCOUNTED
+    (compiling.counting): its body neither allocates nor copies by slices."""
     position, samples = RunArrays(*buffers.unpack_run(run)[:6]), Samples(times, rows)
     torques = (motor_torque, load_torque)
     k, steps = 0, 0
