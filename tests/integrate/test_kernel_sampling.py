@@ -8,6 +8,7 @@ error of one that does; the same error, raised after the same samples, where a r
 the one call, compiled without numba's reference counts, frees what it allocates and keeps what
 it is given."""
 
+import numba
 import numpy as np
 import pytest
 from helpers import MODELS
@@ -280,3 +281,32 @@ def test_the_samples_end_at_the_stop_time_itself(stop_time, output_interval, las
     assert times[-1] == stop_time
     np.testing.assert_allclose(times[-3:], last_three, rtol=1e-12)
     assert np.all(np.diff(times) > 0.0)
+
+
+def test_every_drive_hands_the_loop_arguments_of_the_same_types(monkeypatch):
+    """run_to (the FMU's step, no samples), sample, and the stepper's advance with a callback
+    and advance_sampled into an array (herringbone run's and simulate's) call walk.advance with
+    arguments of the same numba types: one compiled loop a method serves them all, where
+    another type anywhere would compile the loop again (minutes on two cores)."""
+    from herringbone.integrate.compiled import walk
+
+    loop, types_seen = walk.advance, []
+
+    def recorded(*arguments):
+        types_seen.append(tuple(numba.typeof(argument) for argument in arguments))
+        return loop(*arguments)
+
+    monkeypatch.setattr(walk, "advance", recorded)
+    scene = herringbone.load_scene(MODELS / "reference.toml")
+    model = GearTrainModel(scene)
+    stepper = CompiledStepper(model, 1e-7)
+    torques = scene.inputs.at(0.0)
+    start = start_position(model, torques[0])
+    run = stepper.start(start)
+    stepper.run_to(run, 1e-4, torques)
+    stepper.sample(run, [2e-4, 3e-4], np.empty((2, len(run.outputs))), 4e-4, torques)
+    stepper.advance(start, 1e-3, torques, [2e-4, 5e-4], lambda t, outputs: None)
+    times = np.arange(100) * 1e-5
+    stepper.advance_sampled(start, 1e-3, torques, times, np.empty((100, len(run.outputs))))
+    # run_to, sample, advance (2 times: one call), advance_sampled (100 times: two calls)
+    assert len(types_seen) == 5 and len(set(types_seen)) == 1, set(types_seen)
