@@ -13,6 +13,12 @@ reach the set's end, at the stepper's own tolerances, by (tests/helpers/lawson.p
 It prints accepted and rejected steps, summed over the segments, and how far each end state is
 from the bounded DOP853's, in units of the absolute tolerance.
 
+Held speed (--held-speed): each segment run with its points moved at the train's rigid
+speed from the set's start (a linear time-varying system, whose transition over the set could
+be made once per set and speed), and that run corrected to first order in the pinion's
+departure from the held motion (tests/helpers/held_speed.py): how far each lands from the
+model's own run over the set, over the force scale.
+
 Cost (unless --no-cost): CPU µs of one compiled DOP853 step (dop853.step), of one exact step
 from a new start (exponential.step: a product by L, the exponentials, a product by R), of the
 two products alone (L on the acceleration rows, R) and of numba's eig of a set's augmented
@@ -22,6 +28,7 @@ scene.
     python benchmarks/exponential_variable.py                    # the four scenes, the cost
     python benchmarks/exponential_variable.py lead_error --segments 8 --no-cost
     python benchmarks/exponential_variable.py --no-cost --pinion   # and the pinion's departure
+    python benchmarks/exponential_variable.py --no-cost --held-speed   # a held speed, corrected
 """
 from __future__ import annotations
 
@@ -37,7 +44,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 import common  # noqa: E402
 import numpy as np  # noqa: E402
-from helpers import lawson  # noqa: E402
+from helpers import held_speed, lawson  # noqa: E402
 
 SCENES = ("lead_error", "staggered", "coinciding_switches", "contact_loss")
 
@@ -104,6 +111,27 @@ def pinion_deviation(path, count, warm):
                   for degree in (1, 2)]
         print(f"{path.stem} | {span * 1e6:.0f} | {strays[0]:.1e} | {strays[1]:.1e}",
               flush=True)
+
+
+def held_speed_errors(path, count, warm):
+    """Print, per segment, how far the segment run at a held speed (its points moved by the
+    pinion angle at the set's start going on at the train's rigid speed) lands from the
+    model's own run over the set, and how far with its first-order correction in the pinion's
+    departure (tests/helpers/held_speed.py), over the force scale."""
+    import herringbone
+
+    scene = herringbone.load_scene(path)
+    model, stepper, found = lawson.segments_after_switches(scene, count, warm)
+    absolute = 1e-7 * stepper.absolute_tolerance
+    for segment, state, span in found:
+        nominal = held_speed.held_motion(segment, state, model.pinion)
+        own = held_speed.model_end(segment, state, span, absolute)
+        ends = (held_speed.held_end(segment, state, span, absolute, nominal),
+                held_speed.corrected_end(segment, state, span, absolute, nominal,
+                                         model.pinion))
+        errors = [held_speed.force_error_between(model, segment, end, own) for end in ends]
+        print(f"{path.stem} | {segment.count} | {span * 1e6:.0f} | {errors[0]:.1e} | "
+              f"{errors[1]:.1e}", flush=True)
 
 
 def compiled_cost(repeats=200_000):
@@ -237,6 +265,9 @@ def main(argv=None) -> int:
     parser.add_argument("--no-cost", dest="cost", action="store_false")
     parser.add_argument("--pinion", action="store_true",
                         help="also the pinion angle's departure from a polynomial in t")
+    parser.add_argument("--held-speed", action="store_true",
+                        help="also the segment run at a held speed, and corrected to first "
+                             "order in the pinion's departure")
     args = parser.parse_args(argv)
     print("scene | scheme | accepted steps | rejected | max |x − x_DOP853, bound| / atol")
     for path in common.scene_paths(args.scenes, parser, "scene"):
@@ -245,6 +276,11 @@ def main(argv=None) -> int:
         print("scene | set's span µs | max |φp − line| / length | max |φp − parabola| / length")
         for path in common.scene_paths(args.scenes, parser, "scene"):
             pinion_deviation(path, args.segments, args.warm)
+    if args.held_speed:
+        print("scene | set's points | span µs | held speed, error / force scale | "
+              "corrected to first order")
+        for path in common.scene_paths(args.scenes, parser, "scene"):
+            held_speed_errors(path, args.segments, args.warm)
     if args.cost:
         print("compiled kernel | CPU µs a call")
         compiled_cost()

@@ -7,7 +7,7 @@ prints them for four scenes with the compiled costs)."""
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import MODELS, lawson
+from helpers import MODELS, held_speed, lawson
 from scipy.integrate import solve_ivp
 
 import herringbone
@@ -83,3 +83,45 @@ def test_lawson_steps_do_not_pay(name):
             form=lawson.linearized(segment, scales)).accepted
     assert steps["frozen"] > FROZEN_BREAK_EVEN * steps["dop853"]
     assert steps["jacobian"] > JACOBIAN_FAR_FROM_PAYING * steps["dop853"]
+
+
+# --- a transition at a held speed, corrected to first order (tests/helpers/held_speed.py) ------
+
+@pytest.mark.parametrize("name", ["lead_error", "contact_loss"])
+def test_a_segment_is_linear_in_the_state_where_the_pinion_angle_is_given(name):
+    """The premise of the held-speed transition: for a given pinion angle the model's
+    derivative is A(s)·x + B(s)·u, exponential.linear_system on the point table moved to that
+    angle; with s the state's own angle it is the model's derivative (equations.derivative)
+    to rounding, at the segment's start and at states strayed from it."""
+    model, _, found = segments(name)
+    scales = model.state_scales()
+    random = np.random.default_rng(3)
+    for segment, state, span in found:
+        for stray in [np.zeros_like(state), *(random.normal(size=(3, len(state))) * scales)]:
+            x = state + 0.1 * stray
+            x[model.pinion] = state[model.pinion] + random.uniform(0.0, 0.9) * span \
+                * state[len(state) // 2 + model.pinion]
+            expected = lawson.rate(segment, x)
+            assert np.allclose(held_speed.rate_at(segment, x, x[model.pinion]), expected,
+                               rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+
+
+def test_a_held_speed_run_corrected_to_first_order_leaves_the_departure_squared():
+    """On lead_error's sets (a lead-error slope drives the tilt, so the lever arms' travel
+    reaches the forces) the segment run with its points moved at the train's rigid speed
+    lands 6.5e-6 and 1.6e-5 of the force scale from the model's own run, and its first-order
+    correction in the pinion's departure 2.9e-9 and 4.3e-9 (docs/exponential-variable-
+    segments.md): within a tenth of the bar's 1e-7 and a thousandth of the held run's error."""
+    model, stepper, found = segments("lead_error")
+    absolute = 1e-7 * stepper.absolute_tolerance
+    for segment, state, span in found:
+        nominal = held_speed.held_motion(segment, state, model.pinion)
+        own = held_speed.model_end(segment, state, span, absolute)
+        held = held_speed.held_end(segment, state, span, absolute, nominal)
+        corrected = held_speed.corrected_end(segment, state, span, absolute, nominal,
+                                             model.pinion)
+        held_error = held_speed.force_error_between(model, segment, held, own)
+        corrected_error = held_speed.force_error_between(model, segment, corrected, own)
+        assert held_error > 1e-6, held_error
+        assert corrected_error < 1e-8 and corrected_error < held_error / 1000, (
+            corrected_error, held_error)

@@ -1,0 +1,120 @@
+"""A contact set's segment as a linear time-varying system at a held pinion speed, and its
+first-order correction in the pinion's departure from it, in plain numpy and scipy: the
+measurement behind docs/exponential-variable-segments.md ("A transition at a held speed,
+corrected to first order"), not a method of the compiled integrator.
+
+Within a segment (contact set, loaded points and torques fixed) the model's derivative is
+linear in the state for a given pinion travel angle s (rad since the set began), which sets
+each point's stiffness, lever arm and lead error along the face:
+
+    x' = F(x, s(x)),   F(x, s) = A(s)·x + B(s)·u,   s(x) = x[pinion],
+
+so the segment is bilinear in the state only through s(x). With s replaced by a held motion
+s_n(t) (the angle at the set's start moving at a held speed) it is linear, x_L' = F(x_L,
+s_n(t)): its transition over the set could be made once per set and speed. What that leaves
+is first order in the departure ε = s(x) − s_n(t), about 1e-3 of the set's length:
+
+    x ≈ x_L + δ,   δ' = A(s_n)·δ + ∂F/∂s(x_L, s_n)·(s(x_L) − s_n(t)),
+
+a correction linear in δ and bilinear in the set's start state, so that it too could be
+made once per set and speed (a quadratic form of the start state). The runs here integrate
+both with scipy's DOP853 at 1e-12; what they measure is how far each lands from the model's
+own run over the set, not what a compiled form would cost.
+
+Units: time in s, angles in rad, the state as equations.py lays it out, torques in N·m.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from herringbone.integrate.compiled import exponential
+from herringbone.model import equations
+
+from . import force_error
+from .lawson import Segment, inputs, rate
+
+ANGLE_STEP = 1e-7  # rad: the central difference of ∂F/∂s (F is quadratic in s at most)
+
+
+def system_at(segment: Segment, angle: float) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) of x' = A·x + B·u with every point of the set where the pinion has turned
+    `angle` (rad) since the set began: exponential.linear_system on the point table moved to
+    that travel (its slopes zeroed, since the values already hold them)."""
+    points = segment.points.copy()
+    travel = segment.system.axial_travel_per_radian * angle
+    for i in range(segment.count):
+        moved = equations.point_at(segment.points, i, travel)
+        points[equations.STIFFNESS0, i], points[equations.LEVER_ARM0, i], \
+            points[equations.LEAD_ERROR0, i] = moved
+    for field in (equations.STIFFNESS_SLOPE, equations.LEVER_ARM_SLOPE,
+                  equations.LEAD_ERROR_SLOPE):
+        points[field, :segment.count] = 0.0
+    return exponential.linear_system(segment.system, points, segment.count, segment.loaded)
+
+
+def rate_at(segment: Segment, state: np.ndarray, angle: float) -> np.ndarray:
+    """F(state, angle): the segment's derivative with its points where `angle` puts them."""
+    a, b = system_at(segment, angle)
+    return a @ state + b @ inputs(segment)
+
+
+def held_motion(segment: Segment, state: np.ndarray, pinion: int) -> Callable[[float], float]:
+    """s_n(t): the pinion angle of `state` moving on at the train's rigid speed there (its
+    angular momentum over its inertia, both referred to the pinion along the rigid rotation
+    r), which leaves out the pinion's own vibration."""
+    half = len(state) // 2
+    mass, rigid = segment.system.mass, segment.system.rigid_rotation
+    pinion_speed = state[half + pinion]
+    speeds = state[half:] + rigid * pinion_speed  # q̇ = ẏ + r·φ̇p, but the pinion's own
+    speeds[pinion] = pinion_speed
+    speed = float(np.sum(mass * rigid * speeds) / np.sum(mass * rigid ** 2))
+    return lambda t: state[pinion] + speed * t
+
+
+def model_end(segment: Segment, state: np.ndarray, span: float,
+              absolute: np.ndarray) -> np.ndarray:
+    """The model's own run over the set (its derivative, equations.derivative), at 1e-12."""
+    return solve_ivp(lambda _t, x: rate(segment, x), (0.0, span), state, method="DOP853",
+                     rtol=1e-12, atol=absolute).y[:, -1]
+
+
+def held_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
+             nominal: Callable[[float], float]) -> np.ndarray:
+    """x_L at the set's end: the segment with its points moved by `nominal` (s_n(t))."""
+    return solve_ivp(lambda t, x: rate_at(segment, x, nominal(t)), (0.0, span), state,
+                     method="DOP853", rtol=1e-12, atol=absolute).y[:, -1]
+
+
+def corrected_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
+                  nominal: Callable[[float], float], pinion: int) -> np.ndarray:
+    """x_L + δ at the set's end: the held motion's run and its first-order correction in the
+    pinion's departure from `nominal`, integrated together."""
+    size = len(state)
+
+    def joint(t, both):
+        held, correction = both[:size], both[size:]
+        angle = nominal(t)
+        slope = (rate_at(segment, held, angle + ANGLE_STEP)
+                 - rate_at(segment, held, angle - ANGLE_STEP)) / (2.0 * ANGLE_STEP)
+        return np.concatenate([rate_at(segment, held, angle),
+                               system_at(segment, angle)[0] @ correction
+                               + slope * (held[pinion] - angle)])
+
+    end = solve_ivp(joint, (0.0, span), np.concatenate([state, np.zeros(size)]),
+                    method="DOP853", rtol=1e-12,
+                    atol=np.concatenate([absolute, absolute])).y[:, -1]
+    return end[:size] + end[size:]
+
+
+def force_error_between(model, segment: Segment, state: np.ndarray, other: np.ndarray) -> float:
+    """How far the forces of two states of the segment lie apart (force_error: the largest of
+    the mesh and bearing forces' differences, over the force scale)."""
+    def named(x):
+        out = np.empty(model.output_layout_size)
+        equations.outputs(segment.system, segment.points, segment.count, segment.loaded, x, out)
+        return {name: np.array([value]) for name, value in model.named_outputs(out).items()}
+
+    return force_error(named(state), named(other), model)
