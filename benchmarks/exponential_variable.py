@@ -47,6 +47,7 @@ import numpy as np  # noqa: E402
 from helpers import held_speed, lawson  # noqa: E402
 
 SCENES = ("lead_error", "staggered", "coinciding_switches", "contact_loss")
+HELD_SPEED_FACTORS = (1.0, 1.001, 1.003, 1.01)  # held speed / the train's rigid speed
 
 
 def variants(stepper):
@@ -117,21 +118,25 @@ def held_speed_errors(path, count, warm):
     """Print, per segment, how far the segment run at a held speed (its points moved by the
     pinion angle at the set's start going on at the train's rigid speed) lands from the
     model's own run over the set, and how far with its first-order correction in the pinion's
-    departure (tests/helpers/held_speed.py), over the force scale."""
+    departure (tests/helpers/held_speed.py), over the force scale; the corrected run also
+    with the held speed off the train's by each factor of HELD_SPEED_FACTORS but the first (a
+    table made for a band of speeds)."""
     import herringbone
 
     scene = herringbone.load_scene(path)
     model, stepper, found = lawson.segments_after_switches(scene, count, warm)
     absolute = 1e-7 * stepper.absolute_tolerance
     for segment, state, span in found:
-        nominal = held_speed.held_motion(segment, state, model.pinion)
         own = held_speed.model_end(segment, state, span, absolute)
-        ends = (held_speed.held_end(segment, state, span, absolute, nominal),
-                held_speed.corrected_end(segment, state, span, absolute, nominal,
-                                         model.pinion))
-        errors = [held_speed.force_error_between(model, segment, end, own) for end in ends]
-        print(f"{path.stem} | {segment.count} | {span * 1e6:.0f} | {errors[0]:.1e} | "
-              f"{errors[1]:.1e}", flush=True)
+        ends = [held_speed.held_end(segment, state, span, absolute,
+                                    held_speed.held_motion(segment, state, model.pinion))]
+        for factor in HELD_SPEED_FACTORS:
+            nominal = held_speed.held_motion(segment, state, model.pinion, factor)
+            ends.append(held_speed.corrected_end(segment, state, span, absolute, nominal,
+                                                 model.pinion))
+        errors = " | ".join(f"{held_speed.force_error_between(model, segment, end, own):.1e}"
+                            for end in ends)
+        print(f"{path.stem} | {segment.count} | {span * 1e6:.0f} | {errors}", flush=True)
 
 
 def compiled_cost(repeats=200_000):
@@ -278,7 +283,8 @@ def main(argv=None) -> int:
             pinion_deviation(path, args.segments, args.warm)
     if args.held_speed:
         print("scene | set's points | span µs | held speed, error / force scale | "
-              "corrected to first order")
+              "corrected to first order | the same, held speed "
+              + " | ".join(f"×{factor:g}" for factor in HELD_SPEED_FACTORS[1:]))
         for path in common.scene_paths(args.scenes, parser, "scene"):
             held_speed_errors(path, args.segments, args.warm)
     if args.cost:

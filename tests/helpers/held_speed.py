@@ -61,16 +61,18 @@ def rate_at(segment: Segment, state: np.ndarray, angle: float) -> np.ndarray:
     return a @ state + b @ inputs(segment)
 
 
-def held_motion(segment: Segment, state: np.ndarray, pinion: int) -> Callable[[float], float]:
+def held_motion(segment: Segment, state: np.ndarray, pinion: int,
+                speed_factor: float = 1.0) -> Callable[[float], float]:
     """s_n(t): the pinion angle of `state` moving on at the train's rigid speed there (its
     angular momentum over its inertia, both referred to the pinion along the rigid rotation
-    r), which leaves out the pinion's own vibration."""
+    r), which leaves out the pinion's own vibration; times `speed_factor`, for a table made
+    at a speed beside the train's."""
     half = len(state) // 2
     mass, rigid = segment.system.mass, segment.system.rigid_rotation
     pinion_speed = state[half + pinion]
     speeds = state[half:] + rigid * pinion_speed  # q̇ = ẏ + r·φ̇p, but the pinion's own
     speeds[pinion] = pinion_speed
-    speed = float(np.sum(mass * rigid * speeds) / np.sum(mass * rigid ** 2))
+    speed = speed_factor * float(np.sum(mass * rigid * speeds) / np.sum(mass * rigid ** 2))
     return lambda t: state[pinion] + speed * t
 
 
