@@ -26,6 +26,7 @@ Units: time in s, angles in rad, the state as equations.py lays it out, torques 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -34,7 +35,7 @@ from herringbone.integrate.compiled import exponential
 from herringbone.model import equations
 
 from . import force_error
-from .lawson import Segment, inputs, rate
+from .lawson import INPUTS, Segment, inputs, rate
 
 ANGLE_STEP = 1e-7  # rad: the central difference of ∂F/∂s (F is quadratic in s at most)
 
@@ -120,3 +121,59 @@ def force_error_between(model, segment: Segment, state: np.ndarray, other: np.nd
         return {name: np.array([value]) for name, value in model.named_outputs(out).items()}
 
     return force_error(named(state), named(other), model)
+
+
+class SetTables(NamedTuple):
+    """What a set's held-speed tables would hold, in the scaled [x; u] (each entry over its
+    scale, `scales`): the transition over the set at the held motion (N + INPUTS square: the
+    inputs held) and the first-order correction as a quadratic form of the start
+    (N × (N + INPUTS) × (N + INPUTS))."""
+
+    transition: np.ndarray
+    correction: np.ndarray
+    scales: np.ndarray
+
+
+def set_tables(segment: Segment, span: float, nominal: Callable[[float], float],
+               pinion: int, scales: np.ndarray) -> SetTables:
+    """The tables of one set at one held motion (`nominal`, s_n(t)), independent of any start
+    state, in [x; u] scaled by `scales` (the state's scales, the torques', 1): Φ' = Â(s_n)·Φ
+    from the identity; and with X = [x; u], x_L = Φ_x·X, the correction's forcing
+    ∂F/∂s(x_L, s_n)·(s(x_L) − s_n) = (Â_s·Φ·X)·(ℓ·X), ℓ = Φ's pinion row less s_n on the held
+    1, so that Q' = A(s_n)·Q + (Â_s·Φ) ⊗ ℓ from Q = 0 gives δ = Q : X ⊗ X."""
+    width, size = len(scales), len(scales) - INPUTS
+
+    def augmented(angle):  # scaled: diag(1/σ_x)·[A B]·diag(σ)
+        a, b = system_at(segment, angle)
+        return np.block([[a, b]]) * scales[None, :] / scales[:size, None]
+
+    def derivative(t, flat):
+        angle = nominal(t)
+        transition = flat[:width * width].reshape(width, width)
+        form = flat[width * width:].reshape(size, width, width)
+        here = augmented(angle)
+        slope = (augmented(angle + ANGLE_STEP) - augmented(angle - ANGLE_STEP)) \
+            / (2.0 * ANGLE_STEP)
+        row = scales[pinion] * transition[pinion]
+        row[-1] -= angle
+        d_transition = np.zeros((width, width))
+        d_transition[:size] = here @ transition
+        d_form = (np.einsum("il,ljk->ijk", here[:, :size], form)
+                  + np.einsum("ij,k->ijk", slope @ transition, row))
+        return np.concatenate([d_transition.ravel(), d_form.ravel()])
+
+    start = np.concatenate([np.eye(width).ravel(), np.zeros(size * width * width)])
+    end = solve_ivp(derivative, (0.0, span), start, method="DOP853", rtol=1e-11,
+                    atol=1e-13).y[:, -1]
+    return SetTables(end[:width * width].reshape(width, width),
+                     end[width * width:].reshape(size, width, width), scales)
+
+
+def tabulated_end(tables: SetTables, segment: Segment, state: np.ndarray) -> np.ndarray:
+    """The state at the set's end from its tables: Φ_x·X + Q : X ⊗ X, X = [state; u]
+    scaled."""
+    size = len(state)
+    start = np.concatenate([state, inputs(segment)]) / tables.scales
+    scaled = (tables.transition @ start)[:size] + np.einsum("ijk,j,k->i", tables.correction,
+                                                              start, start)
+    return scaled * tables.scales[:size]
