@@ -140,8 +140,10 @@ def held_speed_errors(path, count, warm):
 
 
 def compiled_cost(repeats=200_000):
-    """Print the CPU µs of a DOP853 step, an exact step from a new start and the two modal
-    products, in compiled loops (reference scene, 1e-3 s in, half the step bound)."""
+    """Print the CPU µs of a DOP853 step, an exact step from a new start, the two modal
+    products and a held-speed set crossed by its tables (a transition of [x; u] and a
+    quadratic form of it, tests/helpers/held_speed.py), in compiled loops (reference scene,
+    1e-3 s in, half the step bound)."""
     import herringbone
     from herringbone.integrate.compiled import exponential, walk
     from herringbone.integrate.compiled_stepper import CompiledStepper
@@ -173,6 +175,9 @@ def compiled_cost(repeats=200_000):
                torques[0], torques[1], h, np.zeros(size))),
              ("L (acceleration rows) and R", kernels[2],
               (tables, exact, state, np.zeros(size))),
+             ("a held-speed set from its tables: Φ·X and Q : X ⊗ X", kernels[4],
+              (np.ones((size + 3, size + 3)), np.ones((size, size + 3, size + 3)),
+               np.ones(size + 3), np.zeros(size))),
              ("np.linalg.eig of the set's Â (complex)", kernels[3],
               (lawson.frozen_form(lawson.Segment(model.system, segment.points,
                                                  segment.point_count, run.loaded,
@@ -259,7 +264,26 @@ def _modal_kernels():
             total += rates[0].real
         return total
 
-    return products, modal_forms
+    @njit
+    def held_speed_sets(transition, correction, start, out, count):
+        size, width = out.shape[0], start.shape[0]
+        total = 0.0
+        for _ in range(count):
+            start[0] += 1e-15
+            for i in range(size):
+                value = 0.0
+                for j in range(width):
+                    value += transition[i, j] * start[j]
+                for j in range(width):
+                    inner = 0.0
+                    for k in range(width):
+                        inner += correction[i, j, k] * start[k]
+                    value += inner * start[j]
+                out[i] = value
+            total += out[0]
+        return total
+
+    return products, modal_forms, held_speed_sets
 
 
 def main(argv=None) -> int:
