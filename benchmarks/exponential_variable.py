@@ -120,7 +120,7 @@ def held_speed_errors(path, count, warm):
     model's own run over the set, and how far with its first-order correction in the pinion's
     departure (tests/helpers/held_speed.py), over the force scale; the corrected run also
     with the held speed off the train's by each factor of HELD_SPEED_FACTORS but the first (a
-    table made for a band of speeds)."""
+    table made for a band of speeds); and the run corrected to second order."""
     import herringbone
 
     scene = herringbone.load_scene(path)
@@ -134,6 +134,10 @@ def held_speed_errors(path, count, warm):
             nominal = held_speed.held_motion(segment, state, model.pinion, factor)
             ends.append(held_speed.corrected_end(segment, state, span, absolute, nominal,
                                                  model.pinion))
+        ends.append(held_speed.second_order_end(segment, state, span, absolute,
+                                                held_speed.held_motion(segment, state,
+                                                                       model.pinion),
+                                                model.pinion))
         errors = " | ".join(f"{held_speed.force_error_between(model, segment, end, own):.1e}"
                             for end in ends)
         print(f"{path.stem} | {segment.count} | {span * 1e6:.0f} | {errors}", flush=True)
@@ -308,7 +312,8 @@ def main(argv=None) -> int:
     if args.held_speed:
         print("scene | set's points | span µs | held speed, error / force scale | "
               "corrected to first order | the same, held speed "
-              + " | ".join(f"×{factor:g}" for factor in HELD_SPEED_FACTORS[1:]))
+              + " | ".join(f"×{factor:g}" for factor in HELD_SPEED_FACTORS[1:])
+              + " | corrected to second order")
         for path in common.scene_paths(args.scenes, parser, "scene"):
             held_speed_errors(path, args.segments, args.warm)
     if args.cost:

@@ -112,6 +112,38 @@ def corrected_end(segment: Segment, state: np.ndarray, span: float, absolute: np
     return end[:size] + end[size:]
 
 
+def second_order_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
+                     nominal: Callable[[float], float], pinion: int) -> np.ndarray:
+    """x_L + δ₁ + δ₂ at the set's end: corrected_end's run with the second-order term in the
+    departure ε = s(x_L) − s_n as well (F being a polynomial in s, its derivatives in s by
+    central differences),
+
+        δ₂' = A(s_n)·δ₂ + ∂F/∂s(x_L)·δ₁[pinion] + ∂A/∂s·δ₁·ε + ½·∂²F/∂s²(x_L)·ε²,
+
+    a cubic form of the set's start [x; u] where δ₁ is a quadratic one."""
+    size, step = len(state), 1e3 * ANGLE_STEP
+
+    def joint(t, three):
+        held, first, second = three[:size], three[size:2 * size], three[2 * size:]
+        angle = nominal(t)
+        here, ahead, behind = (rate_at(segment, held, angle + shift)
+                               for shift in (0.0, step, -step))
+        slope = (ahead - behind) / (2.0 * step)
+        curvature = (ahead - 2.0 * here + behind) / step ** 2
+        matrix = system_at(segment, angle)[0]
+        matrix_slope = (system_at(segment, angle + step)[0]
+                        - system_at(segment, angle - step)[0]) / (2.0 * step)
+        departure = held[pinion] - angle
+        return np.concatenate([here, matrix @ first + slope * departure,
+                               matrix @ second + slope * first[pinion]
+                               + matrix_slope @ first * departure
+                               + 0.5 * curvature * departure ** 2])
+
+    end = solve_ivp(joint, (0.0, span), np.concatenate([state, np.zeros(2 * size)]),
+                    method="DOP853", rtol=1e-12, atol=np.concatenate([absolute] * 3)).y[:, -1]
+    return end[:size] + end[size:2 * size] + end[2 * size:]
+
+
 def force_error_between(model, segment: Segment, state: np.ndarray, other: np.ndarray) -> float:
     """How far the forces of two states of the segment lie apart (force_error: the largest of
     the mesh and bearing forces' differences, over the force scale)."""
