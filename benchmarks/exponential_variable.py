@@ -128,16 +128,11 @@ def held_speed_errors(path, count, warm):
     absolute = 1e-7 * stepper.absolute_tolerance
     for segment, state, span in found:
         own = held_speed.model_end(segment, state, span, absolute)
-        ends = [held_speed.held_end(segment, state, span, absolute,
-                                    held_speed.held_motion(segment, state, model.pinion))]
-        for factor in HELD_SPEED_FACTORS:
-            nominal = held_speed.held_motion(segment, state, model.pinion, factor)
-            ends.append(held_speed.corrected_end(segment, state, span, absolute, nominal,
-                                                 model.pinion))
-        ends.append(held_speed.second_order_end(segment, state, span, absolute,
-                                                held_speed.held_motion(segment, state,
-                                                                       model.pinion),
-                                                model.pinion))
+        held = held_speed.held_motion(segment, state, model.pinion)
+        runs = [(held, 0), *((held_speed.held_motion(segment, state, model.pinion, factor), 1)
+                             for factor in HELD_SPEED_FACTORS), (held, 2)]
+        ends = [held_speed.corrected_end(segment, state, span, absolute, nominal, model.pinion,
+                                         order) for nominal, order in runs]
         errors = " | ".join(f"{held_speed.force_error_between(model, segment, end, own):.1e}"
                             for end in ends)
         print(f"{path.stem} | {segment.count} | {span * 1e6:.0f} | {errors}", flush=True)

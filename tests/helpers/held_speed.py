@@ -17,9 +17,10 @@ is first order in the departure ε = s(x) − s_n(t), about 1e-3 of the set's le
     x ≈ x_L + δ,   δ' = A(s_n)·δ + ∂F/∂s(x_L, s_n)·(s(x_L) − s_n(t)),
 
 a correction linear in δ and bilinear in the set's start state, so that it too could be
-made once per set and speed (a quadratic form of the start state). The runs here integrate
-both with scipy's DOP853 at 1e-12; what they measure is how far each lands from the model's
-own run over the set, not what a compiled form would cost.
+made once per set and speed (a quadratic form of the start state: set_tables); the
+second-order term is a cubic one (corrected_end's `order`). The runs here integrate with
+scipy's DOP853 at 1e-12; what they measure is how far each lands from the model's own run
+over the set, not what a compiled form would cost.
 
 Units: time in s, angles in rad, the state as equations.py lays it out, torques in N·m.
 """
@@ -37,7 +38,10 @@ from herringbone.model import equations
 from . import force_error
 from .lawson import INPUTS, Segment, inputs, rate
 
-ANGLE_STEP = 1e-7  # rad: the central difference of ∂F/∂s (F is quadratic in s at most)
+# rad: the central differences in the pinion angle. [A B] is a cubic in it (Σ k·ζ², k and ζ
+# linear in the travel), so a step of 1e-4 of the 0.05 rad a set turns leaves its curvature
+# to rounding and its slope within (1e-4/0.05)² of its cubic term
+ANGLE_STEP = 1e-4
 
 
 def system_at(segment: Segment, angle: float) -> tuple[np.ndarray, np.ndarray]:
@@ -56,10 +60,23 @@ def system_at(segment: Segment, angle: float) -> tuple[np.ndarray, np.ndarray]:
     return exponential.linear_system(segment.system, points, segment.count, segment.loaded)
 
 
+def augmented_at(segment: Segment, angle: float) -> np.ndarray:
+    """[A B] at `angle` (system_at side by side): F(x, s) = [A B]·[x; u]."""
+    return np.hstack(system_at(segment, angle))
+
+
+def in_angle(segment: Segment, angle: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """[A B] at `angle` and its first and second derivatives in the angle (central
+    differences of ANGLE_STEP)."""
+    here, ahead, behind = (augmented_at(segment, angle + shift)
+                           for shift in (0.0, ANGLE_STEP, -ANGLE_STEP))
+    return (here, (ahead - behind) / (2.0 * ANGLE_STEP),
+            (ahead - 2.0 * here + behind) / ANGLE_STEP ** 2)
+
+
 def rate_at(segment: Segment, state: np.ndarray, angle: float) -> np.ndarray:
     """F(state, angle): the segment's derivative with its points where `angle` puts them."""
-    a, b = system_at(segment, angle)
-    return a @ state + b @ inputs(segment)
+    return augmented_at(segment, angle) @ np.concatenate([state, inputs(segment)])
 
 
 def held_motion(segment: Segment, state: np.ndarray, pinion: int,
@@ -84,64 +101,36 @@ def model_end(segment: Segment, state: np.ndarray, span: float,
                      rtol=1e-12, atol=absolute).y[:, -1]
 
 
-def held_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
-             nominal: Callable[[float], float]) -> np.ndarray:
-    """x_L at the set's end: the segment with its points moved by `nominal` (s_n(t))."""
-    return solve_ivp(lambda t, x: rate_at(segment, x, nominal(t)), (0.0, span), state,
-                     method="DOP853", rtol=1e-12, atol=absolute).y[:, -1]
-
-
 def corrected_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
-                  nominal: Callable[[float], float], pinion: int) -> np.ndarray:
-    """x_L + δ at the set's end: the held motion's run and its first-order correction in the
-    pinion's departure from `nominal`, integrated together."""
-    size = len(state)
+                  nominal: Callable[[float], float], pinion: int, order: int = 1) -> np.ndarray:
+    """x_L + δ₁ + … + δ_order at the set's end: the segment with its points moved by
+    `nominal` (s_n(t); order 0, x_L alone) and its corrections in the pinion's departure
+    ε = s(x_L) − s_n up to `order` (1 or 2), integrated together:
 
-    def joint(t, both):
-        held, correction = both[:size], both[size:]
-        angle = nominal(t)
-        slope = (rate_at(segment, held, angle + ANGLE_STEP)
-                 - rate_at(segment, held, angle - ANGLE_STEP)) / (2.0 * ANGLE_STEP)
-        return np.concatenate([rate_at(segment, held, angle),
-                               system_at(segment, angle)[0] @ correction
-                               + slope * (held[pinion] - angle)])
+        δ₁' = A·δ₁ + ∂F/∂s(x_L)·ε,
+        δ₂' = A·δ₂ + ∂F/∂s(x_L)·δ₁[pinion] + ∂A/∂s·δ₁·ε + ½·∂²F/∂s²(x_L)·ε²,
 
-    end = solve_ivp(joint, (0.0, span), np.concatenate([state, np.zeros(size)]),
+    A and F at s_n; δ₁ a quadratic form of the set's start [x; u], δ₂ a cubic one."""
+    size, held_inputs = len(state), inputs(segment)
+
+    def joint(t, parts):
+        held, first, second = parts[:size], parts[size:2 * size], parts[2 * size:]
+        matrix, slope, curvature = in_angle(segment, nominal(t))
+        start = np.concatenate([held, held_inputs])
+        departure = held[pinion] - nominal(t)
+        rates = [matrix @ start]
+        if order >= 1:
+            rates.append(matrix[:, :size] @ first + slope @ start * departure)
+        if order >= 2:
+            rates.append(matrix[:, :size] @ second + slope @ start * first[pinion]
+                         + slope[:, :size] @ first * departure
+                         + 0.5 * curvature @ start * departure ** 2)
+        return np.concatenate(rates)
+
+    end = solve_ivp(joint, (0.0, span), np.concatenate([state, np.zeros(order * size)]),
                     method="DOP853", rtol=1e-12,
-                    atol=np.concatenate([absolute, absolute])).y[:, -1]
-    return end[:size] + end[size:]
-
-
-def second_order_end(segment: Segment, state: np.ndarray, span: float, absolute: np.ndarray,
-                     nominal: Callable[[float], float], pinion: int) -> np.ndarray:
-    """x_L + δ₁ + δ₂ at the set's end: corrected_end's run with the second-order term in the
-    departure ε = s(x_L) − s_n as well (F being a polynomial in s, its derivatives in s by
-    central differences),
-
-        δ₂' = A(s_n)·δ₂ + ∂F/∂s(x_L)·δ₁[pinion] + ∂A/∂s·δ₁·ε + ½·∂²F/∂s²(x_L)·ε²,
-
-    a cubic form of the set's start [x; u] where δ₁ is a quadratic one."""
-    size, step = len(state), 1e3 * ANGLE_STEP
-
-    def joint(t, three):
-        held, first, second = three[:size], three[size:2 * size], three[2 * size:]
-        angle = nominal(t)
-        here, ahead, behind = (rate_at(segment, held, angle + shift)
-                               for shift in (0.0, step, -step))
-        slope = (ahead - behind) / (2.0 * step)
-        curvature = (ahead - 2.0 * here + behind) / step ** 2
-        matrix = system_at(segment, angle)[0]
-        matrix_slope = (system_at(segment, angle + step)[0]
-                        - system_at(segment, angle - step)[0]) / (2.0 * step)
-        departure = held[pinion] - angle
-        return np.concatenate([here, matrix @ first + slope * departure,
-                               matrix @ second + slope * first[pinion]
-                               + matrix_slope @ first * departure
-                               + 0.5 * curvature * departure ** 2])
-
-    end = solve_ivp(joint, (0.0, span), np.concatenate([state, np.zeros(2 * size)]),
-                    method="DOP853", rtol=1e-12, atol=np.concatenate([absolute] * 3)).y[:, -1]
-    return end[:size] + end[size:2 * size] + end[2 * size:]
+                    atol=np.tile(absolute, order + 1)).y[:, -1]
+    return end.reshape(order + 1, size).sum(axis=0)
 
 
 def force_error_between(model, segment: Segment, state: np.ndarray, other: np.ndarray) -> float:
@@ -153,6 +142,14 @@ def force_error_between(model, segment: Segment, state: np.ndarray, other: np.nd
         return {name: np.array([value]) for name, value in model.named_outputs(out).items()}
 
     return force_error(named(state), named(other), model)
+
+
+def augmented_scales(model) -> np.ndarray:
+    """The scales of [x; u]: the state's, the torques' (the force scale on each radius, as
+    the exponential method scales its modal forms), 1."""
+    force = model.force_scale()
+    return np.concatenate([model.state_scales(), [force * model.geometry.radius_pinion,
+                                                  force * model.geometry.radius_wheel, 1.0]])
 
 
 class SetTables(NamedTuple):
@@ -175,17 +172,13 @@ def set_tables(segment: Segment, span: float, nominal: Callable[[float], float],
     1, so that Q' = A(s_n)·Q + (Â_s·Φ) ⊗ ℓ from Q = 0 gives δ = Q : X ⊗ X."""
     width, size = len(scales), len(scales) - INPUTS
 
-    def augmented(angle):  # scaled: diag(1/σ_x)·[A B]·diag(σ)
-        a, b = system_at(segment, angle)
-        return np.block([[a, b]]) * scales[None, :] / scales[:size, None]
+    scaling = scales[None, :] / scales[:size, None]  # diag(1/σ_x)·[A B]·diag(σ)
 
     def derivative(t, flat):
         angle = nominal(t)
         transition = flat[:width * width].reshape(width, width)
         form = flat[width * width:].reshape(size, width, width)
-        here = augmented(angle)
-        slope = (augmented(angle + ANGLE_STEP) - augmented(angle - ANGLE_STEP)) \
-            / (2.0 * ANGLE_STEP)
+        here, slope, _ = (matrix * scaling for matrix in in_angle(segment, angle))
         row = scales[pinion] * transition[pinion]
         row[-1] -= angle
         d_transition = np.zeros((width, width))

@@ -117,7 +117,8 @@ def test_a_held_speed_run_corrected_to_first_order_leaves_the_departure_squared(
     for segment, state, span in found:
         nominal = held_speed.held_motion(segment, state, model.pinion)
         own = held_speed.model_end(segment, state, span, absolute)
-        held = held_speed.held_end(segment, state, span, absolute, nominal)
+        held = held_speed.corrected_end(segment, state, span, absolute, nominal, model.pinion,
+                                        order=0)
         corrected = held_speed.corrected_end(segment, state, span, absolute, nominal,
                                              model.pinion)
         held_error = held_speed.force_error_between(model, segment, held, own)
@@ -136,11 +137,9 @@ def test_the_correction_is_a_quadratic_form_that_tables_made_once_per_set_hold()
     model, stepper, found = segments("lead_error", 1)
     segment, state, span = found[0]
     absolute = 1e-7 * stepper.absolute_tolerance
-    force = model.force_scale()
-    scales = np.concatenate([model.state_scales(), [force * model.geometry.radius_pinion,
-                                                    force * model.geometry.radius_wheel, 1.0]])
     nominal = held_speed.held_motion(segment, state, model.pinion)
-    tables = held_speed.set_tables(segment, span, nominal, model.pinion, scales)
+    tables = held_speed.set_tables(segment, span, nominal, model.pinion,
+                                   held_speed.augmented_scales(model))
     joint = held_speed.corrected_end(segment, state, span, absolute, nominal, model.pinion)
     assert held_speed.force_error_between(
         model, segment, held_speed.tabulated_end(tables, segment, state), joint) < 1e-10
@@ -163,7 +162,7 @@ def test_the_second_order_term_takes_contact_loss_below_the_bar():
         nominal = held_speed.held_motion(segment, state, model.pinion)
         own = held_speed.model_end(segment, state, span, absolute)
         first, second = (
-            held_speed.force_error_between(model, segment, end(segment, state, span, absolute,
-                                                               nominal, model.pinion), own)
-            for end in (held_speed.corrected_end, held_speed.second_order_end))
+            held_speed.force_error_between(model, segment, held_speed.corrected_end(
+                segment, state, span, absolute, nominal, model.pinion, order), own)
+            for order in (1, 2))
         assert second < 1e-9 and second < first / 100, (second, first)
