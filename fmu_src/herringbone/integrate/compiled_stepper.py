@@ -475,6 +475,8 @@ class CompiledStepper:
         if len(times) and not (times[-1] <= end and np.all(times[1:] >= times[:-1])):
             raise ValueError(f"times: {_unordered(times, end)}; allowed: rising times, none "
                              f"past end")
+        # numba's dispatcher, not run_to's compiled entry: the caller's times and rows may be
+        # of other types (read-only, say), which the entry would not check
         status, steps, written = walk.advance(
             self.constants, self.exact_buffers, run.implicit, run.buffers, times, rows,
             float(end), float(torques[0]), float(torques[1]),
